@@ -1,0 +1,8 @@
+#pragma once
+// Umbrella header of mbi::interp.
+#include <mbi/interp/control.hpp>
+#include <mbi/interp/embed.hpp>
+#include <mbi/interp/evaluate.hpp>
+#include <mbi/interp/mesh.hpp>
+#include <mbi/interp/metrics.hpp>
+#include <mbi/interp/modified_bi.hpp>

@@ -1,0 +1,32 @@
+#pragma once
+// Embedding of dense points in the control mesh: element + barycentric coordinates.
+#include <mbi/interp/mesh.hpp>
+
+#include <vector>
+
+namespace mbi::interp {
+
+struct Embedding {
+  Eigen::VectorXi element;   ///< p, element containing (or nearest to) each point
+  Eigen::MatrixXd bary;      ///< p x (d+1), barycentric coordinates in that element (sum 1)
+  std::vector<int> outside;  ///< points outside every element, attached to the nearest one
+                             ///< with extrapolated coordinates (some negative)
+  double max_outside_distance = 0.0;  ///< largest distance of an outside point to the mesh
+  int dim() const { return static_cast<int>(bary.cols()) - 1; }
+  int size() const { return static_cast<int>(element.size()); }
+};
+
+/// Locates every row of P (p x d) in the control mesh (U, T) with a uniform-grid acceleration
+/// structure (no loop over all elements per point). A point is inside an element when all its
+/// coordinates are >= -tol (tol = 1e-9). Throws Error on a non-finite point (naming it) or a
+/// dimension mismatch.
+Embedding embed(const Eigen::Ref<const Eigen::MatrixXd>& U,
+                const Eigen::Ref<const Eigen::MatrixXi>& T,
+                const Eigen::Ref<const Eigen::MatrixXd>& P);
+
+/// Rest positions reproduced from an embedding: sum_k bary(p,k) * U(T(e,k)). p x d.
+Eigen::MatrixXd embedded_positions(const Eigen::Ref<const Eigen::MatrixXd>& U,
+                                   const Eigen::Ref<const Eigen::MatrixXi>& T,
+                                   const Embedding& emb);
+
+}  // namespace mbi::interp

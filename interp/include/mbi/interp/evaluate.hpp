@@ -1,0 +1,29 @@
+#pragma once
+// Evaluation of the embedded points from element Bezier control points (method.md facts 5, 6).
+// Multithreaded; the same kernel serves BI (M = 0) and modified-BI.
+#include <mbi/interp/embed.hpp>
+#include <mbi/interp/modified_bi.hpp>
+
+namespace mbi::interp {
+
+/// Positions of all embedded points: p x d. Scalar = float or double (control points are
+/// converted once). threads = 0: hardware concurrency.
+template <typename Scalar>
+void evaluate(const BezierPoints& B, const Embedding& emb,
+              Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& positions, int threads = 0);
+
+/// Positions and mapped normals: normals_rest (p x d, unit rest normals) map by cof(J) n and are
+/// renormalised (fact 6). normals_out is p x d.
+template <typename Scalar>
+void evaluate(const BezierPoints& B, const Embedding& emb,
+              const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& normals_rest,
+              Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& positions,
+              Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& normals_out, int threads = 0);
+
+/// Jacobian dx/du (d x d) at one embedded point (element e, barycentric b), needs rest U/T for
+/// the basis gradients.
+Eigen::MatrixXd jacobian(const Eigen::Ref<const Eigen::MatrixXd>& U,
+                         const Eigen::Ref<const Eigen::MatrixXi>& T, const BezierPoints& B, int e,
+                         const Eigen::Ref<const Eigen::VectorXd>& bary);
+
+}  // namespace mbi::interp

@@ -1,0 +1,102 @@
+#pragma once
+// Modified barycentric interpolation (Huang, Chen, Liu, Bao 2008), see docs/method.md.
+//
+//   x(u) = sum_i phi_i(u) (x_i + M_i (u - u_i))
+//
+// Precompute once per rest mesh and parameters (ModifiedBI constructor): assemble E_vibr and
+// E_disc on the per-component unknowns m (d n of them, method.md fact 1), choose beta (fact 7),
+// remove the gauge null space (fact 4) and factor. Per frame: solve() gives all M_i for the
+// deformed positions X, bezier() the element control points that evaluate() consumes.
+#include <mbi/interp/mesh.hpp>
+
+#include <Eigen/SparseCore>
+#include <memory>
+
+namespace mbi::interp {
+
+enum class Method { BI, ModifiedBI };
+
+struct Options {
+  double alpha = 0.0;         ///< weight of E_vibr; 0 = default (0.1 in 3D, 0.2 in 2D); < 0 rejected
+  double beta = 0.0;          ///< weight of E_disc; 0 = automatic (equal Frobenius norms, fact 7)
+  bool pin_boundary = false;  ///< M_i = 0 on boundary vertices (fact 9)
+};
+
+/// Default alpha for dimension d (0.1 in 3D, 0.2 in 2D).
+double default_alpha(int d);
+
+/// Per-vertex matrices M: (n d) x d; rows [i d, i d + d) hold M_i (d x d). Row c of M_i is m_i
+/// of output component c.
+using VertexMatrices = Eigen::MatrixXd;
+
+/// Element Bezier control points: (m * K) x d with K = (d+1)(d+2)/2 per element; element e
+/// uses rows [e K, e K + K): first the d+1 vertex points x_i (local order of T), then the edge
+/// points P_ij for local pairs in the order of bezier_edges(d).
+using BezierPoints = Eigen::MatrixXd;
+
+/// Local vertex pairs (i<j) of the edge control points: 3 in 2D, 6 in 3D.
+const std::vector<std::pair<int, int>>& bezier_edges(int d);
+
+class ModifiedBI {
+ public:
+  /// Precompute for rest mesh (U n x d, T m x (d+1)). Validates the mesh (throws Error).
+  ModifiedBI(const Eigen::Ref<const Eigen::MatrixXd>& U,
+             const Eigen::Ref<const Eigen::MatrixXi>& T, const Options& options = {});
+  ~ModifiedBI();
+  ModifiedBI(ModifiedBI&&) noexcept;
+  ModifiedBI& operator=(ModifiedBI&&) noexcept;
+
+  /// Changes alpha (> 0) and refactors; beta stays as chosen at construction unless automatic
+  /// (it does not depend on alpha).
+  void set_alpha(double alpha);
+
+  int dim() const;
+  int vertices() const;
+  int elements() const;
+  double alpha() const;
+  double beta() const;
+  bool pin_boundary() const;
+  /// Dimension of the gauge null space removed: d + d(d-1)/2 (6 in 3D, 3 in 2D), or 0 with
+  /// pin_boundary.
+  int null_space_dim() const;
+
+  /// M for deformed control positions X (n x d). Throws Error on a size mismatch or NaN.
+  VertexMatrices solve(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
+
+  /// Bezier control points for positions X and matrices M (M = 0 gives BI).
+  BezierPoints bezier(const Eigen::Ref<const Eigen::MatrixXd>& X, const VertexMatrices& M) const;
+
+  /// The assembled per-component quadratic forms (fact 1): Q(m, x_c) =
+  /// [m; x_c]^T [H_mm H_mx; H_mx^T H_xx] [m; x_c] for E_vibr and E_disc separately, unweighted,
+  /// m ordered as m_i = (row c of M_i), vertex-major (d n), x_c of size n. For tests & metrics.
+  const Eigen::SparseMatrix<double>& vibr_hessian_mm() const;
+  const Eigen::SparseMatrix<double>& disc_hessian_mm() const;
+  const Eigen::SparseMatrix<double>& disc_hessian_mx() const;
+  const Eigen::SparseMatrix<double>& disc_hessian_xx() const;
+
+  const Eigen::MatrixXd& rest_positions() const;
+  const Eigen::MatrixXi& elements_matrix() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Bezier control points of plain BI (M = 0) without any precompute.
+BezierPoints bezier_bi(const Eigen::Ref<const Eigen::MatrixXd>& X,
+                       const Eigen::Ref<const Eigen::MatrixXi>& T);
+
+/// Bezier control points from any M (method.md fact 5); needs rest positions U.
+BezierPoints bezier_points(const Eigen::Ref<const Eigen::MatrixXd>& U,
+                           const Eigen::Ref<const Eigen::MatrixXi>& T,
+                           const Eigen::Ref<const Eigen::MatrixXd>& X, const VertexMatrices& M);
+
+/// The defining formula x(u) = sum_i phi_i (x_i + M_i (u - u_i)) at rest point u in element e
+/// (slow; for tests and reference).
+Eigen::VectorXd evaluate_reference(const Eigen::Ref<const Eigen::MatrixXd>& U,
+                                   const Eigen::Ref<const Eigen::MatrixXi>& T,
+                                   const Eigen::Ref<const Eigen::MatrixXd>& X,
+                                   const VertexMatrices& M, int e,
+                                   const Eigen::Ref<const Eigen::VectorXd>& u);
+
+}  // namespace mbi::interp

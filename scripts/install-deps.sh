@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# Installs every build and test dependency of mbi from Debian 12 packages.
+# Idempotent: packages already present are skipped; nothing is downloaded outside apt.
+# Run as root (or with sudo).
+set -euo pipefail
+
+packages=(
+  build-essential cmake ninja-build pkg-config git
+  libeigen3-dev libtet1.5-dev libopenmesh-dev libsuitesparse-dev libtbb-dev
+  libtoml11-dev libcli11-dev nlohmann-json3-dev libstb-dev
+  catch2 libbenchmark-dev
+  libglfw3-dev libegl-dev libgl-dev libegl-mesa0 libglx-mesa0 libgl1-mesa-dri libepoxy-dev
+  libimgui-dev xvfb xauth
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#packages[@]} packages present"
+  exit 0
+fi
+
+if [ "$(id -u)" -ne 0 ]; then
+  if command -v sudo >/dev/null 2>&1; then SUDO=sudo; else
+    echo "install-deps: missing packages (${missing[*]}) and not root; run as root" >&2
+    exit 1
+  fi
+else
+  SUDO=
+fi
+
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
