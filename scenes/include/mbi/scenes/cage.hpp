@@ -1,0 +1,47 @@
+#pragma once
+// Control-mesh ("cage") generation: a coarse simplicial mesh that contains a dense surface.
+//
+// Method: the dense surface is voxelised on a uniform grid of cell size h (every cell that a
+// triangle or a vertex touches, plus the cells enclosed by those, found by a flood fill from
+// outside). The union of these closed cells contains every dense vertex. Each cell is split
+// into simplices with one consistent Kuhn (Freudenthal) subdivision: 6 tetrahedra per cube in
+// 3D (dihedral angles 45, 60 and 90 degrees), 2 right triangles per square in 2D (angles 45 and
+// 90 degrees), so there are no slivers and the mesh is conforming. Parts of the shape farther
+// apart than about one cell stay separate. h is searched (deterministically) so that the number
+// of control vertices is as close as possible to the target.
+//
+// 2D: when every dense vertex has the same z (e.g. the planar alligator and woody meshes), the
+// cage is a 2D triangle mesh in x, y (unless Options::force_3d).
+#include <Eigen/Core>
+
+namespace mbi::scenes {
+
+struct CageOptions {
+  int target_vertices = 200;  ///< desired number of control vertices (>= 8 in 3D, >= 4 in 2D)
+  bool force_3d = false;      ///< build tetrahedra even for a planar input
+  int search_steps = 48;      ///< number of cell sizes tried around the best estimate
+};
+
+struct CageResult {
+  Eigen::MatrixXd U;            ///< n x d control vertices (d = 3, or 2 for planar input)
+  Eigen::MatrixXi T;            ///< m x (d+1) tetrahedra / triangles, positive volume
+  double cell_size = 0.0;       ///< grid cell size h, in the units of the input
+  double min_dihedral_deg = 0;  ///< smallest dihedral angle (2D: smallest triangle angle), deg
+  int outside_points = 0;       ///< dense vertices outside the cage (mbi::interp::embed)
+  double seconds = 0.0;         ///< wall-clock time of the generation
+  int dim() const { return static_cast<int>(U.cols()); }
+};
+
+/// Builds a cage around the dense surface V (n x 3, finite), F (t x 3, 0-based; may be empty
+/// for a point cloud). Deterministic: the same input and options give the same mesh. Throws
+/// std::invalid_argument on bad input (empty V, non-finite coordinates, bad indices, target out
+/// of range) and std::runtime_error if no cell size contains every vertex.
+CageResult make_cage(const Eigen::Ref<const Eigen::MatrixXd>& V,
+                     const Eigen::Ref<const Eigen::MatrixXi>& F, const CageOptions& options = {});
+
+/// Smallest dihedral angle (degrees) over the tetrahedra T of U (3D), or smallest interior
+/// angle over the triangles (2D).
+double min_dihedral_angle_deg(const Eigen::Ref<const Eigen::MatrixXd>& U,
+                              const Eigen::Ref<const Eigen::MatrixXi>& T);
+
+}  // namespace mbi::scenes
