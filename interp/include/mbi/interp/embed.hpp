@@ -12,6 +12,9 @@ struct Embedding {
   std::vector<int> outside;  ///< points outside every element, attached to the nearest one
                              ///< with extrapolated coordinates (some negative)
   double max_outside_distance = 0.0;  ///< largest distance of an outside point to the mesh
+  /// (m (d+1)) x d: rows [e (d+1), e (d+1) + d] are basis_gradients(U, T, e). Filled by embed();
+  /// evaluate() needs it for normals only (J = sum_k dx/dphi_k a_k^T, fact 6).
+  Eigen::MatrixXd gradients;
   int dim() const { return static_cast<int>(bary.cols()) - 1; }
   int size() const { return static_cast<int>(element.size()); }
 };

@@ -1,0 +1,108 @@
+// Embedding: barycentric coordinates, outside points, errors.
+#include <mbi/interp/embed.hpp>
+
+#include <catch2/catch.hpp>
+
+#include "common/grid_meshes.hpp"
+
+#include <random>
+
+using namespace mbi::interp;
+
+namespace {
+// Brute-force distance to the mesh: minimum over elements of the distance to the element,
+// computed by dense sampling-free projection (quadratic program solved by enumeration of faces
+// is what embed does; here: sample the element with a fine barycentric lattice -> upper bound,
+// used with a tolerance of the lattice spacing).
+double lattice_distance(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T, const Eigen::RowVectorXd& p,
+                        int steps) {
+  const int d = static_cast<int>(U.cols());
+  double best = 1e300;
+  for (int e = 0; e < T.rows(); ++e) {
+    for (int i = 0; i <= steps; ++i)
+      for (int j = 0; i + j <= steps; ++j)
+        for (int k = 0; i + j + k <= steps; ++k) {
+          if (d == 2 && k > 0) break;
+          const double b1 = double(i) / steps, b2 = double(j) / steps, b3 = double(k) / steps;
+          Eigen::RowVectorXd q = (1 - b1 - b2 - b3) * U.row(T(e, 0)) + b1 * U.row(T(e, 1)) +
+                                 b2 * U.row(T(e, 2));
+          if (d == 3) q += b3 * U.row(T(e, 3));
+          best = std::min(best, (q - p).norm());
+        }
+  }
+  return best;
+}
+}  // namespace
+
+TEST_CASE("embedding of random inside points reproduces them", "[embed]") {
+  for (int d : {2, 3}) {
+    auto M = d == 3 ? mbi::test::box_tet_mesh(3, 2, 4) : mbi::test::square_tri_mesh(5, 4);
+    mbi::test::jitter(M, 0.2, d == 3 ? 0.25 : 0.2, 11);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> uni(0.0, 1.0);
+    Eigen::MatrixXd P(2000, d);
+    for (int i = 0; i < P.rows(); ++i)
+      for (int c = 0; c < d; ++c) P(i, c) = uni(rng);
+    const Embedding emb = embed(M.U, M.T, P);
+    CHECK(emb.outside.empty());  // the unit box is covered exactly
+    CHECK(emb.max_outside_distance == 0.0);
+    REQUIRE(emb.size() == P.rows());
+    REQUIRE(emb.dim() == d);
+    for (int i = 0; i < P.rows(); ++i) {
+      CHECK(std::abs(emb.bary.row(i).sum() - 1.0) < 1e-12);
+      CHECK(emb.bary.row(i).minCoeff() >= -1e-9);  // inside tolerance of embed()
+    }
+    const Eigen::MatrixXd R = embedded_positions(M.U, M.T, emb);
+    CHECK((R - P).cwiseAbs().maxCoeff() < 1e-12);
+    // Vertices themselves
+    const Embedding ev = embed(M.U, M.T, M.U);
+    CHECK((embedded_positions(M.U, M.T, ev) - M.U).cwiseAbs().maxCoeff() < 1e-12);
+    CHECK(ev.outside.empty());
+  }
+}
+
+TEST_CASE("outside points attach to the nearest element with the true distance", "[embed]") {
+  for (int d : {2, 3}) {
+    auto M = d == 3 ? mbi::test::box_tet_mesh(2, 2, 3) : mbi::test::square_tri_mesh(4, 3);
+    mbi::test::jitter(M, 0.2, 0.3, 2);
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<double> uni(-0.6, 1.6);
+    Eigen::MatrixXd P(60, d);
+    for (int i = 0; i < P.rows(); ++i)
+      for (int c = 0; c < d; ++c) P(i, c) = uni(rng);
+    P.row(0).setConstant(25.0);  // far away: the shell search must still find the corner
+    const Embedding emb = embed(M.U, M.T, P);
+    int expected_outside = 0;
+    double max_dist = 0;
+    for (int i = 0; i < P.rows(); ++i) {
+      const bool out = (P.row(i).array() < 0).any() || (P.row(i).array() > 1).any();
+      expected_outside += out;
+      if (!out) continue;
+      // exact distance to the unit box (convex, equal to the mesh's union)
+      const Eigen::RowVectorXd q = P.row(i).cwiseMax(0.0).cwiseMin(1.0);
+      const double dist = (P.row(i) - q).norm();
+      max_dist = std::max(max_dist, dist);
+      // the attached element realises the distance: the closest point of that element
+      // is within distance dist; check via a lattice sample (spacing 1/40 of an element edge)
+      const Eigen::MatrixXi Te = M.T.row(emb.element(i));
+      CHECK(lattice_distance(M.U, Te, P.row(i), 40) <= dist + 0.03);
+      // coordinates still sum to 1 and reproduce the point by extrapolation
+      CHECK(std::abs(emb.bary.row(i).sum() - 1.0) < 1e-12);
+      CHECK(emb.bary.row(i).minCoeff() < 0);
+    }
+    CHECK(static_cast<int>(emb.outside.size()) == expected_outside);
+    CHECK(emb.max_outside_distance == Approx(max_dist).epsilon(1e-9));
+    const Eigen::MatrixXd R = embedded_positions(M.U, M.T, emb);
+    CHECK((R - P).cwiseAbs().maxCoeff() < 1e-9);  // extrapolated coordinates reproduce P
+  }
+}
+
+TEST_CASE("embedding errors", "[embed]") {
+  auto M = mbi::test::box_tet_mesh(1, 1, 1);
+  Eigen::MatrixXd P = Eigen::MatrixXd::Constant(4, 3, 0.5);
+  P(2, 1) = std::numeric_limits<double>::infinity();
+  CHECK_THROWS_WITH(embed(M.U, M.T, P), Catch::Contains("point 2"));
+  P(2, 1) = std::numeric_limits<double>::quiet_NaN();
+  CHECK_THROWS_WITH(embed(M.U, M.T, P), Catch::Contains("point 2"));
+  CHECK_THROWS_AS(embed(M.U, M.T, Eigen::MatrixXd::Zero(3, 2)), Error);
+}
