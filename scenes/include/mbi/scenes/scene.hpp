@@ -1,0 +1,134 @@
+#pragma once
+// Scene files (TOML): what to load, how to simulate or drag it, how to interpolate, what to write.
+// The format is documented key by key in docs/scene-format.md. load_scene() checks every key:
+// unknown keys, wrong types and out-of-range values throw SceneError "<file>:<line>: <key>: ...".
+#include <Eigen/Core>
+
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace mbi::scenes {
+
+class SceneError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Dense model: a file (path relative to the scene file) or a built-in procedural mesh.
+struct DenseSpec {
+  std::filesystem::path path;  ///< empty when builtin is set
+  std::string builtin;         ///< "paper-bar", "cylinder", "bumpy-sphere", "image-grid"
+  int subdivide = 0;           ///< Loop subdivision steps (OpenMesh), 3D surfaces only
+  std::filesystem::path image; ///< 2D: PNG texture (relative to the scene file); "" = checker
+  int grid = 128;              ///< 2D image grid: cells along the longer side
+};
+
+/// Control mesh: a file, a built-in, or generated around the dense model.
+struct ControlSpec {
+  std::filesystem::path path;  ///< TetGen .node/.ele (or base) or Gmsh .msh
+  std::string builtin;         ///< "paper-bar", "box", "grid-2d"
+  int generate_vertices = 0;   ///< > 0: generate with TetGen to about this many vertices
+  Eigen::Vector3i cells{2, 2, 8};  ///< for builtin "box" / "grid-2d" (z ignored in 2D)
+};
+
+struct MaterialSpec {
+  double young = 1e6;     ///< Pa
+  double poisson = 0.45;  ///< 1
+  double density = 1000;  ///< kg/m^3
+};
+
+struct SimulationSpec {
+  double dt = 1.0 / 30.0;  ///< s per frame
+  int substeps = 1;
+  int frames = 120;
+  int newton_iterations = 1;
+  Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  ///< m/s^2
+  double damping_mass = 0.0;       ///< Rayleigh alpha, 1/s
+  double damping_stiffness = 0.0;  ///< Rayleigh beta, s
+  std::optional<double> ground;    ///< ground plane height (y up), m
+};
+
+/// Node selection: an axis-aligned box, a half-space, or explicit indices (any combination is a
+/// union).
+struct Selection {
+  std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> box;        ///< min, max
+  std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> half_space; ///< point, normal: n.(x-p) >= 0
+  std::vector<int> indices;
+  std::string where;  ///< "<file>:<line>" for error messages
+};
+
+struct MotionSpec {
+  Eigen::Vector3d twist_axis = Eigen::Vector3d::UnitZ();
+  Eigen::Vector3d twist_center = Eigen::Vector3d::Zero();
+  double twist_rate = 0.0;  ///< rad/s
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  ///< m/s
+  double start = 0.0, stop = 1e30;  ///< s: the motion runs in [start, stop]
+};
+
+struct ConstraintSpec {
+  enum class Kind { Fixed, Kinematic } kind = Kind::Fixed;
+  Selection select;
+  MotionSpec motion;  ///< Kinematic only
+};
+
+/// A scripted poke: a constant force (N) or a spring (N/m) toward a target, on frames
+/// [first, last], at a material point given in rest coordinates.
+struct PokeSpec {
+  int first = 0, last = 0;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+  std::optional<Eigen::Vector3d> force;
+  std::optional<Eigen::Vector3d> target;
+  double stiffness = 0.0;
+};
+
+/// A dragged control vertex (no physics; paper Eq. 10/11): keyframes (frame, position) linearly
+/// interpolated.
+struct DragSpec {
+  int vertex = -1;                      ///< control vertex index, or -1 with `near`
+  std::optional<Eigen::Vector3d> near;  ///< pick the control vertex nearest to this point
+  std::vector<std::pair<double, Eigen::Vector3d>> keys;
+};
+
+struct InterpolationSpec {
+  std::string method = "modified-bi";  ///< "bi" or "modified-bi"
+  double alpha = 0.0;                  ///< 0 = default (0.1 in 3D, 0.2 in 2D)
+  bool pin_boundary = false;
+  bool compare_pinned = false;         ///< 2D drag scenes: also write the pinned variant
+  std::string handles = "hard";        ///< drag scenes: "hard" (Eq. 10) or "soft" (Eq. 11)
+};
+
+struct OutputSpec {
+  int every = 10;                  ///< write meshes every N frames (and the last)
+  std::string mesh_format = "obj"; ///< "obj", "ply" or "none"
+  bool pc2 = true;
+  bool control_vtk = true;
+  bool metrics = true;
+  bool image = true;               ///< 2D scenes: warped PNG of written frames
+};
+
+struct Scene {
+  std::filesystem::path file;  ///< the scene file itself
+  std::string name;
+  std::string mode = "simulate";  ///< "simulate" (FEM) or "drag" (handles, paper Eq. 10/11)
+  DenseSpec dense;
+  ControlSpec control;
+  MaterialSpec material;
+  SimulationSpec simulation;
+  std::vector<ConstraintSpec> constraints;
+  std::vector<PokeSpec> pokes;
+  std::vector<DragSpec> drags;
+  InterpolationSpec interpolation;
+  OutputSpec output;
+};
+
+/// Reads and checks a scene file. Throws SceneError naming file, line and key.
+Scene load_scene(const std::filesystem::path& file);
+
+/// Nodes of U (n x d) selected by s (sorted, unique). Throws SceneError if an index is out of
+/// range or nothing is selected.
+std::vector<int> select_nodes(const Selection& s, const Eigen::Ref<const Eigen::MatrixXd>& U);
+
+}  // namespace mbi::scenes

@@ -1,0 +1,398 @@
+#include <mbi/scenes/scene.hpp>
+
+#include <toml.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <sstream>
+
+namespace mbi::scenes {
+namespace {
+
+using toml_value = toml::value;
+
+std::string first_line(const std::string& s) {
+  std::string out;
+  std::istringstream in(s);
+  std::string line;
+  while (std::getline(in, line)) {
+    // toml11 messages start with "[error] ..." followed by a source excerpt
+    if (!line.empty()) {
+      out = line;
+      break;
+    }
+  }
+  const std::string tag = "[error] ";
+  if (out.rfind(tag, 0) == 0) out = out.substr(tag.size());
+  return out;
+}
+
+// A TOML table whose keys are checked: every key must be read through this class, or finish()
+// reports it as unknown.
+class Table {
+ public:
+  Table(const toml_value& v, std::string prefix, std::string file)
+      : v_(v), prefix_(std::move(prefix)), file_(std::move(file)) {}
+
+  bool has(const std::string& key) {
+    if (!v_.as_table().count(key)) return false;
+    used_.insert(key);
+    return true;
+  }
+  const toml_value& at(const std::string& key) {
+    used_.insert(key);
+    return v_.as_table().at(key);
+  }
+  std::string where(const toml_value& v) const {
+    return file_ + ":" + std::to_string(v.location().line());
+  }
+  std::string key_name(const std::string& key) const {
+    return prefix_.empty() ? key : prefix_ + "." + key;
+  }
+  [[noreturn]] void fail(const std::string& key, const std::string& msg) {
+    const toml_value& v = v_.as_table().count(key) ? v_.as_table().at(key) : v_;
+    throw SceneError(where(v) + ": " + key_name(key) + ": " + msg);
+  }
+
+  double number(const std::string& key, double def, double lo = -HUGE_VAL, double hi = HUGE_VAL,
+                bool lo_open = false) {
+    if (!has(key)) return def;
+    const toml_value& v = at(key);
+    double x;
+    if (v.is_floating())
+      x = v.as_floating();
+    else if (v.is_integer())
+      x = static_cast<double>(v.as_integer());
+    else
+      fail(key, "expected a number");
+    if (!std::isfinite(x)) fail(key, "must be finite");
+    if (x < lo || x > hi || (lo_open && x == lo)) {
+      std::ostringstream m;
+      m << "value " << x << " out of range " << (lo_open ? "(" : "[") << lo << ", " << hi << "]";
+      fail(key, m.str());
+    }
+    return x;
+  }
+  int integer(const std::string& key, int def, long lo, long hi) {
+    if (!has(key)) return def;
+    const toml_value& v = at(key);
+    if (!v.is_integer()) fail(key, "expected an integer");
+    const auto x = v.as_integer();
+    if (x < lo || x > hi)
+      fail(key, "value " + std::to_string(x) + " out of range [" + std::to_string(lo) + ", " +
+                    std::to_string(hi) + "]");
+    return static_cast<int>(x);
+  }
+  bool boolean(const std::string& key, bool def) {
+    if (!has(key)) return def;
+    const toml_value& v = at(key);
+    if (!v.is_boolean()) fail(key, "expected true or false");
+    return v.as_boolean();
+  }
+  std::string string(const std::string& key, const std::string& def,
+                     std::initializer_list<const char*> allowed = {}) {
+    if (!has(key)) return def;
+    const toml_value& v = at(key);
+    if (!v.is_string()) fail(key, "expected a string");
+    std::string s = v.as_string();
+    if (allowed.size()) {
+      std::string list;
+      for (const char* a : allowed) {
+        if (s == a) return s;
+        list += std::string(list.empty() ? "" : ", ") + a;
+      }
+      fail(key, "unknown value \"" + s + "\" (expected one of: " + list + ")");
+    }
+    return s;
+  }
+  Eigen::Vector3d vec(const std::string& key, const Eigen::Vector3d& def, int dims = 3) {
+    if (!has(key)) return def;
+    const toml_value& v = at(key);
+    if (!v.is_array()) fail(key, "expected an array of " + std::to_string(dims) + " numbers");
+    const auto& a = v.as_array();
+    if (static_cast<int>(a.size()) != dims && !(dims == 2 && a.size() == 3))
+      fail(key, "expected " + std::to_string(dims) + " numbers, got " + std::to_string(a.size()));
+    Eigen::Vector3d out = Eigen::Vector3d::Zero();
+    for (size_t i = 0; i < a.size(); ++i) {
+      if (a[i].is_floating())
+        out[static_cast<Eigen::Index>(i)] = a[i].as_floating();
+      else if (a[i].is_integer())
+        out[static_cast<Eigen::Index>(i)] = static_cast<double>(a[i].as_integer());
+      else
+        fail(key, "element " + std::to_string(i) + " is not a number");
+      if (!std::isfinite(out[static_cast<Eigen::Index>(i)])) fail(key, "must be finite");
+    }
+    return out;
+  }
+  Table sub(const std::string& key) {
+    const toml_value& v = at(key);
+    if (!v.is_table()) fail(key, "expected a table");
+    return Table(v, key_name(key), file_);
+  }
+  std::vector<Table> array_of_tables(const std::string& key) {
+    std::vector<Table> out;
+    if (!has(key)) return out;
+    const toml_value& v = at(key);
+    if (!v.is_array()) fail(key, "expected an array of tables ([[" + key_name(key) + "]])");
+    const auto& arr = v.as_array();
+    for (size_t i = 0; i < arr.size(); ++i) {
+      if (!arr[i].is_table())
+        throw SceneError(where(arr[i]) + ": " + key_name(key) + "[" + std::to_string(i) +
+                         "]: expected a table");
+      out.emplace_back(arr[i], key_name(key) + "[" + std::to_string(i) + "]", file_);
+    }
+    return out;
+  }
+  /// Every key of this table must have been read.
+  void finish() {
+    std::vector<std::string> unknown;
+    for (const auto& [k, v] : v_.as_table())
+      if (!used_.count(k)) unknown.push_back(k);
+    if (unknown.empty()) return;
+    std::sort(unknown.begin(), unknown.end());
+    const toml_value& v = v_.as_table().at(unknown.front());
+    throw SceneError(where(v) + ": " + key_name(unknown.front()) + ": unknown key");
+  }
+  const std::string& file() const { return file_; }
+  const toml_value& value() const { return v_; }
+
+ private:
+  const toml_value& v_;
+  std::string prefix_, file_;
+  std::set<std::string> used_;
+};
+
+Selection parse_selection(Table t) {
+  Selection s;
+  s.where = t.where(t.value());
+  if (t.has("box")) {
+    Table b = t.sub("box");
+    const Eigen::Vector3d lo = b.vec("min", Eigen::Vector3d::Constant(-HUGE_VAL));
+    const Eigen::Vector3d hi = b.vec("max", Eigen::Vector3d::Constant(HUGE_VAL));
+    if ((hi - lo).minCoeff() < 0) b.fail("max", "max must be >= min in every coordinate");
+    b.finish();
+    s.box = std::make_pair(lo, hi);
+  }
+  if (t.has("half_space")) {
+    Table h = t.sub("half_space");
+    const Eigen::Vector3d p = h.vec("point", Eigen::Vector3d::Zero());
+    const Eigen::Vector3d n = h.vec("normal", Eigen::Vector3d::UnitZ());
+    if (n.norm() == 0) h.fail("normal", "normal must be non-zero");
+    h.finish();
+    s.half_space = std::make_pair(p, n);
+  }
+  if (t.has("indices")) {
+    const toml_value& v = t.at("indices");
+    if (!v.is_array()) t.fail("indices", "expected an array of integers");
+    for (const auto& x : v.as_array()) {
+      if (!x.is_integer() || x.as_integer() < 0 || x.as_integer() > (1 << 30))
+        t.fail("indices", "expected non-negative integers");
+      s.indices.push_back(static_cast<int>(x.as_integer()));
+    }
+  }
+  if (!s.box && !s.half_space && s.indices.empty())
+    throw SceneError(s.where + ": " + t.key_name("") + " needs box, half_space or indices");
+  t.finish();
+  return s;
+}
+
+}  // namespace
+
+Scene load_scene(const std::filesystem::path& file) {
+  const std::string fname = file.string();
+  if (!std::filesystem::is_regular_file(file)) throw SceneError(fname + ": no such scene file");
+  toml_value root;
+  try {
+    root = toml::parse(file);
+  } catch (const toml::exception& e) {
+    throw SceneError(fname + ":" + std::to_string(e.location().line()) +
+                     ": syntax error: " + first_line(e.what()));
+  } catch (const std::exception& e) {
+    throw SceneError(fname + ": " + first_line(e.what()));
+  }
+  Scene sc;
+  sc.file = file;
+  Table top(root, "", fname);
+  sc.name = top.string("name", file.stem().string());
+  sc.mode = top.string("mode", "simulate", {"simulate", "drag"});
+
+  if (!top.has("dense")) throw SceneError(fname + ":1: dense: missing table [dense]");
+  {
+    Table t = top.sub("dense");
+    if (t.has("path")) sc.dense.path = t.string("path", "");
+    sc.dense.builtin =
+        t.string("builtin", "", {"paper-bar", "cylinder", "bumpy-sphere", "image-grid"});
+    if (sc.dense.path.empty() == sc.dense.builtin.empty())
+      throw SceneError(t.where(t.value()) + ": dense: give exactly one of path or builtin");
+    sc.dense.subdivide = t.integer("subdivide", 0, 0, 4);
+    if (t.has("image")) sc.dense.image = t.string("image", "");
+    sc.dense.grid = t.integer("grid", 128, 2, 4096);
+    t.finish();
+  }
+  if (!top.has("control")) throw SceneError(fname + ":1: control: missing table [control]");
+  {
+    Table t = top.sub("control");
+    if (t.has("path")) sc.control.path = t.string("path", "");
+    sc.control.builtin = t.string("builtin", "", {"paper-bar", "box", "grid-2d"});
+    sc.control.generate_vertices = t.integer("generate_vertices", 0, 4, 100000);
+    const int given = int(!sc.control.path.empty()) + int(!sc.control.builtin.empty()) +
+                      int(sc.control.generate_vertices > 0);
+    if (given != 1)
+      throw SceneError(t.where(t.value()) +
+                       ": control: give exactly one of path, builtin or generate_vertices");
+    const Eigen::Vector3d c = t.vec("cells", Eigen::Vector3d(2, 2, 8));
+    if (c.minCoeff() < 1 || c.maxCoeff() > 1000 || (c - c.array().round().matrix()).norm() > 0)
+      t.fail("cells", "expected positive integers <= 1000");
+    sc.control.cells = c.cast<int>();
+    t.finish();
+  }
+  if (top.has("material")) {
+    Table t = top.sub("material");
+    sc.material.young = t.number("young", sc.material.young, 0, HUGE_VAL, true);
+    sc.material.poisson = t.number("poisson", sc.material.poisson, -0.999, 0.499);
+    sc.material.density = t.number("density", sc.material.density, 0, HUGE_VAL, true);
+    t.finish();
+  }
+  if (top.has("simulation")) {
+    Table t = top.sub("simulation");
+    auto& s = sc.simulation;
+    s.dt = t.number("dt", s.dt, 0, 10, true);
+    s.substeps = t.integer("substeps", s.substeps, 1, 1000);
+    s.frames = t.integer("frames", s.frames, 1, 1000000);
+    s.newton_iterations = t.integer("newton_iterations", s.newton_iterations, 1, 100);
+    s.gravity = t.vec("gravity", s.gravity);
+    s.damping_mass = t.number("damping_mass", s.damping_mass, 0, 1e6);
+    s.damping_stiffness = t.number("damping_stiffness", s.damping_stiffness, 0, 1e3);
+    if (t.has("ground")) s.ground = t.number("ground", 0.0);
+    t.finish();
+  }
+  for (Table& t : top.array_of_tables("constraints")) {
+    ConstraintSpec c;
+    const std::string kind = t.string("type", "fixed", {"fixed", "kinematic"});
+    c.kind = kind == "fixed" ? ConstraintSpec::Kind::Fixed : ConstraintSpec::Kind::Kinematic;
+    if (!t.has("select")) throw SceneError(t.where(t.value()) + ": " + t.key_name("select") + ": missing");
+    c.select = parse_selection(t.sub("select"));
+    if (t.has("motion")) {
+      if (c.kind != ConstraintSpec::Kind::Kinematic)
+        t.fail("motion", "only kinematic constraints have a motion");
+      Table m = t.sub("motion");
+      c.motion.twist_axis = m.vec("twist_axis", c.motion.twist_axis);
+      if (c.motion.twist_axis.norm() == 0) m.fail("twist_axis", "axis must be non-zero");
+      c.motion.twist_center = m.vec("twist_center", c.motion.twist_center);
+      c.motion.twist_rate = m.number("twist_rate", 0.0, -1e4, 1e4);
+      c.motion.velocity = m.vec("velocity", c.motion.velocity);
+      c.motion.start = m.number("start", 0.0, 0, HUGE_VAL);
+      c.motion.stop = m.number("stop", 1e30, 0, HUGE_VAL);
+      if (c.motion.stop < c.motion.start) m.fail("stop", "stop must be >= start");
+      m.finish();
+    }
+    t.finish();
+    sc.constraints.push_back(std::move(c));
+  }
+  for (Table& t : top.array_of_tables("pokes")) {
+    PokeSpec p;
+    p.first = t.integer("first", 0, 0, 1 << 30);
+    p.last = t.integer("last", p.first, 0, 1 << 30);
+    if (p.last < p.first) t.fail("last", "last must be >= first");
+    if (!t.has("point")) throw SceneError(t.where(t.value()) + ": " + t.key_name("point") + ": missing");
+    p.point = t.vec("point", p.point);
+    if (t.has("force")) p.force = t.vec("force", Eigen::Vector3d::Zero());
+    if (t.has("target")) p.target = t.vec("target", Eigen::Vector3d::Zero());
+    p.stiffness = t.number("stiffness", 0.0, 0, HUGE_VAL);
+    if (p.force.has_value() == p.target.has_value())
+      throw SceneError(t.where(t.value()) + ": " + t.key_name("") + ": give exactly one of force or target");
+    if (p.target && p.stiffness <= 0) t.fail("stiffness", "a target poke needs stiffness > 0 (N/m)");
+    t.finish();
+    sc.pokes.push_back(p);
+  }
+  for (Table& t : top.array_of_tables("drags")) {
+    DragSpec d;
+    d.vertex = t.integer("vertex", -1, 0, 1 << 30);
+    if (t.has("near")) d.near = t.vec("near", Eigen::Vector3d::Zero());
+    if ((d.vertex >= 0) == d.near.has_value())
+      throw SceneError(t.where(t.value()) + ": " + t.key_name("") + ": give exactly one of vertex or near");
+    if (!t.has("keys")) throw SceneError(t.where(t.value()) + ": " + t.key_name("keys") + ": missing");
+    const toml_value& keys = t.at("keys");
+    if (!keys.is_array() || keys.as_array().empty())
+      t.fail("keys", "expected an array of [frame, x, y(, z)] arrays");
+    for (const auto& k : keys.as_array()) {
+      if (!k.is_array() || (k.as_array().size() != 3 && k.as_array().size() != 4))
+        t.fail("keys", "each key is [frame, x, y] (2D) or [frame, x, y, z]");
+      Eigen::Vector4d q = Eigen::Vector4d::Zero();
+      for (size_t i = 0; i < k.as_array().size(); ++i) {
+        const auto& x = k.as_array()[i];
+        if (x.is_floating())
+          q[static_cast<Eigen::Index>(i)] = x.as_floating();
+        else if (x.is_integer())
+          q[static_cast<Eigen::Index>(i)] = static_cast<double>(x.as_integer());
+        else
+          t.fail("keys", "key entries must be numbers");
+      }
+      if (!q.allFinite()) t.fail("keys", "key entries must be finite");
+      if (!d.keys.empty() && q[0] <= d.keys.back().first) t.fail("keys", "frames must increase");
+      d.keys.emplace_back(q[0], q.tail<3>());
+    }
+    t.finish();
+    sc.drags.push_back(std::move(d));
+  }
+  if (top.has("interpolation")) {
+    Table t = top.sub("interpolation");
+    auto& i = sc.interpolation;
+    i.method = t.string("method", i.method, {"bi", "modified-bi"});
+    i.alpha = t.number("alpha", 0.0, 0, 1e6, true);
+    i.pin_boundary = t.boolean("pin_boundary", false);
+    i.compare_pinned = t.boolean("compare_pinned", false);
+    i.handles = t.string("handles", i.handles, {"hard", "soft"});
+    t.finish();
+  }
+  if (top.has("output")) {
+    Table t = top.sub("output");
+    auto& o = sc.output;
+    o.every = t.integer("every", o.every, 1, 1 << 30);
+    o.mesh_format = t.string("mesh_format", o.mesh_format, {"obj", "ply", "none"});
+    o.pc2 = t.boolean("pc2", o.pc2);
+    o.control_vtk = t.boolean("control_vtk", o.control_vtk);
+    o.metrics = t.boolean("metrics", o.metrics);
+    o.image = t.boolean("image", o.image);
+    t.finish();
+  }
+  top.finish();
+  if (sc.mode == "drag" && sc.drags.empty())
+    throw SceneError(fname + ":1: drags: a drag scene needs at least one [[drags]] entry");
+  if (sc.mode == "simulate" && !sc.drags.empty())
+    throw SceneError(fname + ":1: drags: only drag scenes (mode = \"drag\") take [[drags]]");
+  return sc;
+}
+
+std::vector<int> select_nodes(const Selection& s, const Eigen::Ref<const Eigen::MatrixXd>& U) {
+  std::vector<char> on(static_cast<size_t>(U.rows()), 0);
+  const int d = static_cast<int>(U.cols());
+  for (int i : s.indices) {
+    if (i >= U.rows())
+      throw SceneError(s.where + ": select.indices: node " + std::to_string(i) +
+                       " out of range (control mesh has " + std::to_string(U.rows()) + ")");
+    on[static_cast<size_t>(i)] = 1;
+  }
+  for (Eigen::Index i = 0; i < U.rows(); ++i) {
+    if (s.box) {
+      const auto& [lo, hi] = *s.box;
+      bool in = true;
+      for (int c = 0; c < d; ++c) in = in && U(i, c) >= lo[c] && U(i, c) <= hi[c];
+      if (in) on[static_cast<size_t>(i)] = 1;
+    }
+    if (s.half_space) {
+      const auto& [q, n] = *s.half_space;
+      double side = 0;
+      for (int c = 0; c < d; ++c) side += (U(i, c) - q[c]) * n[c];
+      if (side >= 0) on[static_cast<size_t>(i)] = 1;
+    }
+  }
+  std::vector<int> out;
+  for (size_t i = 0; i < on.size(); ++i)
+    if (on[i]) out.push_back(static_cast<int>(i));
+  if (out.empty()) throw SceneError(s.where + ": select: selects no control node");
+  return out;
+}
+
+}  // namespace mbi::scenes
