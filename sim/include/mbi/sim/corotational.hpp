@@ -110,9 +110,11 @@ Eigen::SparseMatrix<double> corotational_hessian(const MeshRest& rest,
                                                  const Eigen::Ref<const Eigen::MatrixXi>& T,
                                                  const Eigen::Ref<const Eigen::MatrixXd>& X);
 
-/// Plain linear-elasticity stiffness sum_e K_e (3n x 3n, N/m): the small-strain baseline.
+/// Plain linear-elasticity stiffness sum_e K_e (3n x 3n, N/m, n = nodes): the small-strain
+/// baseline.
 Eigen::SparseMatrix<double> linear_stiffness(const MeshRest& rest,
-                                             const Eigen::Ref<const Eigen::MatrixXi>& T);
+                                             const Eigen::Ref<const Eigen::MatrixXi>& T,
+                                             int nodes);
 
 /// Lumped masses (kg), n: each element gives rho V / 4 to each corner.
 Eigen::VectorXd lumped_masses(const MeshRest& rest, const Eigen::Ref<const Eigen::MatrixXi>& T,

@@ -1,0 +1,810 @@
+#include <mbi/sim/simulator.hpp>
+
+#include <Eigen/Geometry>
+#include <Eigen/IterativeLinearSolvers>
+#include <Eigen/SparseCholesky>
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <string>
+
+namespace mbi::sim {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+std::string vec_str(const Eigen::Vector3d& v) {
+  return "(" + std::to_string(v.x()) + ", " + std::to_string(v.y()) + ", " +
+         std::to_string(v.z()) + ")";
+}
+
+void check_params(const Parameters& p) {
+  auto bad = [](const std::string& what) { throw Error("mbi::sim: parameter " + what); };
+  if (!std::isfinite(p.dt) || p.dt <= 0) bad("dt must be finite and > 0 s");
+  if (p.substeps < 1) bad("substeps must be >= 1");
+  if (!p.gravity.allFinite()) bad("gravity must be finite");
+  if (!std::isfinite(p.mass_damping) || p.mass_damping < 0) bad("mass_damping must be >= 0");
+  if (!std::isfinite(p.stiffness_damping) || p.stiffness_damping < 0)
+    bad("stiffness_damping must be >= 0");
+  if (p.newton_iterations < 1) bad("newton_iterations must be >= 1");
+  if (!std::isfinite(p.newton_tolerance) || p.newton_tolerance < 0)
+    bad("newton_tolerance must be >= 0");
+  if (!std::isfinite(p.pcg_tolerance) || p.pcg_tolerance <= 0 || p.pcg_tolerance >= 1)
+    bad("pcg_tolerance must lie in (0, 1)");
+  if (p.pcg_max_iterations < 1) bad("pcg_max_iterations must be >= 1");
+  if (!std::isfinite(p.max_energy) || p.max_energy < 0) bad("max_energy must be >= 0");
+  if (p.ground) {
+    if (!p.ground_plane.normal.allFinite() || p.ground_plane.normal.norm() == 0)
+      bad("ground_plane.normal must be finite and non-zero");
+    if (!std::isfinite(p.ground_plane.offset)) bad("ground_plane.offset must be finite");
+    if (!(p.ground_plane.friction >= 0 && p.ground_plane.friction <= 1))
+      bad("ground_plane.friction must lie in [0, 1]");
+  }
+}
+
+struct Elem {
+  std::array<int, 4> node;
+  Eigen::Matrix<double, 3, 4> grad;
+  double volume, mu, lambda;
+  // slot[a][b][l]: index (into the lower-triangular CSC values) of block (a, b)'s entry
+  // (row 0 of the block, or row l on the diagonal, column l); -1 when block (b, a) is stored.
+  std::array<std::array<std::array<int, 3>, 4>, 4> slot;
+};
+
+struct Kinematic {
+  std::vector<int> nodes;
+  Eigen::MatrixXd p0;  // k x 3
+  RigidMotion motion;
+  Eigen::Vector3d position(int k, double t) const {
+    const double s = std::clamp(t, motion.start, motion.stop) - motion.start;
+    Eigen::Vector3d r = p0.row(k).transpose() - motion.center;
+    if (motion.angular_velocity != 0.0) {
+      const Eigen::AngleAxisd rot(motion.angular_velocity * s, motion.axis.normalized());
+      r = rot * r;
+    }
+    return motion.center + motion.velocity * s + r;
+  }
+};
+
+struct PointForce {
+  int element;
+  Eigen::Vector4d bary;
+  Eigen::Vector3d force;
+};
+
+struct Poke {
+  int element;
+  Eigen::Vector4d bary;
+  Eigen::Vector3d target;
+  double stiffness;
+};
+
+}  // namespace
+
+struct Simulator::Impl {
+  Eigen::MatrixXd U;
+  Eigen::MatrixXi T;
+  Parameters params;
+  std::vector<Elem> elems;
+  Eigen::VectorXd mass;      // n
+  Eigen::VectorXd mass_dof;  // 3n
+  int n = 0;
+  double total_volume = 0.0;
+  double energy_limit = 0.0;
+
+  // state
+  Eigen::VectorXd x, v;  // 3n
+  Eigen::MatrixXd Xout, Vout;
+  double t = 0.0;
+  long steps = 0;
+
+  // handles
+  int next_id = 0;
+  std::map<int, Kinematic> kinematic;
+  std::map<int, PointForce> forces;
+  std::map<int, Poke> pokes;
+  std::vector<int> owner;  // per node: kinematic handle id or -1
+  std::vector<char> constrained_dof;
+  std::vector<int> zero_slots;  // CSC value slots coupling a constrained and another dof
+  bool constraints_dirty = true;
+
+  // linear algebra
+  Eigen::SparseMatrix<double> A;  // lower triangle, fixed pattern
+  std::vector<int> diag_slot;     // per dof
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt;
+  bool ldlt_analysed = false;
+  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower,
+                           Eigen::DiagonalPreconditioner<double>>
+      pcg;
+  LinearSolver used_solver = LinearSolver::LDLT;
+  Eigen::VectorXd last_delta;
+
+  // scratch
+  Eigen::VectorXd f_el, f_ext, Kv, r, delta;
+  double last_elastic = 0.0;
+
+  void build(const Eigen::Ref<const Eigen::MatrixXd>& U_, const Eigen::Ref<const Eigen::MatrixXi>& T_,
+             const Material& material, const std::vector<Material>& per_element);
+  void build_pattern();
+  void update_constraints();
+  void resolve_solver();
+  void sync_out() {
+    Xout = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(x.data(), n, 3);
+    Vout = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(v.data(), n, 3);
+  }
+  Eigen::Vector3d node(const Eigen::VectorXd& q, int i) const { return q.segment<3>(3 * i); }
+  Eigen::Vector3d material_point(const Eigen::VectorXd& q, int e, const Eigen::Vector4d& b) const {
+    Eigen::Vector3d p = Eigen::Vector3d::Zero();
+    for (int a = 0; a < 4; ++a) p += b(a) * node(q, elems[e].node[a]);
+    return p;
+  }
+  void check_element_bary(int element, const Eigen::Vector4d& bary, const char* what) const;
+  void check_nodes(const std::vector<int>& nodes, const char* what) const;
+
+  // Assembles at positions xe: elastic forces into f_el, A = cM M + cK K_el + cP K_poke (lower,
+  // constrained rows/cols zeroed), and, when vd is non-null, Kv = K_el vd. Returns elastic energy.
+  double assemble(const Eigen::VectorXd& xe, double cM, double cK, double cP,
+                  const Eigen::VectorXd* vd);
+  void external_forces();                                   // gravity + point forces -> f_ext
+  void add_poke_forces(const Eigen::VectorXd& xe, Eigen::VectorXd& f) const;
+  bool solve(std::string& why, int& iterations);            // A delta = r
+  void prescribed(double time, Eigen::VectorXd& pos) const; // kinematic positions into pos
+  std::string substep(double h, int& newton, int& iters, double& t_asm, double& t_solve);
+  void ground();
+};
+
+void Simulator::Impl::build(const Eigen::Ref<const Eigen::MatrixXd>& U_,
+                            const Eigen::Ref<const Eigen::MatrixXi>& T_, const Material& material,
+                            const std::vector<Material>& per_element) {
+  const MeshRest rest = mesh_rest(U_, T_, material, per_element);
+  U = U_;
+  T = T_;
+  n = static_cast<int>(U.rows());
+  mass = lumped_masses(rest, T, n);
+  for (int i = 0; i < n; ++i)
+    if (!(mass(i) > 0))
+      throw Error("mbi::sim: node " + std::to_string(i) +
+                  " belongs to no element (it would have no mass)");
+  mass_dof.resize(3 * n);
+  for (int i = 0; i < n; ++i) mass_dof.segment<3>(3 * i).setConstant(mass(i));
+  elems.resize(T.rows());
+  double max_E = 0.0;
+  for (Eigen::Index e = 0; e < T.rows(); ++e) {
+    Elem& el = elems[e];
+    for (int a = 0; a < 4; ++a) el.node[a] = T(e, a);
+    el.grad = rest.tets[e].grad;
+    el.volume = rest.tets[e].volume;
+    el.mu = rest.lame[e].mu;
+    el.lambda = rest.lame[e].lambda;
+    total_volume += el.volume;
+    const Material& m = per_element.empty() ? material : per_element[e];
+    max_E = std::max(max_E, m.youngs_modulus);
+  }
+  energy_limit = 1e3 * max_E * total_volume;
+  x.resize(3 * n);
+  for (int i = 0; i < n; ++i) x.segment<3>(3 * i) = U.row(i).transpose();
+  v = Eigen::VectorXd::Zero(3 * n);
+  owner.assign(n, -1);
+  constrained_dof.assign(3 * n, 0);
+  build_pattern();
+  resolve_solver();
+  sync_out();
+}
+
+void Simulator::Impl::build_pattern() {
+  // Lower node adjacency: for node j, the nodes i > j sharing an element.
+  std::vector<std::vector<int>> lower(n);
+  for (const Elem& el : elems)
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b)
+        if (el.node[a] > el.node[b]) lower[el.node[b]].push_back(el.node[a]);
+  for (auto& l : lower) {
+    std::sort(l.begin(), l.end());
+    l.erase(std::unique(l.begin(), l.end()), l.end());
+  }
+  const int N = 3 * n;
+  std::vector<int> outer(N + 1, 0);
+  for (int j = 0; j < n; ++j)
+    for (int l = 0; l < 3; ++l)
+      outer[3 * j + l + 1] = outer[3 * j + l] + (3 - l) + 3 * static_cast<int>(lower[j].size());
+  const int nnz = outer[N];
+  std::vector<int> inner(nnz);
+  for (int j = 0; j < n; ++j)
+    for (int l = 0; l < 3; ++l) {
+      int p = outer[3 * j + l];
+      for (int k = l; k < 3; ++k) inner[p++] = 3 * j + k;
+      for (int i : lower[j])
+        for (int k = 0; k < 3; ++k) inner[p++] = 3 * i + k;
+    }
+  A = Eigen::SparseMatrix<double>(N, N);
+  A.resizeNonZeros(nnz);
+  std::copy(outer.begin(), outer.end(), A.outerIndexPtr());
+  std::copy(inner.begin(), inner.end(), A.innerIndexPtr());
+  std::fill(A.valuePtr(), A.valuePtr() + nnz, 0.0);
+  diag_slot.resize(N);
+  for (int d = 0; d < N; ++d) diag_slot[d] = outer[d];
+  for (Elem& el : elems)
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b)
+        for (int l = 0; l < 3; ++l) {
+          const int i = el.node[a], j = el.node[b];
+          if (i < j) {
+            el.slot[a][b][l] = -1;
+          } else if (i == j) {
+            el.slot[a][b][l] = outer[3 * j + l];
+          } else {
+            const auto& lj = lower[j];
+            const int rank = static_cast<int>(std::lower_bound(lj.begin(), lj.end(), i) - lj.begin());
+            el.slot[a][b][l] = outer[3 * j + l] + (3 - l) + 3 * rank;
+          }
+        }
+  ldlt_analysed = false;
+}
+
+void Simulator::Impl::resolve_solver() {
+  used_solver = params.solver;
+  if (used_solver == LinearSolver::Auto) used_solver = LinearSolver::LDLT;
+  if (used_solver == LinearSolver::LDLT && !ldlt_analysed) {
+    ldlt.analyzePattern(A);
+    ldlt_analysed = true;
+  }
+  pcg.setTolerance(params.pcg_tolerance);
+  pcg.setMaxIterations(params.pcg_max_iterations);
+}
+
+void Simulator::Impl::update_constraints() {
+  std::fill(constrained_dof.begin(), constrained_dof.end(), 0);
+  for (int i = 0; i < n; ++i)
+    if (owner[i] >= 0) constrained_dof[3 * i] = constrained_dof[3 * i + 1] = constrained_dof[3 * i + 2] = 1;
+  zero_slots.clear();
+  const int N = 3 * n;
+  for (int c = 0; c < N; ++c)
+    for (int p = A.outerIndexPtr()[c]; p < A.outerIndexPtr()[c + 1]; ++p) {
+      const int r = A.innerIndexPtr()[p];
+      if (r != c && (constrained_dof[r] || constrained_dof[c])) zero_slots.push_back(p);
+    }
+  constraints_dirty = false;
+}
+
+void Simulator::Impl::check_element_bary(int element, const Eigen::Vector4d& bary,
+                                         const char* what) const {
+  if (element < 0 || element >= static_cast<int>(elems.size()))
+    throw Error(std::string("mbi::sim: ") + what + ": element " + std::to_string(element) +
+                " outside [0, " + std::to_string(elems.size()) + ")");
+  if (!bary.allFinite() || std::abs(bary.sum() - 1.0) > 1e-9)
+    throw Error(std::string("mbi::sim: ") + what + ": barycentric coordinates in element " +
+                std::to_string(element) + " must be finite and sum to 1");
+}
+
+void Simulator::Impl::check_nodes(const std::vector<int>& nodes, const char* what) const {
+  if (nodes.empty()) throw Error(std::string("mbi::sim: ") + what + ": empty node set");
+  std::vector<char> seen(n, 0);
+  for (int i : nodes) {
+    if (i < 0 || i >= n)
+      throw Error(std::string("mbi::sim: ") + what + ": node " + std::to_string(i) +
+                  " outside [0, " + std::to_string(n) + ")");
+    if (owner[i] >= 0)
+      throw Error(std::string("mbi::sim: ") + what + ": node " + std::to_string(i) +
+                  " already belongs to handle " + std::to_string(owner[i]));
+    if (seen[i]) throw Error(std::string("mbi::sim: ") + what + ": node " + std::to_string(i) +
+                             " listed twice");
+    seen[i] = 1;
+  }
+}
+
+double Simulator::Impl::assemble(const Eigen::VectorXd& xe, double cM, double cK, double cP,
+                                 const Eigen::VectorXd* vd) {
+  if (constraints_dirty) update_constraints();
+  double* val = A.valuePtr();
+  std::fill(val, val + A.nonZeros(), 0.0);
+  f_el.setZero(3 * n);
+  if (vd) Kv.setZero(3 * n);
+  double energy = 0.0;
+  for (const Elem& el : elems) {
+    Eigen::Matrix<double, 3, 4> xc;
+    for (int a = 0; a < 4; ++a) xc.col(a) = xe.segment<3>(3 * el.node[a]);
+    Eigen::Matrix3d F;
+    F.noalias() = xc * el.grad.transpose();
+    const Eigen::Matrix3d R = rotation(F);
+    Eigen::Matrix3d RtF;
+    RtF.noalias() = R.transpose() * F;
+    const double tr = RtF.trace() - 3.0;
+    energy += el.volume * (el.mu * (F - R).squaredNorm() + 0.5 * el.lambda * tr * tr);
+    Eigen::Matrix3d P = 2.0 * el.mu * (F - R);
+    P += el.lambda * tr * R;
+    Eigen::Matrix<double, 3, 4> fe;
+    fe.noalias() = P * el.grad;
+    for (int a = 0; a < 4; ++a) f_el.segment<3>(3 * el.node[a]) -= el.volume * fe.col(a);
+    Eigen::Matrix<double, 3, 4> h;
+    h.noalias() = R * el.grad;
+    if (vd) {  // K_e vd = V R sigma(R^T grad vd) G
+      Eigen::Matrix<double, 3, 4> vc;
+      for (int a = 0; a < 4; ++a) vc.col(a) = vd->segment<3>(3 * el.node[a]);
+      // R K_e R^T vd: rest-frame velocity gradient Ar = R^T vc G^T, stress sigma(Ar), R sigma G.
+      Eigen::Matrix3d Ar;
+      Ar.noalias() = R.transpose() * vc * el.grad.transpose();
+      Eigen::Matrix3d sig = el.mu * (Ar + Ar.transpose());
+      sig.diagonal().array() += el.lambda * Ar.trace();
+      Eigen::Matrix<double, 3, 4> out;
+      out.noalias() = R * sig * el.grad;
+      for (int a = 0; a < 4; ++a) Kv.segment<3>(3 * el.node[a]) += el.volume * out.col(a);
+    }
+    const double s = cK * el.volume;
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b) {
+        const auto& sl = el.slot[a][b];
+        if (sl[0] < 0) continue;
+        const double gg = el.mu * el.grad.col(a).dot(el.grad.col(b));
+        const bool diag = el.node[a] == el.node[b];
+        for (int l = 0; l < 3; ++l) {
+          // Block (a, b) = V (lambda h_a h_b^T + mu h_b h_a^T + mu (g_a.g_b) I), column l.
+          const int k0 = diag ? l : 0;
+          double* col = val + sl[l] - k0;
+          for (int k = k0; k < 3; ++k) {
+            double e = el.lambda * h(k, a) * h(l, b) + el.mu * h(k, b) * h(l, a);
+            if (k == l) e += gg;
+            col[k] += s * e;
+          }
+        }
+      }
+  }
+  // Pokes: k b_a b_b I on the element's blocks.
+  for (const auto& [id, pk] : pokes) {
+    const Elem& el = elems[pk.element];
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b) {
+        const auto& sl = el.slot[a][b];
+        if (sl[0] < 0) continue;
+        const bool diag = el.node[a] == el.node[b];
+        const double c = cP * pk.stiffness * pk.bary(a) * pk.bary(b);
+        for (int l = 0; l < 3; ++l) val[sl[l] + (diag ? 0 : l)] += c;
+      }
+  }
+  for (int d = 0; d < 3 * n; ++d) val[diag_slot[d]] += cM * mass_dof(d);
+  for (int p : zero_slots) val[p] = 0.0;
+  return energy;
+}
+
+void Simulator::Impl::external_forces() {
+  f_ext.resize(3 * n);
+  for (int i = 0; i < n; ++i) f_ext.segment<3>(3 * i) = mass(i) * params.gravity;
+  for (const auto& [id, pf] : forces)
+    for (int a = 0; a < 4; ++a) f_ext.segment<3>(3 * elems[pf.element].node[a]) += pf.bary(a) * pf.force;
+}
+
+void Simulator::Impl::add_poke_forces(const Eigen::VectorXd& xe, Eigen::VectorXd& f) const {
+  for (const auto& [id, pk] : pokes) {
+    const Eigen::Vector3d pull = pk.stiffness * (pk.target - material_point(xe, pk.element, pk.bary));
+    for (int a = 0; a < 4; ++a) f.segment<3>(3 * elems[pk.element].node[a]) += pk.bary(a) * pull;
+  }
+}
+
+bool Simulator::Impl::solve(std::string& why, int& iterations) {
+  if (used_solver == LinearSolver::LDLT) {
+    ldlt.factorize(A);
+    if (ldlt.info() != Eigen::Success) {
+      why = "sparse LDLT factorisation failed (matrix not positive definite)";
+      return false;
+    }
+    delta = ldlt.solve(r);
+    const double dmin = ldlt.vectorD().minCoeff();
+    if (!(dmin > 0)) {
+      why = "system matrix not positive definite (LDLT pivot " + std::to_string(dmin) + ")";
+      return false;
+    }
+  } else {
+    pcg.compute(A);
+    if (last_delta.size() != r.size()) last_delta.setZero(r.size());
+    delta = pcg.solveWithGuess(r, last_delta);
+    iterations += static_cast<int>(pcg.iterations());
+    if (pcg.info() != Eigen::Success) {
+      why = "PCG did not converge in " + std::to_string(pcg.iterations()) +
+            " iterations (error " + std::to_string(pcg.error()) + ")";
+      return false;
+    }
+    last_delta = delta;
+  }
+  if (!delta.allFinite()) {
+    why = "linear solve produced non-finite values";
+    return false;
+  }
+  return true;
+}
+
+void Simulator::Impl::prescribed(double time, Eigen::VectorXd& pos) const {
+  for (const auto& [id, k] : kinematic)
+    for (size_t j = 0; j < k.nodes.size(); ++j)
+      pos.segment<3>(3 * k.nodes[j]) = k.position(static_cast<int>(j), time);
+}
+
+std::string Simulator::Impl::substep(double h, int& newton, int& iters, double& t_asm,
+                                     double& t_solve) {
+  const bool be = params.integrator == Integrator::BackwardEuler;
+  // x_eval = x + h (th1 v + th2 v+), damping velocity ph1 v + ph2 v+, x+ = x + h (ps1 v + ps2 v+)
+  const double th1 = be ? 0.0 : 0.25, th2 = be ? 1.0 : 0.25;
+  const double ph1 = be ? 0.0 : 0.5, ph2 = be ? 1.0 : 0.5;
+  const double ps1 = be ? 0.0 : 0.5, ps2 = be ? 1.0 : 0.5;
+  const double a = params.mass_damping, b = params.stiffness_damping;
+  external_forces();
+  Eigen::VectorXd vk = v;
+  Eigen::VectorXd target = x;
+  prescribed(t + h, target);
+  if (constraints_dirty) update_constraints();
+  for (int d = 0; d < 3 * n; ++d)
+    if (constrained_dof[d]) vk(d) = ((target(d) - x(d)) / h - ps1 * v(d)) / ps2;
+  Eigen::VectorXd xe(3 * n), vd(3 * n);
+  for (int it = 0; it < params.newton_iterations; ++it) {
+    auto t0 = Clock::now();
+    xe = x + h * (th1 * v + th2 * vk);
+    const bool damp_k = b > 0;
+    if (damp_k || a > 0) vd = ph1 * v + ph2 * vk;
+    last_elastic = assemble(xe, 1.0 + h * ph2 * a, h * h * th2 + h * ph2 * b, h * h * th2,
+                            damp_k ? &vd : nullptr);
+    // r = -(M (vk - v) - h (f_el + f_ext + f_poke - a M vd - b K vd))
+    Eigen::VectorXd f = f_el + f_ext;
+    add_poke_forces(xe, f);
+    if (a > 0) f -= a * mass_dof.cwiseProduct(vd);
+    if (damp_k) f -= b * Kv;
+    r = h * f - mass_dof.cwiseProduct(vk - v);
+    for (int d = 0; d < 3 * n; ++d)
+      if (constrained_dof[d]) r(d) = 0.0;
+    t_asm += ms_since(t0);
+    t0 = Clock::now();
+    std::string why;
+    const bool ok = solve(why, iters);
+    t_solve += ms_since(t0);
+    ++newton;
+    if (!ok) return why;
+    vk += delta;
+    if (params.newton_tolerance > 0) {
+      double dmax = 0.0;
+      for (int i = 0; i < n; ++i) dmax = std::max(dmax, delta.segment<3>(3 * i).norm());
+      if (dmax <= params.newton_tolerance) break;
+    }
+  }
+  const Eigen::VectorXd x_old = x;
+  x += h * (ps1 * v + ps2 * vk);
+  v = vk;
+  for (int d = 0; d < 3 * n; ++d)
+    if (constrained_dof[d]) {
+      x(d) = target(d);
+      v(d) = (target(d) - x_old(d)) / h;
+    }
+  if (params.ground) ground();
+  if (!x.allFinite() || !v.allFinite()) return "non-finite positions or velocities";
+  const double kinetic = 0.5 * v.dot(mass_dof.cwiseProduct(v));
+  const double limit = params.max_energy > 0 ? params.max_energy : energy_limit;
+  if (!(kinetic + last_elastic <= limit))
+    return "runaway energy " + std::to_string(kinetic + last_elastic) + " J (limit " +
+           std::to_string(limit) + " J)";
+  return {};
+}
+
+void Simulator::Impl::ground() {
+  const Eigen::Vector3d nrm = params.ground_plane.normal.normalized();
+  const double off = params.ground_plane.offset / params.ground_plane.normal.norm();
+  for (int i = 0; i < n; ++i) {
+    if (owner[i] >= 0) continue;
+    const double dist = nrm.dot(x.segment<3>(3 * i)) - off;
+    if (dist >= 0) continue;
+    x.segment<3>(3 * i) -= dist * nrm;
+    Eigen::Vector3d vi = v.segment<3>(3 * i);
+    const double vn = nrm.dot(vi);
+    Eigen::Vector3d vt = vi - vn * nrm;
+    vi = (1.0 - params.ground_plane.friction) * vt + std::max(vn, 0.0) * nrm;
+    v.segment<3>(3 * i) = vi;
+  }
+}
+
+// ------------------------------------------------------------------ public
+
+Simulator::Simulator(const Eigen::Ref<const Eigen::MatrixXd>& U,
+                     const Eigen::Ref<const Eigen::MatrixXi>& T, const Material& material,
+                     const Parameters& params, const std::vector<Material>& per_element)
+    : impl_(std::make_unique<Impl>()) {
+  check_params(params);
+  impl_->params = params;
+  impl_->build(U, T, material, per_element);
+}
+Simulator::~Simulator() = default;
+Simulator::Simulator(Simulator&&) noexcept = default;
+Simulator& Simulator::operator=(Simulator&&) noexcept = default;
+
+int Simulator::fix(const std::vector<int>& nodes) { return add_kinematic(nodes, RigidMotion{}); }
+
+int Simulator::add_kinematic(const std::vector<int>& nodes, const RigidMotion& motion) {
+  Impl& s = *impl_;
+  s.check_nodes(nodes, "add_kinematic");
+  if (!motion.center.allFinite() || !motion.axis.allFinite() ||
+      !std::isfinite(motion.angular_velocity) || !motion.velocity.allFinite() ||
+      std::isnan(motion.start) || std::isnan(motion.stop))
+    throw Error("mbi::sim: add_kinematic: rigid motion has a non-finite field");
+  if (motion.angular_velocity != 0.0 && motion.axis.norm() == 0.0)
+    throw Error("mbi::sim: add_kinematic: rotation axis is zero");
+  if (motion.stop < motion.start)
+    throw Error("mbi::sim: add_kinematic: stop time is before start time");
+  Kinematic k;
+  k.nodes = nodes;
+  k.motion = motion;
+  k.p0.resize(static_cast<Eigen::Index>(nodes.size()), 3);
+  for (size_t j = 0; j < nodes.size(); ++j) k.p0.row(j) = s.node(s.x, nodes[j]).transpose();
+  const int id = s.next_id++;
+  for (int i : nodes) s.owner[i] = id;
+  s.kinematic.emplace(id, std::move(k));
+  s.constraints_dirty = true;
+  return id;
+}
+
+int Simulator::add_point_force(int element, const Eigen::Vector4d& bary,
+                               const Eigen::Vector3d& force) {
+  impl_->check_element_bary(element, bary, "add_point_force");
+  if (!force.allFinite())
+    throw Error("mbi::sim: add_point_force: force " + vec_str(force) + " is not finite");
+  const int id = impl_->next_id++;
+  impl_->forces.emplace(id, PointForce{element, bary, force});
+  return id;
+}
+
+void Simulator::set_point_force(int handle, const Eigen::Vector3d& force) {
+  auto it = impl_->forces.find(handle);
+  if (it == impl_->forces.end())
+    throw Error("mbi::sim: set_point_force: handle " + std::to_string(handle) +
+                " is not a point force");
+  if (!force.allFinite())
+    throw Error("mbi::sim: set_point_force: force " + vec_str(force) + " for handle " +
+                std::to_string(handle) + " is not finite");
+  it->second.force = force;
+}
+
+int Simulator::add_poke(int element, const Eigen::Vector4d& bary, const Eigen::Vector3d& target,
+                        double stiffness) {
+  impl_->check_element_bary(element, bary, "add_poke");
+  if (!target.allFinite()) throw Error("mbi::sim: add_poke: target " + vec_str(target) + " is not finite");
+  if (!std::isfinite(stiffness) || stiffness <= 0)
+    throw Error("mbi::sim: add_poke: stiffness must be finite and > 0 N/m, got " +
+                std::to_string(stiffness));
+  const int id = impl_->next_id++;
+  impl_->pokes.emplace(id, Poke{element, bary, target, stiffness});
+  return id;
+}
+
+void Simulator::set_poke_target(int handle, const Eigen::Vector3d& target) {
+  auto it = impl_->pokes.find(handle);
+  if (it == impl_->pokes.end())
+    throw Error("mbi::sim: set_poke_target: handle " + std::to_string(handle) + " is not a poke");
+  if (!target.allFinite())
+    throw Error("mbi::sim: set_poke_target: target " + vec_str(target) + " for handle " +
+                std::to_string(handle) + " is not finite");
+  it->second.target = target;
+}
+
+void Simulator::remove(int handle) {
+  Impl& s = *impl_;
+  if (auto it = s.kinematic.find(handle); it != s.kinematic.end()) {
+    for (int i : it->second.nodes) s.owner[i] = -1;
+    s.kinematic.erase(it);
+    s.constraints_dirty = true;
+  } else if (!s.forces.erase(handle) && !s.pokes.erase(handle)) {
+    throw Error("mbi::sim: remove: no handle " + std::to_string(handle));
+  }
+}
+
+bool Simulator::has_handle(int handle) const {
+  return impl_->kinematic.count(handle) || impl_->forces.count(handle) ||
+         impl_->pokes.count(handle);
+}
+
+StepResult Simulator::step() {
+  Impl& s = *impl_;
+  const auto t0 = Clock::now();
+  StepResult res;
+  res.step = s.steps + 1;
+  const Eigen::VectorXd x0 = s.x, v0 = s.v;
+  const double time0 = s.t;
+  const double h = s.params.dt / s.params.substeps;
+  std::string why;
+  for (int k = 0; k < s.params.substeps && why.empty(); ++k) {
+    why = s.substep(h, res.newton_iterations, res.solver_iterations, res.assemble_ms, res.solve_ms);
+    if (why.empty()) s.t = time0 + (k + 1) * h;
+  }
+  if (!why.empty()) {
+    s.x = x0;
+    s.v = v0;
+    s.t = time0;
+    res.success = false;
+    res.message = "mbi::sim: step " + std::to_string(res.step) + " (t = " +
+                  std::to_string(time0) + " s) failed: " + why +
+                  "; state left at the last good step";
+  } else {
+    s.t = time0 + s.params.dt;
+    ++s.steps;
+  }
+  res.time = s.t;
+  s.sync_out();
+  res.total_ms = ms_since(t0);
+  return res;
+}
+
+StaticResult Simulator::solve_static(int max_iterations, double tolerance) {
+  Impl& s = *impl_;
+  StaticResult res;
+  if (max_iterations < 1) throw Error("mbi::sim: solve_static: max_iterations must be >= 1");
+  if (!std::isfinite(tolerance) || tolerance < 0)
+    throw Error("mbi::sim: solve_static: tolerance must be finite and >= 0 N");
+  const Eigen::VectorXd x0 = s.x, v0 = s.v;
+  s.prescribed(s.t, s.x);
+  s.external_forces();
+  double tol = tolerance;
+  auto max_node = [&](const Eigen::VectorXd& f) {
+    double m = 0.0;
+    for (int i = 0; i < s.n; ++i)
+      if (s.owner[i] < 0) m = std::max(m, f.segment<3>(3 * i).norm());
+    return m;
+  };
+  const LinearSolver keep = s.used_solver;
+  for (int it = 0; it < max_iterations; ++it) {
+    s.assemble(s.x, 0.0, 1.0, 1.0, nullptr);
+    Eigen::VectorXd f = s.f_el + s.f_ext;
+    s.add_poke_forces(s.x, f);
+    for (int d = 0; d < 3 * s.n; ++d)
+      if (s.constrained_dof[d]) f(d) = 0.0;
+    res.residual = max_node(f);
+    if (it == 0 && tol == 0.0) {
+      Eigen::VectorXd fe = s.f_el;
+      for (int d = 0; d < 3 * s.n; ++d)
+        if (s.constrained_dof[d]) fe(d) = 0.0;
+      tol = 1e-10 * (max_node(s.f_ext) + max_node(fe) + max_node(f));
+    }
+    res.iterations = it;
+    if (res.residual <= tol) {
+      res.converged = true;
+      break;
+    }
+    s.r = f;
+    std::string why;
+    int dummy = 0;
+    if (s.used_solver != LinearSolver::LDLT) {  // static systems are better solved directly
+      s.used_solver = LinearSolver::LDLT;
+      if (!s.ldlt_analysed) {
+        s.ldlt.analyzePattern(s.A);
+        s.ldlt_analysed = true;
+      }
+    }
+    if (!s.solve(why, dummy)) {
+      res.message = "mbi::sim: solve_static: iteration " + std::to_string(it) + ": " + why;
+      break;
+    }
+    s.x += s.delta;
+    res.iterations = it + 1;
+  }
+  s.used_solver = keep;
+  if (res.converged && !s.x.allFinite()) res.converged = false;
+  if (!res.converged) {
+    if (res.message.empty())
+      res.message = "mbi::sim: solve_static: no convergence in " + std::to_string(max_iterations) +
+                    " iterations (residual " + std::to_string(res.residual) + " N, tolerance " +
+                    std::to_string(tol) + " N)";
+    s.x = x0;
+    s.v = v0;
+  } else {
+    s.v.setZero();
+  }
+  s.sync_out();
+  return res;
+}
+
+const Eigen::MatrixXd& Simulator::positions() const { return impl_->Xout; }
+const Eigen::MatrixXd& Simulator::velocities() const { return impl_->Vout; }
+
+void Simulator::set_positions(const Eigen::Ref<const Eigen::MatrixXd>& X) {
+  Impl& s = *impl_;
+  if (X.rows() != s.n || X.cols() != 3)
+    throw Error("mbi::sim: set_positions: expected " + std::to_string(s.n) + " x 3");
+  for (int i = 0; i < s.n; ++i) {
+    if (!X.row(i).allFinite())
+      throw Error("mbi::sim: set_positions: node " + std::to_string(i) + " is not finite");
+    s.x.segment<3>(3 * i) = X.row(i).transpose();
+  }
+  s.sync_out();
+}
+
+void Simulator::set_velocities(const Eigen::Ref<const Eigen::MatrixXd>& V) {
+  Impl& s = *impl_;
+  if (V.rows() != s.n || V.cols() != 3)
+    throw Error("mbi::sim: set_velocities: expected " + std::to_string(s.n) + " x 3");
+  for (int i = 0; i < s.n; ++i) {
+    if (!V.row(i).allFinite())
+      throw Error("mbi::sim: set_velocities: node " + std::to_string(i) + " is not finite");
+    s.v.segment<3>(3 * i) = V.row(i).transpose();
+  }
+  s.sync_out();
+}
+
+void Simulator::reset() {
+  Impl& s = *impl_;
+  for (int i = 0; i < s.n; ++i) s.x.segment<3>(3 * i) = s.U.row(i).transpose();
+  s.v.setZero();
+  s.t = 0.0;
+  s.steps = 0;
+  s.last_delta.resize(0);
+  s.sync_out();
+}
+
+double Simulator::time() const { return impl_->t; }
+long Simulator::step_count() const { return impl_->steps; }
+
+double Simulator::kinetic_energy() const {
+  return 0.5 * impl_->v.dot(impl_->mass_dof.cwiseProduct(impl_->v));
+}
+
+double Simulator::elastic_energy() const {
+  const Impl& s = *impl_;
+  double E = 0.0;
+  for (const Elem& el : s.elems) {
+    Eigen::Matrix<double, 3, 4> xc;
+    for (int a = 0; a < 4; ++a) xc.col(a) = s.x.segment<3>(3 * el.node[a]);
+    Eigen::Matrix3d F;
+    F.noalias() = xc * el.grad.transpose();
+    E += el.volume * corotational_psi(F, rotation(F), Lame{el.mu, el.lambda});
+  }
+  return E;
+}
+
+double Simulator::gravity_energy() const {
+  const Impl& s = *impl_;
+  double E = 0.0;
+  for (int i = 0; i < s.n; ++i) E -= s.mass(i) * s.params.gravity.dot(s.x.segment<3>(3 * i));
+  return E;
+}
+
+Eigen::Vector3d Simulator::linear_momentum() const {
+  const Impl& s = *impl_;
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  for (int i = 0; i < s.n; ++i) p += s.mass(i) * s.v.segment<3>(3 * i);
+  return p;
+}
+
+Eigen::Vector3d Simulator::angular_momentum() const {
+  const Impl& s = *impl_;
+  Eigen::Vector3d L = Eigen::Vector3d::Zero();
+  for (int i = 0; i < s.n; ++i)
+    L += s.mass(i) * s.x.segment<3>(3 * i).cross(s.v.segment<3>(3 * i));
+  return L;
+}
+
+double Simulator::rest_volume() const { return impl_->total_volume; }
+
+double Simulator::volume() const {
+  const Impl& s = *impl_;
+  double V = 0.0;
+  for (const Elem& el : s.elems) {
+    Eigen::Matrix<double, 3, 4> xc;
+    for (int a = 0; a < 4; ++a) xc.col(a) = s.x.segment<3>(3 * el.node[a]);
+    Eigen::Matrix3d F;
+    F.noalias() = xc * el.grad.transpose();
+    V += el.volume * F.determinant();
+  }
+  return V;
+}
+
+int Simulator::nodes() const { return impl_->n; }
+int Simulator::elements() const { return static_cast<int>(impl_->elems.size()); }
+const Eigen::MatrixXd& Simulator::rest_positions() const { return impl_->U; }
+const Eigen::MatrixXi& Simulator::tets() const { return impl_->T; }
+const Eigen::VectorXd& Simulator::masses() const { return impl_->mass; }
+const Parameters& Simulator::params() const { return impl_->params; }
+
+void Simulator::set_params(const Parameters& params) {
+  check_params(params);
+  impl_->params = params;
+  impl_->resolve_solver();
+}
+
+LinearSolver Simulator::solver() const { return impl_->used_solver; }
+
+}  // namespace mbi::sim
