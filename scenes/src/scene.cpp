@@ -174,6 +174,14 @@ Selection parse_selection(Table t) {
     b.finish();
     s.box = std::make_pair(lo, hi);
   }
+  if (t.has("box_relative")) {
+    Table b = t.sub("box_relative");
+    const Eigen::Vector3d lo = b.vec("min", Eigen::Vector3d::Zero());
+    const Eigen::Vector3d hi = b.vec("max", Eigen::Vector3d::Ones());
+    if ((hi - lo).minCoeff() < 0) b.fail("max", "max must be >= min in every coordinate");
+    b.finish();
+    s.box_relative = std::make_pair(lo, hi);
+  }
   if (t.has("half_space")) {
     Table h = t.sub("half_space");
     const Eigen::Vector3d p = h.vec("point", Eigen::Vector3d::Zero());
@@ -191,8 +199,9 @@ Selection parse_selection(Table t) {
       s.indices.push_back(static_cast<int>(x.as_integer()));
     }
   }
-  if (!s.box && !s.half_space && s.indices.empty())
-    throw SceneError(s.where + ": " + t.key_name("") + " needs box, half_space or indices");
+  if (!s.box && !s.box_relative && !s.half_space && s.indices.empty())
+    throw SceneError(s.where + ": " + t.key_name("") +
+                     " needs box, box_relative, half_space or indices");
   t.finish();
   return s;
 }
@@ -295,10 +304,18 @@ Scene load_scene(const std::filesystem::path& file) {
     p.first = t.integer("first", 0, 0, 1 << 30);
     p.last = t.integer("last", p.first, 0, 1 << 30);
     if (p.last < p.first) t.fail("last", "last must be >= first");
-    if (!t.has("point")) throw SceneError(t.where(t.value()) + ": " + t.key_name("point") + ": missing");
-    p.point = t.vec("point", p.point);
+    const bool has_point = t.has("point"), has_at = t.has("at");
+    if (has_point == has_at)
+      throw SceneError(t.where(t.value()) + ": " + t.key_name("") + ": give exactly one of point or at");
+    p.relative = has_at;
+    p.point = has_at ? t.vec("at", p.point) : t.vec("point", p.point);
     if (t.has("force")) p.force = t.vec("force", Eigen::Vector3d::Zero());
     if (t.has("target")) p.target = t.vec("target", Eigen::Vector3d::Zero());
+    if (t.has("offset")) {
+      if (p.target) t.fail("offset", "give target or offset, not both");
+      p.target = t.vec("offset", Eigen::Vector3d::Zero());
+      p.target_relative = true;
+    }
     p.stiffness = t.number("stiffness", 0.0, 0, HUGE_VAL);
     if (p.force.has_value() == p.target.has_value())
       throw SceneError(t.where(t.value()) + ": " + t.key_name("") + ": give exactly one of force or target");
@@ -374,7 +391,17 @@ std::vector<int> select_nodes(const Selection& s, const Eigen::Ref<const Eigen::
                        " out of range (control mesh has " + std::to_string(U.rows()) + ")");
     on[static_cast<size_t>(i)] = 1;
   }
+  Eigen::VectorXd lo = U.colwise().minCoeff().transpose(), hi = U.colwise().maxCoeff().transpose();
   for (Eigen::Index i = 0; i < U.rows(); ++i) {
+    if (s.box_relative) {
+      const auto& [a, b] = *s.box_relative;
+      bool in = true;
+      for (int c = 0; c < d; ++c) {
+        const double ext = hi[c] - lo[c], tol = 1e-9 * (1 + ext);
+        in = in && U(i, c) >= lo[c] + a[c] * ext - tol && U(i, c) <= lo[c] + b[c] * ext + tol;
+      }
+      if (in) on[static_cast<size_t>(i)] = 1;
+    }
     if (s.box) {
       const auto& [lo, hi] = *s.box;
       bool in = true;

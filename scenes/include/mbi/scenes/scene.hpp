@@ -56,6 +56,9 @@ struct SimulationSpec {
 struct Selection {
   std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> box;        ///< min, max
   std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> half_space; ///< point, normal: n.(x-p) >= 0
+  /// Box in fractions of the control mesh's bounding box (0 = min, 1 = max per axis), so that a
+  /// scene works with any model given by --mesh.
+  std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> box_relative;
   std::vector<int> indices;
   std::string where;  ///< "<file>:<line>" for error messages
 };
@@ -75,17 +78,20 @@ struct ConstraintSpec {
 };
 
 /// A scripted poke: a constant force (N) or a spring (N/m) toward a target, on frames
-/// [first, last], at a material point given in rest coordinates.
+/// [first, last], at a material point: `point` in rest coordinates, or `at` in fractions of the
+/// dense model's bounding box (the dense vertex nearest to it is poked).
 struct PokeSpec {
   int first = 0, last = 0;
   Eigen::Vector3d point = Eigen::Vector3d::Zero();
+  bool relative = false;  ///< point holds the `at` fractions
+  bool target_relative = false;  ///< target is an offset from the poked point (m)
   std::optional<Eigen::Vector3d> force;
   std::optional<Eigen::Vector3d> target;
   double stiffness = 0.0;
 };
 
-/// A dragged control vertex (no physics; paper Eq. 10/11): keyframes (frame, position) linearly
-/// interpolated.
+/// A dragged control vertex (no physics; paper Eq. 10/11): keyframes (frame, displacement from
+/// the vertex's rest position) linearly interpolated, held before the first and after the last.
 struct DragSpec {
   int vertex = -1;                      ///< control vertex index, or -1 with `near`
   std::optional<Eigen::Vector3d> near;  ///< pick the control vertex nearest to this point

@@ -1,0 +1,63 @@
+#pragma once
+// The headless scene runner behind `mbi run`: loads a scene's models, simulates the control mesh
+// (or drags its handles), interpolates the dense model each frame and writes the outputs:
+//   <out>/mesh_NNNN.obj|ply    dense mesh at the written frames (every output.every, and last)
+//   <out>/dense.pc2            point cache of every frame (Blender Mesh Cache, 3ds Max)
+//   <out>/control_NNNN.vtk     control mesh at the written frames (ParaView)
+//   <out>/frame_NNNN.png       pictures: 3D BI | modified-BI side by side; 2D the warped image
+//   <out>/metrics.json         per-frame timings and the discontinuity table (BI vs modified-BI)
+#include <mbi/interp/embed.hpp>
+#include <mbi/interp/metrics.hpp>
+#include <mbi/scenes/io.hpp>
+#include <mbi/scenes/raster.hpp>
+#include <mbi/scenes/scene.hpp>
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+
+namespace mbi::scenes {
+
+/// A scene's models, ready to run: the dense model and the control mesh in one dimension d.
+struct SceneModels {
+  SurfaceMesh dense;           ///< 3D: the surface; 2D: V n x 2 grid, F triangles
+  Eigen::MatrixXd U;           ///< control rest positions n x d
+  Eigen::MatrixXi T;           ///< control elements m x (d+1)
+  std::optional<Image> image;  ///< 2D: the texture (pixels; dense V are pixel coordinates)
+  std::string dense_name, control_name;
+  double generate_seconds = 0; ///< time spent generating the control mesh, s
+  int dim() const { return static_cast<int>(U.cols()); }
+};
+
+/// Loads (or builds) the dense model and the control mesh of a scene. mesh_override replaces the
+/// scene's dense model. Throws SceneError / IoError naming the file.
+SceneModels load_models(const Scene& scene, const std::filesystem::path& mesh_override = {});
+
+struct RunOptions {
+  std::filesystem::path out_dir;  ///< empty: "out/<scene name>"
+  int frames = 0;                 ///< 0: the scene's
+  std::filesystem::path mesh;     ///< replaces the scene's dense model
+  std::string method;             ///< "", "bi" or "modified-bi": replaces the scene's
+  bool force = false;             ///< overwrite a non-empty output folder
+  /// Progress callback (frame done, frames total); may be empty.
+  std::function<void(int, int)> progress;
+  /// Log lines (warnings, summary); may be empty.
+  std::function<void(const std::string&)> log;
+};
+
+struct RunResult {
+  std::filesystem::path out_dir;
+  int frames = 0;         ///< frames completed
+  bool failed = false;    ///< a simulation step failed; outputs up to the last good frame kept
+  std::string message;    ///< the failure
+  mbi::interp::DiscontinuityTable last_table;  ///< of the last completed frame
+  int outside_points = 0;
+};
+
+/// Runs a scene headless. Throws on bad input before anything is written (SceneError, IoError,
+/// mbi::interp::Error, mbi::sim::Error). A failing simulation step ends the run with
+/// RunResult::failed and keeps what was written.
+RunResult run_scene(const Scene& scene, const RunOptions& options);
+
+}  // namespace mbi::scenes
