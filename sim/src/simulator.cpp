@@ -96,6 +96,7 @@ struct Simulator::Impl {
   int n = 0;
   double total_volume = 0.0;
   double energy_limit = 0.0;
+  double bbox_diagonal = 0.0;
 
   // state
   Eigen::VectorXd x, v;  // 3n
@@ -186,6 +187,7 @@ void Simulator::Impl::build(const Eigen::Ref<const Eigen::MatrixXd>& U_,
     max_E = std::max(max_E, m.youngs_modulus);
   }
   energy_limit = 1e3 * max_E * total_volume;
+  bbox_diagonal = (U.colwise().maxCoeff() - U.colwise().minCoeff()).norm();
   x.resize(3 * n);
   for (int i = 0; i < n; ++i) x.segment<3>(3 * i) = U.row(i).transpose();
   v = Eigen::VectorXd::Zero(3 * n);
@@ -681,6 +683,16 @@ StaticResult Simulator::solve_static(int max_iterations, double tolerance) {
     }
     s.x += s.delta;
     res.iterations = it + 1;
+    // Automatic tolerance: also stop once the update is at round-off level (the force
+    // residual's own round-off floor, ~1e-16 E h^2 |x| / h, can exceed 1e-10 |f_ext|).
+    if (tolerance == 0.0) {
+      double dmax = 0.0;
+      for (int i = 0; i < s.n; ++i) dmax = std::max(dmax, s.delta.segment<3>(3 * i).norm());
+      if (dmax <= 1e-13 * s.bbox_diagonal) {
+        res.converged = true;
+        break;
+      }
+    }
   }
   s.used_solver = keep;
   if (res.converged && !s.x.allFinite()) res.converged = false;

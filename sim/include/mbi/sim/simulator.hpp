@@ -139,8 +139,10 @@ class Simulator {
   StepResult step();
   /// Static equilibrium under gravity, point forces, pokes and the handles at the current time
   /// (velocities set to 0): Newton iterations with the warped stiffness until the max free-node
-  /// force imbalance is <= tolerance (N) or, if tolerance = 0, <= 1e-10 * (max |external
-  /// force| + max elastic force at the first iterate). Failure leaves the state unchanged.
+  /// force imbalance is <= tolerance (N) or, if tolerance = 0, until either it is <= 1e-10 *
+  /// (max |external force| + max elastic force at the first iterate) or the last update moved
+  /// no node by more than 1e-13 * (rest bounding-box diagonal). Failure leaves the state
+  /// unchanged.
   StaticResult solve_static(int max_iterations = 100, double tolerance = 0.0);
 
   // ------------------------------------------------------------ state
