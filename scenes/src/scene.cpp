@@ -391,14 +391,15 @@ std::vector<int> select_nodes(const Selection& s, const Eigen::Ref<const Eigen::
                        " out of range (control mesh has " + std::to_string(U.rows()) + ")");
     on[static_cast<size_t>(i)] = 1;
   }
-  Eigen::VectorXd lo = U.colwise().minCoeff().transpose(), hi = U.colwise().maxCoeff().transpose();
+  const Eigen::VectorXd bb_lo = U.colwise().minCoeff().transpose();
+  const Eigen::VectorXd bb_hi = U.colwise().maxCoeff().transpose();
   for (Eigen::Index i = 0; i < U.rows(); ++i) {
     if (s.box_relative) {
       const auto& [a, b] = *s.box_relative;
       bool in = true;
       for (int c = 0; c < d; ++c) {
-        const double ext = hi[c] - lo[c], tol = 1e-9 * (1 + ext);
-        in = in && U(i, c) >= lo[c] + a[c] * ext - tol && U(i, c) <= lo[c] + b[c] * ext + tol;
+        const double ext = bb_hi[c] - bb_lo[c], tol = 1e-9 * (1 + ext);
+        in = in && U(i, c) >= bb_lo[c] + a[c] * ext - tol && U(i, c) <= bb_lo[c] + b[c] * ext + tol;
       }
       if (in) on[static_cast<size_t>(i)] = 1;
     }
