@@ -3,9 +3,11 @@
 #include <mbi/interp/mesh.hpp>
 
 #include <Eigen/Dense>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <string>
 #include <thread>
+#include <vector>
 
 namespace mbi::interp::detail {
 
@@ -16,6 +18,20 @@ void check_shapes(const char* who, const Eigen::Ref<const Eigen::MatrixXd>& U,
 
 /// Throws Error naming the first non-finite entry of A (row `what` r).
 void check_finite(const char* who, const char* what, const Eigen::Ref<const Eigen::MatrixXd>& A);
+
+/// Per-component quadratic forms (method.md facts 1-3), unweighted, energy = z^T H z:
+/// vibr_mm (dn x dn), disc_mm (dn x dn), disc_mx (dn x n), disc_xx (n x n); m index i d + r.
+struct Hessians {
+  Eigen::SparseMatrix<double> vibr_mm, disc_mm, disc_mx, disc_xx;
+};
+Hessians assemble(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T);
+
+/// Gauge treatment (fact 4). free_vertex(i) = 1 when m_i are unknowns. Returns, per full m
+/// index (i d + r), 1 when that unknown must be pinned to zero to remove the gauge null space
+/// (t + S u_i on every face-connected component, restricted to what the fixed vertices leave);
+/// null_dim receives the number of removed null vectors.
+std::vector<char> gauge_pins(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T,
+                             const std::vector<char>& free_vertex, int& null_dim);
 
 /// Number of worker threads to use for `work` items (threads <= 0: hardware concurrency).
 inline int thread_count(int threads, long long work, long long min_per_thread = 4096) {

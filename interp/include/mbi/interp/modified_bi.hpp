@@ -11,15 +11,24 @@
 
 #include <Eigen/SparseCore>
 #include <memory>
+#include <utility>
+#include <vector>
 
 namespace mbi::interp {
 
 enum class Method { BI, ModifiedBI };
 
+/// How solve() maps X to M (fact 11): sparse triangular solves with the cached Cholesky factor,
+/// or one dense product with the precomputed operator -H_mm^-1 H_mx ((d n) x n doubles).
+/// Automatic picks the dense operator for small meshes (see modified_bi.cpp for the measured
+/// threshold) and the sparse path otherwise.
+enum class SolvePath { Automatic, Sparse, Dense };
+
 struct Options {
   double alpha = 0.0;         ///< weight of E_vibr; 0 = default (0.1 in 3D, 0.2 in 2D); < 0 rejected
-  double beta = 0.0;          ///< weight of E_disc; 0 = automatic (equal Frobenius norms, fact 7)
+  double beta = 0.0;          ///< weight of E_disc; 0 = automatic (equal Frobenius norms, fact 7); < 0 rejected
   bool pin_boundary = false;  ///< M_i = 0 on boundary vertices (fact 9)
+  SolvePath solve_path = SolvePath::Automatic;
 };
 
 /// Default alpha for dimension d (0.1 in 3D, 0.2 in 2D).
@@ -59,6 +68,10 @@ class ModifiedBI {
   /// Dimension of the gauge null space removed: d + d(d-1)/2 (6 in 3D, 3 in 2D), or 0 with
   /// pin_boundary.
   int null_space_dim() const;
+  /// Number of scalar unknowns per component after pinning (boundary, gauge, unused vertices).
+  int unknowns() const;
+  /// True when solve() uses the dense operator -H_mm^-1 H_mx.
+  bool dense_operator() const;
 
   /// M for deformed control positions X (n x d). Throws Error on a size mismatch or NaN.
   VertexMatrices solve(const Eigen::Ref<const Eigen::MatrixXd>& X) const;

@@ -1,0 +1,188 @@
+// Evaluation of embedded points from element Bezier control points (facts 5, 6).
+#include <mbi/interp/evaluate.hpp>
+
+#include "detail.hpp"
+
+#include <array>
+#include <cmath>
+
+namespace mbi::interp {
+namespace {
+
+template <typename Scalar>
+using MatX = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
+
+// Checks B / emb consistency; returns d.
+int check_inputs(const char* who, const BezierPoints& B, const Embedding& emb) {
+  const int d = static_cast<int>(B.cols());
+  if (d != 2 && d != 3) throw Error(std::string(who) + ": Bezier points must have 2 or 3 columns");
+  const int K = (d + 1) * (d + 2) / 2;
+  if (B.rows() % K != 0)
+    throw Error(std::string(who) + ": Bezier points have " + std::to_string(B.rows()) +
+                " rows, not a multiple of " + std::to_string(K));
+  if (emb.bary.cols() != d + 1 || emb.bary.rows() != emb.element.size())
+    throw Error(std::string(who) + ": embedding has " + std::to_string(emb.bary.cols()) +
+                " coordinates per point, expected " + std::to_string(d + 1));
+  const long long m = B.rows() / K;
+  for (int i = 0; i < emb.size(); ++i)
+    if (emb.element(i) < 0 || emb.element(i) >= m)
+      throw Error(std::string(who) + ": point " + std::to_string(i) + " refers to element " +
+                  std::to_string(emb.element(i)) + " outside [0, " + std::to_string(m) + ")");
+  return d;
+}
+
+// Position and derivatives dx/dphi_k (k = 0..D) of the quadratic Bezier simplex.
+template <int D, typename Scalar>
+inline void bezier_eval(const Scalar* P /* K x D row-major */, const Scalar* b, Scalar* x,
+                        Scalar (*g)[D]) {
+  constexpr int E = D * (D + 1) / 2;
+  static constexpr std::array<std::pair<int, int>, 6> edges3{
+      {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}}};
+  static constexpr std::array<std::pair<int, int>, 3> edges2{{{0, 1}, {0, 2}, {1, 2}}};
+  for (int c = 0; c < D; ++c) x[c] = 0;
+  for (int k = 0; k <= D; ++k) {
+    const Scalar w = b[k] * b[k];
+    for (int c = 0; c < D; ++c) x[c] += w * P[k * D + c];
+    if (g)
+      for (int c = 0; c < D; ++c) g[k][c] = 2 * b[k] * P[k * D + c];
+  }
+  for (int s = 0; s < E; ++s) {
+    const int i = D == 3 ? edges3[s].first : edges2[s].first;
+    const int j = D == 3 ? edges3[s].second : edges2[s].second;
+    const Scalar* q = P + (D + 1 + s) * D;
+    const Scalar w = 2 * b[i] * b[j];
+    for (int c = 0; c < D; ++c) x[c] += w * q[c];
+    if (g)
+      for (int c = 0; c < D; ++c) {
+        g[i][c] += 2 * b[j] * q[c];
+        g[j][c] += 2 * b[i] * q[c];
+      }
+  }
+}
+
+template <int D, typename Scalar>
+void kernel(const MatX<Scalar>& Prow /* D x (m K), column per control point */, const Embedding& emb,
+            const MatX<Scalar>* grads /* D x (m (D+1)) */, const MatX<Scalar>* normals_rest,
+            MatX<Scalar>& pos, MatX<Scalar>* normals_out, int threads) {
+  constexpr int K = (D + 1) * (D + 2) / 2;
+  const long long np = emb.size();
+  const int nt = detail::thread_count(threads, np, 8192);
+  detail::parallel_for(np, nt, [&](long long begin, long long end) {
+    Scalar b[D + 1], x[D], g[D + 1][D];
+    for (long long p = begin; p < end; ++p) {
+      const int e = emb.element(p);
+      for (int k = 0; k <= D; ++k) b[k] = static_cast<Scalar>(emb.bary(p, k));
+      const Scalar* P = Prow.data() + static_cast<long long>(e) * K * D;
+      if (!normals_out) {
+        bezier_eval<D, Scalar>(P, b, x, nullptr);
+        for (int c = 0; c < D; ++c) pos(p, c) = x[c];
+        continue;
+      }
+      bezier_eval<D, Scalar>(P, b, x, g);
+      for (int c = 0; c < D; ++c) pos(p, c) = x[c];
+      // J = sum_k g_k a_k^T (column r of J: sum_k g_k a_k[r])
+      Scalar J[D][D];
+      const Scalar* a = grads->data() + static_cast<long long>(e) * (D + 1) * D;
+      for (int c = 0; c < D; ++c)
+        for (int r = 0; r < D; ++r) {
+          Scalar s = 0;
+          for (int k = 0; k <= D; ++k) s += g[k][c] * a[k * D + r];
+          J[c][r] = s;
+        }
+      Scalar n[D];
+      for (int c = 0; c < D; ++c) n[c] = (*normals_rest)(p, c);
+      Scalar o[D];
+      if constexpr (D == 3) {
+        // cof(J) has columns j1 x j2, j2 x j0, j0 x j1 (j_r = column r of J)
+        Scalar C[3][3];
+        for (int r = 0; r < 3; ++r) {
+          const int r1 = (r + 1) % 3, r2 = (r + 2) % 3;
+          C[0][r] = J[1][r1] * J[2][r2] - J[2][r1] * J[1][r2];
+          C[1][r] = J[2][r1] * J[0][r2] - J[0][r1] * J[2][r2];
+          C[2][r] = J[0][r1] * J[1][r2] - J[1][r1] * J[0][r2];
+        }
+        for (int c = 0; c < 3; ++c) o[c] = C[c][0] * n[0] + C[c][1] * n[1] + C[c][2] * n[2];
+      } else {
+        // cof([[a, b], [c, d]]) = [[d, -c], [-b, a]]
+        o[0] = J[1][1] * n[0] - J[1][0] * n[1];
+        o[1] = -J[0][1] * n[0] + J[0][0] * n[1];
+      }
+      Scalar len = 0;
+      for (int c = 0; c < D; ++c) len += o[c] * o[c];
+      len = std::sqrt(len);
+      for (int c = 0; c < D; ++c) (*normals_out)(p, c) = len > 0 ? o[c] / len : Scalar(0);
+    }
+  });
+}
+
+template <typename Scalar>
+void run(const BezierPoints& B, const Embedding& emb, const MatX<Scalar>* normals_rest,
+         MatX<Scalar>& positions, MatX<Scalar>* normals_out, int threads) {
+  const int d = check_inputs("evaluate", B, emb);
+  // control points as D x (m K) so that each element's points are contiguous
+  const MatX<Scalar> Prow = B.transpose().template cast<Scalar>();
+  MatX<Scalar> grads;
+  if (normals_out) {
+    const long long m = B.rows() / ((d + 1) * (d + 2) / 2);
+    if (emb.gradients.rows() != m * (d + 1) || emb.gradients.cols() != d)
+      throw Error("evaluate: normals need the embedding's basis gradients (" + std::to_string(m * (d + 1)) +
+                  " x " + std::to_string(d) + ", filled by embed()), got " +
+                  std::to_string(emb.gradients.rows()) + " x " + std::to_string(emb.gradients.cols()));
+    if (normals_rest->rows() != emb.size() || normals_rest->cols() != d)
+      throw Error("evaluate: rest normals must be " + std::to_string(emb.size()) + " x " +
+                  std::to_string(d) + ", got " + std::to_string(normals_rest->rows()) + " x " +
+                  std::to_string(normals_rest->cols()));
+    grads = emb.gradients.transpose().template cast<Scalar>();
+    normals_out->resize(emb.size(), d);
+  }
+  positions.resize(emb.size(), d);
+  if (d == 3) kernel<3, Scalar>(Prow, emb, normals_out ? &grads : nullptr, normals_rest, positions, normals_out, threads);
+  else kernel<2, Scalar>(Prow, emb, normals_out ? &grads : nullptr, normals_rest, positions, normals_out, threads);
+}
+
+}  // namespace
+
+template <typename Scalar>
+void evaluate(const BezierPoints& B, const Embedding& emb,
+              Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& positions, int threads) {
+  run<Scalar>(B, emb, nullptr, positions, nullptr, threads);
+}
+
+template <typename Scalar>
+void evaluate(const BezierPoints& B, const Embedding& emb,
+              const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& normals_rest,
+              Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& positions,
+              Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& normals_out, int threads) {
+  run<Scalar>(B, emb, &normals_rest, positions, &normals_out, threads);
+}
+
+template void evaluate<float>(const BezierPoints&, const Embedding&, Eigen::MatrixXf&, int);
+template void evaluate<double>(const BezierPoints&, const Embedding&, Eigen::MatrixXd&, int);
+template void evaluate<float>(const BezierPoints&, const Embedding&, const Eigen::MatrixXf&,
+                              Eigen::MatrixXf&, Eigen::MatrixXf&, int);
+template void evaluate<double>(const BezierPoints&, const Embedding&, const Eigen::MatrixXd&,
+                               Eigen::MatrixXd&, Eigen::MatrixXd&, int);
+
+Eigen::MatrixXd jacobian(const Eigen::Ref<const Eigen::MatrixXd>& U,
+                         const Eigen::Ref<const Eigen::MatrixXi>& T, const BezierPoints& B, int e,
+                         const Eigen::Ref<const Eigen::VectorXd>& bary) {
+  const Eigen::MatrixXd A = basis_gradients(U, T, e);  // checks shapes and e
+  const int d = static_cast<int>(U.cols());
+  const int K = (d + 1) * (d + 2) / 2;
+  if (B.cols() != d || B.rows() != T.rows() * K)
+    throw Error("jacobian: Bezier points must be " + std::to_string(T.rows() * K) + " x " + std::to_string(d));
+  if (bary.size() != d + 1) throw Error("jacobian: bary must have " + std::to_string(d + 1) + " entries");
+  // g_k = dx/dphi_k = 2 phi_k x_k + sum_{edges (k, j)} 2 phi_j P_kj
+  Eigen::MatrixXd g(d, d + 1);
+  for (int k = 0; k <= d; ++k) g.col(k) = 2 * bary(k) * B.row(e * K + k).transpose();
+  const auto& edges = bezier_edges(d);
+  for (size_t s = 0; s < edges.size(); ++s) {
+    const auto [i, j] = edges[s];
+    const Eigen::VectorXd q = B.row(e * K + d + 1 + static_cast<int>(s)).transpose();
+    g.col(i) += 2 * bary(j) * q;
+    g.col(j) += 2 * bary(i) * q;
+  }
+  return g * A;  // sum_k g_k a_k^T
+}
+
+}  // namespace mbi::interp

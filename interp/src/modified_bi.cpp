@@ -1,0 +1,464 @@
+// Modified-BI precompute (assembly, beta, gauge, factorisation) and per-frame solve.
+#include <mbi/interp/modified_bi.hpp>
+
+#include "detail.hpp"
+
+#include <Eigen/SparseCholesky>
+#include <cmath>
+#include <numeric>
+
+namespace mbi::interp {
+
+using SpMat = Eigen::SparseMatrix<double>;
+using Triplets = std::vector<Eigen::Triplet<double>>;
+
+namespace {
+// Solve path threshold: the dense operator is used when (unknowns per component) x n is at most
+// this many entries. Measured with mbi-bench (BM_Solve*, see bench/bench_interp.cpp).
+constexpr long long kDenseOperatorMaxEntries = 1LL << 21;
+}  // namespace
+
+namespace detail {
+
+Hessians assemble(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T) {
+  const int d = static_cast<int>(U.cols());
+  const int n = static_cast<int>(U.rows());
+  const int m = static_cast<int>(T.rows());
+  std::vector<Eigen::MatrixXd> A(m);
+  Triplets tv;
+  tv.reserve(static_cast<size_t>(m) * d * d * (d + 1) * (d + 1));
+  Eigen::MatrixXd L(d * d, d * (d + 1));
+  for (int e = 0; e < m; ++e) {
+    A[e] = basis_gradients(U, T, e);
+    const double vol = std::abs(element_volume(U, T, e));
+    // vec(Hess x_c) = L m_local: Hess_pq = sum_k a_k[p] m_k[q] + m_k[p] a_k[q] (fact 2)
+    L.setZero();
+    for (int k = 0; k <= d; ++k)
+      for (int p = 0; p < d; ++p)
+        for (int q = 0; q < d; ++q) {
+          L(p * d + q, k * d + q) += A[e](k, p);
+          L(p * d + q, k * d + p) += A[e](k, q);
+        }
+    const Eigen::MatrixXd H = vol * (L.transpose() * L);
+    for (int k = 0; k <= d; ++k)
+      for (int r = 0; r < d; ++r)
+        for (int l = 0; l <= d; ++l)
+          for (int s = 0; s < d; ++s)
+            tv.emplace_back(T(e, k) * d + r, T(e, l) * d + s, H(k * d + r, l * d + s));
+  }
+
+  // E_disc: the jump of grad x_c across a face is linear; at a face vertex v the phi_v m_v terms
+  // of both sides cancel, leaving sum_k +-a_k (x_k + m_k . (u_v - u_k)) (fact 3).
+  const Eigen::MatrixXi F = interior_faces(T);
+  const int nl = d + 2;             // local vertices: d face vertices + 2 opposite ones
+  const int nz = nl * (d + 1);      // local unknowns: m (d each) then x (1 each)
+  const int xoff = nl * d;
+  Triplets tmm, tmx, txx;
+  tmm.reserve(static_cast<size_t>(F.rows()) * xoff * xoff);
+  tmx.reserve(static_cast<size_t>(F.rows()) * xoff * nl);
+  txx.reserve(static_cast<size_t>(F.rows()) * nl * nl);
+  std::vector<Eigen::MatrixXd> G(d, Eigen::MatrixXd(d, nz));
+  std::vector<int> local(nl);
+  for (int f = 0; f < F.rows(); ++f) {
+    for (int j = 0; j < d; ++j) local[j] = F(f, j);
+    for (int s = 0; s < 2; ++s) {
+      const int e = F(f, d + s);
+      for (int k = 0; k <= d; ++k) {
+        bool on_face = false;
+        for (int j = 0; j < d; ++j) on_face = on_face || T(e, k) == F(f, j);
+        if (!on_face) local[d + s] = T(e, k);
+      }
+    }
+    auto local_of = [&](int g) {
+      for (int j = 0; j < nl; ++j)
+        if (local[j] == g) return j;
+      return -1;
+    };
+    for (auto& g : G) g.setZero();
+    for (int s = 0; s < 2; ++s) {
+      const int e = F(f, d + s);
+      const double sgn = s == 0 ? 1.0 : -1.0;
+      for (int k = 0; k <= d; ++k) {
+        const int j = local_of(T(e, k));
+        const Eigen::VectorXd a = A[e].row(k).transpose();
+        for (int v = 0; v < d; ++v) {
+          const Eigen::RowVectorXd w = U.row(F(f, v)) - U.row(T(e, k));
+          G[v].col(xoff + j) += sgn * a;
+          G[v].block(0, j * d, d, d) += sgn * (a * w);
+        }
+      }
+    }
+    double area;
+    if (d == 2) {
+      area = (U.row(F(f, 1)) - U.row(F(f, 0))).norm();
+    } else {
+      const Eigen::Vector3d e1 = (U.row(F(f, 1)) - U.row(F(f, 0))).transpose();
+      const Eigen::Vector3d e2 = (U.row(F(f, 2)) - U.row(F(f, 0))).transpose();
+      area = 0.5 * e1.cross(e2).norm();
+    }
+    // integral over a (d-1)-simplex of |g|^2, g linear: |F|/(d(d+1)) (sum |g_v|^2 + |sum g_v|^2)
+    Eigen::MatrixXd Gs = Eigen::MatrixXd::Zero(d, nz);
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(nz, nz);
+    for (int v = 0; v < d; ++v) {
+      Gs += G[v];
+      H.noalias() += G[v].transpose() * G[v];
+    }
+    H.noalias() += Gs.transpose() * Gs;
+    H *= area / (d * (d + 1));
+    auto global_m = [&](int a) { return local[a / d] * d + a % d; };
+    for (int a = 0; a < nz; ++a)
+      for (int b = 0; b < nz; ++b) {
+        const double h = H(a, b);
+        if (h == 0.0) continue;
+        if (a < xoff && b < xoff) tmm.emplace_back(global_m(a), global_m(b), h);
+        else if (a < xoff) tmx.emplace_back(global_m(a), local[b - xoff], h);
+        else if (b >= xoff) txx.emplace_back(local[a - xoff], local[b - xoff], h);
+      }
+  }
+  Hessians Hs;
+  Hs.vibr_mm.resize(d * n, d * n);
+  Hs.vibr_mm.setFromTriplets(tv.begin(), tv.end());
+  Hs.disc_mm.resize(d * n, d * n);
+  Hs.disc_mm.setFromTriplets(tmm.begin(), tmm.end());
+  Hs.disc_mx.resize(d * n, n);
+  Hs.disc_mx.setFromTriplets(tmx.begin(), tmx.end());
+  Hs.disc_xx.resize(n, n);
+  Hs.disc_xx.setFromTriplets(txx.begin(), txx.end());
+  return Hs;
+}
+
+std::vector<char> gauge_pins(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T,
+                             const std::vector<char>& free_vertex, int& null_dim) {
+  const int d = static_cast<int>(U.cols());
+  const int n = static_cast<int>(U.rows());
+  const int m = static_cast<int>(T.rows());
+  const int k = d + d * (d - 1) / 2;
+  null_dim = 0;
+  std::vector<char> pinned(static_cast<size_t>(d) * n, 0);
+  // face-connected components of elements (union-find)
+  std::vector<int> parent(m);
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  const Eigen::MatrixXi F = interior_faces(T);
+  for (int f = 0; f < F.rows(); ++f) parent[find(F(f, d))] = find(F(f, d + 1));
+  std::vector<int> comp_of_vertex(n, -1);
+  std::vector<std::vector<int>> comps(m);
+  for (int e = 0; e < m; ++e) {
+    const int c = find(e);
+    for (int j = 0; j <= d; ++j) {
+      const int v = T(e, j);
+      if (comp_of_vertex[v] == -1) {
+        comp_of_vertex[v] = c;
+        comps[c].push_back(v);
+      } else if (comp_of_vertex[v] != c) {
+        throw Error("ModifiedBI: vertex " + std::to_string(v) + " (of element " + std::to_string(e) +
+                    ") joins two parts of the control mesh that share no face; split the mesh "
+                    "into separate objects");
+      }
+    }
+  }
+  for (const auto& verts : comps) {
+    if (verts.empty()) continue;
+    // null vectors m_i = t + S c_i (c_i: centred, scaled rest positions), rows (vertex, r)
+    Eigen::RowVectorXd centre = Eigen::RowVectorXd::Zero(d);
+    for (int v : verts) centre += U.row(v);
+    centre /= static_cast<double>(verts.size());
+    double scale = 0;
+    for (int v : verts) scale = std::max(scale, (U.row(v) - centre).norm());
+    if (!(scale > 0)) scale = 1;
+    const int nc = static_cast<int>(verts.size());
+    Eigen::MatrixXd N = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(d) * nc, k);
+    for (int j = 0; j < nc; ++j) {
+      const Eigen::RowVectorXd c = (U.row(verts[j]) - centre) / scale;
+      for (int r = 0; r < d; ++r) N(j * d + r, r) = 1.0;
+      int col = d;
+      for (int p = 0; p < d; ++p)
+        for (int q = p + 1; q < d; ++q, ++col) {  // S = e_p e_q^T - e_q e_p^T
+          N(j * d + p, col) = c(q);
+          N(j * d + q, col) = -c(p);
+        }
+    }
+    // Null vectors that survive the fixed vertices: kernel of N restricted to fixed rows.
+    std::vector<int> fixed_rows, free_rows;
+    for (int j = 0; j < nc; ++j)
+      for (int r = 0; r < d; ++r) (free_vertex[verts[j]] ? free_rows : fixed_rows).push_back(j * d + r);
+    Eigen::MatrixXd Z = Eigen::MatrixXd::Identity(k, k);
+    if (!fixed_rows.empty()) {
+      Eigen::MatrixXd Nf(fixed_rows.size(), k);
+      for (size_t i = 0; i < fixed_rows.size(); ++i) Nf.row(i) = N.row(fixed_rows[i]);
+      Eigen::FullPivLU<Eigen::MatrixXd> lu(Nf);
+      lu.setThreshold(1e-10);
+      Z = lu.rank() == k ? Eigen::MatrixXd(k, 0) : Eigen::MatrixXd(lu.kernel());
+    }
+    const int kk = static_cast<int>(Z.cols());
+    if (kk == 0 || free_rows.empty()) continue;
+    Eigen::MatrixXd Nr(free_rows.size(), kk);
+    {
+      const Eigen::MatrixXd NZ = N * Z;
+      for (size_t i = 0; i < free_rows.size(); ++i) Nr.row(i) = NZ.row(free_rows[i]);
+    }
+    // Pick kk unknowns on which the null vectors are best conditioned (column-pivoted QR of
+    // Nr^T); pinning them to zero removes the null space without changing x(u).
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(Nr.transpose());
+    const Eigen::MatrixXd R = qr.matrixR().template triangularView<Eigen::Upper>();
+    if (!(std::abs(R(kk - 1, kk - 1)) > 1e-8 * std::abs(R(0, 0))))
+      throw Error("ModifiedBI: cannot fix the gauge of the component containing vertex " +
+                  std::to_string(verts[0]) + " (its vertices are too close to collinear)");
+    for (int i = 0; i < kk; ++i) {
+      const int row = free_rows[qr.colsPermutation().indices()(i)];
+      pinned[static_cast<size_t>(verts[row / d]) * d + row % d] = 1;
+    }
+    null_dim += kk;
+  }
+  return pinned;
+}
+
+}  // namespace detail
+
+double default_alpha(int d) {
+  if (d == 3) return 0.1;
+  if (d == 2) return 0.2;
+  throw Error("default_alpha: dimension must be 2 or 3, got " + std::to_string(d));
+}
+
+const std::vector<std::pair<int, int>>& bezier_edges(int d) {
+  static const std::vector<std::pair<int, int>> e2{{0, 1}, {0, 2}, {1, 2}};
+  static const std::vector<std::pair<int, int>> e3{{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+  if (d == 2) return e2;
+  if (d == 3) return e3;
+  throw Error("bezier_edges: dimension must be 2 or 3, got " + std::to_string(d));
+}
+
+struct ModifiedBI::Impl {
+  int d = 3, n = 0, m = 0;
+  Eigen::MatrixXd U;
+  Eigen::MatrixXi T;
+  Options opt;
+  double alpha = 0, beta = 0;
+  detail::Hessians H;
+  std::vector<int> reduced;  // full m index -> reduced index, -1 when pinned to 0
+  int n_red = 0;
+  int null_dim = 0;
+  SpMat Hmm_vibr_red, Hmm_disc_red, Hmx_red;  // restricted blocks (Hmx_red unweighted)
+  Eigen::SimplicialLLT<SpMat> llt;
+  bool dense = false;
+  Eigen::MatrixXd K;  // dense operator -H^-1 H_mx (n_red x n)
+
+  void factor() {
+    if (n_red == 0) return;
+    const SpMat A = alpha * Hmm_vibr_red + beta * Hmm_disc_red;
+    llt.factorize(A);
+    if (llt.info() != Eigen::Success)
+      throw Error("ModifiedBI: Cholesky factorisation failed (alpha = " + std::to_string(alpha) +
+                  ", beta = " + std::to_string(beta) + "): the reduced system is not positive definite");
+    if (dense) {
+      const Eigen::MatrixXd rhs = -beta * Eigen::MatrixXd(Hmx_red);
+      K = llt.solve(rhs);
+    } else {
+      K.resize(0, 0);
+    }
+  }
+};
+
+ModifiedBI::ModifiedBI(const Eigen::Ref<const Eigen::MatrixXd>& U,
+                       const Eigen::Ref<const Eigen::MatrixXi>& T, const Options& options)
+    : impl_(std::make_unique<Impl>()) {
+  validate_mesh(U, T);
+  Impl& I = *impl_;
+  I.U = U;
+  I.T = T;
+  I.d = static_cast<int>(U.cols());
+  I.n = static_cast<int>(U.rows());
+  I.m = static_cast<int>(T.rows());
+  I.opt = options;
+  const int d = I.d, n = I.n;
+  if (!(options.alpha >= 0) || !std::isfinite(options.alpha))
+    throw Error("ModifiedBI: alpha must be > 0 (0 selects the default), got " + std::to_string(options.alpha));
+  if (!(options.beta >= 0) || !std::isfinite(options.beta))
+    throw Error("ModifiedBI: beta must be > 0 (0 selects the automatic rule), got " + std::to_string(options.beta));
+  I.alpha = options.alpha > 0 ? options.alpha : default_alpha(d);
+
+  I.H = detail::assemble(I.U, I.T);
+  if (I.H.disc_mm.nonZeros() == 0)
+    throw Error("ModifiedBI: the control mesh has no interior faces (a single element?); "
+                "modified-BI needs at least two face-adjacent elements");
+  // beta: equal Frobenius norms of the m-blocks of E_vibr and beta E_disc (fact 7).
+  I.beta = options.beta > 0 ? options.beta : I.H.vibr_mm.norm() / I.H.disc_mm.norm();
+
+  std::vector<char> free_vertex(n, 0);
+  for (int e = 0; e < I.m; ++e)
+    for (int j = 0; j <= d; ++j) free_vertex[T(e, j)] = 1;
+  if (options.pin_boundary) {
+    const Eigen::VectorXi b = boundary_vertices(n, T);
+    for (int i = 0; i < n; ++i)
+      if (b(i)) free_vertex[i] = 0;
+  }
+  const std::vector<char> pinned = detail::gauge_pins(I.U, I.T, free_vertex, I.null_dim);
+  I.reduced.assign(static_cast<size_t>(d) * n, -1);
+  for (int i = 0; i < n; ++i)
+    for (int r = 0; r < d; ++r)
+      if (free_vertex[i] && !pinned[static_cast<size_t>(i) * d + r]) I.reduced[i * d + r] = I.n_red++;
+
+  // Restriction R (n_red x d n) selects the reduced unknowns.
+  Triplets tr;
+  for (int a = 0; a < d * n; ++a)
+    if (I.reduced[a] >= 0) tr.emplace_back(I.reduced[a], a, 1.0);
+  SpMat R(I.n_red, d * n);
+  R.setFromTriplets(tr.begin(), tr.end());
+  const SpMat Rt = R.transpose();
+  I.Hmm_vibr_red = R * I.H.vibr_mm * Rt;
+  I.Hmm_disc_red = R * I.H.disc_mm * Rt;
+  I.Hmx_red = R * I.H.disc_mx;
+  switch (options.solve_path) {
+    case SolvePath::Dense: I.dense = true; break;
+    case SolvePath::Sparse: I.dense = false; break;
+    case SolvePath::Automatic:
+      I.dense = static_cast<long long>(I.n_red) * n <= kDenseOperatorMaxEntries;
+      break;
+  }
+  if (I.n_red > 0) {
+    const SpMat A = I.alpha * I.Hmm_vibr_red + I.beta * I.Hmm_disc_red;
+    I.llt.analyzePattern(A);
+  }
+  I.factor();
+}
+
+ModifiedBI::~ModifiedBI() = default;
+ModifiedBI::ModifiedBI(ModifiedBI&&) noexcept = default;
+ModifiedBI& ModifiedBI::operator=(ModifiedBI&&) noexcept = default;
+
+void ModifiedBI::set_alpha(double alpha) {
+  if (!(alpha > 0) || !std::isfinite(alpha))
+    throw Error("ModifiedBI::set_alpha: alpha must be a finite number > 0, got " + std::to_string(alpha));
+  impl_->alpha = alpha;
+  impl_->factor();
+}
+
+int ModifiedBI::dim() const { return impl_->d; }
+int ModifiedBI::vertices() const { return impl_->n; }
+int ModifiedBI::elements() const { return impl_->m; }
+double ModifiedBI::alpha() const { return impl_->alpha; }
+double ModifiedBI::beta() const { return impl_->beta; }
+bool ModifiedBI::pin_boundary() const { return impl_->opt.pin_boundary; }
+int ModifiedBI::null_space_dim() const { return impl_->null_dim; }
+int ModifiedBI::unknowns() const { return impl_->n_red; }
+bool ModifiedBI::dense_operator() const { return impl_->dense; }
+const SpMat& ModifiedBI::vibr_hessian_mm() const { return impl_->H.vibr_mm; }
+const SpMat& ModifiedBI::disc_hessian_mm() const { return impl_->H.disc_mm; }
+const SpMat& ModifiedBI::disc_hessian_mx() const { return impl_->H.disc_mx; }
+const SpMat& ModifiedBI::disc_hessian_xx() const { return impl_->H.disc_xx; }
+const Eigen::MatrixXd& ModifiedBI::rest_positions() const { return impl_->U; }
+const Eigen::MatrixXi& ModifiedBI::elements_matrix() const { return impl_->T; }
+
+VertexMatrices ModifiedBI::solve(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
+  const Impl& I = *impl_;
+  const int d = I.d, n = I.n;
+  if (X.rows() != n || X.cols() != d)
+    throw Error("ModifiedBI::solve: X must be " + std::to_string(n) + " x " + std::to_string(d) +
+                ", got " + std::to_string(X.rows()) + " x " + std::to_string(X.cols()));
+  detail::check_finite("ModifiedBI::solve", "control vertex", X);
+  VertexMatrices M = VertexMatrices::Zero(static_cast<Eigen::Index>(d) * n, d);
+  if (I.n_red == 0) return M;
+  Eigen::MatrixXd sol;  // n_red x d, column c = reduced m of component c
+  if (I.dense) {
+    sol.noalias() = I.K * X;
+  } else {
+    Eigen::MatrixXd rhs = I.Hmx_red * X;
+    rhs *= -I.beta;
+    sol = I.llt.solve(rhs);
+  }
+  for (int i = 0; i < n; ++i)
+    for (int r = 0; r < d; ++r) {
+      const int a = I.reduced[i * d + r];
+      if (a < 0) continue;
+      for (int c = 0; c < d; ++c) M(i * d + c, r) = sol(a, c);
+    }
+  return M;
+}
+
+BezierPoints ModifiedBI::bezier(const Eigen::Ref<const Eigen::MatrixXd>& X, const VertexMatrices& M) const {
+  return bezier_points(impl_->U, impl_->T, X, M);
+}
+
+namespace {
+void check_xm(const char* who, int n, int d, const Eigen::Ref<const Eigen::MatrixXd>& X,
+              const VertexMatrices* M) {
+  if (X.rows() != n || X.cols() != d)
+    throw Error(std::string(who) + ": X must be " + std::to_string(n) + " x " + std::to_string(d) +
+                ", got " + std::to_string(X.rows()) + " x " + std::to_string(X.cols()));
+  if (M && (M->rows() != static_cast<Eigen::Index>(n) * d || M->cols() != d))
+    throw Error(std::string(who) + ": M must be " + std::to_string(n * d) + " x " + std::to_string(d) +
+                ", got " + std::to_string(M->rows()) + " x " + std::to_string(M->cols()));
+}
+}  // namespace
+
+BezierPoints bezier_bi(const Eigen::Ref<const Eigen::MatrixXd>& X,
+                       const Eigen::Ref<const Eigen::MatrixXi>& T) {
+  const int d = static_cast<int>(X.cols());
+  if ((d != 2 && d != 3) || T.cols() != d + 1)
+    throw Error("bezier_bi: X must be n x d (d = 2, 3) and T m x (d+1)");
+  const auto& edges = bezier_edges(d);
+  const int K = (d + 1) * (d + 2) / 2;
+  BezierPoints B(T.rows() * K, d);
+  for (Eigen::Index e = 0; e < T.rows(); ++e) {
+    for (int k = 0; k <= d; ++k) {
+      if (T(e, k) < 0 || T(e, k) >= X.rows())
+        throw Error("bezier_bi: element " + std::to_string(e) + " has vertex index " +
+                    std::to_string(T(e, k)) + " outside [0, " + std::to_string(X.rows()) + ")");
+      B.row(e * K + k) = X.row(T(e, k));
+    }
+    for (size_t s = 0; s < edges.size(); ++s)
+      B.row(e * K + d + 1 + s) = 0.5 * (X.row(T(e, edges[s].first)) + X.row(T(e, edges[s].second)));
+  }
+  return B;
+}
+
+BezierPoints bezier_points(const Eigen::Ref<const Eigen::MatrixXd>& U,
+                           const Eigen::Ref<const Eigen::MatrixXi>& T,
+                           const Eigen::Ref<const Eigen::MatrixXd>& X, const VertexMatrices& M) {
+  detail::check_shapes("bezier_points", U, T);
+  const int d = static_cast<int>(U.cols());
+  const int n = static_cast<int>(U.rows());
+  check_xm("bezier_points", n, d, X, &M);
+  const auto& edges = bezier_edges(d);
+  const int K = (d + 1) * (d + 2) / 2;
+  BezierPoints B(T.rows() * K, d);
+  for (Eigen::Index e = 0; e < T.rows(); ++e) {
+    for (int k = 0; k <= d; ++k) B.row(e * K + k) = X.row(T(e, k));
+    for (size_t s = 0; s < edges.size(); ++s) {
+      const int i = T(e, edges[s].first), j = T(e, edges[s].second);
+      const Eigen::VectorXd du = (U.row(j) - U.row(i)).transpose();
+      const Eigen::VectorXd dM = (M.middleRows(i * d, d) - M.middleRows(j * d, d)) * du;
+      B.row(e * K + d + 1 + s) = 0.5 * (X.row(i) + X.row(j)) + 0.5 * dM.transpose();
+    }
+  }
+  return B;
+}
+
+Eigen::VectorXd evaluate_reference(const Eigen::Ref<const Eigen::MatrixXd>& U,
+                                   const Eigen::Ref<const Eigen::MatrixXi>& T,
+                                   const Eigen::Ref<const Eigen::MatrixXd>& X,
+                                   const VertexMatrices& M, int e,
+                                   const Eigen::Ref<const Eigen::VectorXd>& u) {
+  const int d = static_cast<int>(U.cols());
+  check_xm("evaluate_reference", static_cast<int>(U.rows()), d, X, &M);
+  if (u.size() != d) throw Error("evaluate_reference: u must have " + std::to_string(d) + " entries");
+  const Eigen::MatrixXd A = basis_gradients(U, T, e);  // checks e
+  const Eigen::VectorXd r = u - U.row(T(e, 0)).transpose();
+  Eigen::VectorXd phi(d + 1);
+  phi.tail(d) = A.bottomRows(d) * r;
+  phi(0) = 1.0 - phi.tail(d).sum();
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(d);
+  for (int k = 0; k <= d; ++k) {
+    const int i = T(e, k);
+    const Eigen::VectorXd w = u - U.row(i).transpose();
+    const Eigen::VectorXd xi = X.row(i).transpose() + M.middleRows(i * d, d) * w;
+    x += phi(k) * xi;
+  }
+  return x;
+}
+
+}  // namespace mbi::interp
