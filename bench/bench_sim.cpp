@@ -1,0 +1,101 @@
+// Simulator step time (mbi::sim). Reference set-up of the issue (VegaFEM corotational linear
+// FEM, implicit backward Euler, one Newton iteration): dt = 1/60 s, E = 1e5 Pa, nu = 0.45,
+// 1000 kg/m^3, bar with one end fixed, gravity. Vega measured 1.41 ms at 281 tets, 10.6 ms at
+// 1,311 tets and 54.9 ms at 5,125 tets on this kind of machine.
+//
+//   mbi-bench --benchmark_filter=BM_SimStep
+//
+// Arguments: (mesh, solver) with mesh 0..3 = about 100, 1.3K, 5K, 20K tetrahedra and solver
+// 1 = LDLT (cached symbolic analysis), 2 = PCG (Jacobi, warm-started). Counters: tets,
+// Newton and PCG iterations per step, assembly and solve time per step (ms).
+#include <benchmark/benchmark.h>
+#include <mbi/sim/simulator.hpp>
+
+#include <array>
+#include <vector>
+
+namespace {
+
+struct BarMesh {
+  Eigen::MatrixXd U;
+  Eigen::MatrixXi T;
+};
+
+// Bar of nx x n x n cells (cell size 0.1 m), each hex split into 6 tetrahedra.
+BarMesh bar_mesh(int nx, int n) {
+  BarMesh M;
+  const int ny = n, nz = n;
+  auto id = [&](int i, int j, int k) { return (k * (ny + 1) + j) * (nx + 1) + i; };
+  M.U.resize((nx + 1) * (ny + 1) * (nz + 1), 3);
+  for (int k = 0; k <= nz; ++k)
+    for (int j = 0; j <= ny; ++j)
+      for (int i = 0; i <= nx; ++i) M.U.row(id(i, j, k)) << 0.1 * i, 0.1 * j, 0.1 * k;
+  static const std::array<std::array<int, 3>, 6> perms{
+      {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}}};
+  M.T.resize(6 * nx * ny * nz, 4);
+  int t = 0;
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i)
+        for (const auto& p : perms) {
+          std::array<int, 3> c{i, j, k};
+          std::array<int, 4> v{};
+          v[0] = id(c[0], c[1], c[2]);
+          for (int s = 0; s < 3; ++s) {
+            ++c[p[s]];
+            v[s + 1] = id(c[0], c[1], c[2]);
+          }
+          M.T.row(t++) << v[0], v[1], v[2], v[3];
+        }
+  return M;
+}
+
+BarMesh bench_mesh(int which) {
+  switch (which) {
+    case 0: return bar_mesh(4, 2);    //    96 tets
+    case 1: return bar_mesh(14, 4);   //  1344 tets
+    case 2: return bar_mesh(24, 6);   //  5184 tets
+    default: return bar_mesh(34, 10); // 20400 tets
+  }
+}
+
+void BM_SimStep(benchmark::State& state) {
+  const BarMesh M = bench_mesh(static_cast<int>(state.range(0)));
+  mbi::sim::Parameters p;
+  p.dt = 1.0 / 60.0;
+  p.newton_iterations = 1;
+  p.solver = state.range(1) == 1 ? mbi::sim::LinearSolver::LDLT : mbi::sim::LinearSolver::PCG;
+  mbi::sim::Simulator sim(M.U, M.T, mbi::sim::Material{1e5, 0.45, 1000.0}, p);
+  std::vector<int> fixed;
+  for (Eigen::Index i = 0; i < M.U.rows(); ++i)
+    if (M.U(i, 0) == 0.0) fixed.push_back(static_cast<int>(i));
+  sim.fix(fixed);
+  for (int s = 0; s < 5; ++s) sim.step();  // warm start, bar starts to sag
+  double newton = 0, iters = 0, assemble = 0, solve = 0;
+  long steps = 0;
+  for (auto _ : state) {
+    const mbi::sim::StepResult r = sim.step();
+    if (!r.success) {
+      state.SkipWithError(r.message.c_str());
+      break;
+    }
+    newton += r.newton_iterations;
+    iters += r.solver_iterations;
+    assemble += r.assemble_ms;
+    solve += r.solve_ms;
+    ++steps;
+  }
+  const double k = steps > 0 ? 1.0 / static_cast<double>(steps) : 0.0;
+  state.counters["tets"] = static_cast<double>(M.T.rows());
+  state.counters["newton_per_step"] = newton * k;
+  state.counters["pcg_iters_per_step"] = iters * k;
+  state.counters["assemble_ms"] = assemble * k;
+  state.counters["solve_ms"] = solve * k;
+}
+
+}  // namespace
+
+BENCHMARK(BM_SimStep)
+    ->ArgsProduct({{0, 1, 2, 3}, {1, 2}})
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(0.5);
