@@ -1,5 +1,7 @@
 #include <mbi/scenes/procedural.hpp>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <array>
 #include <cmath>

@@ -1,6 +1,8 @@
 #include <mbi/scenes/io.hpp>
 #include <mbi/scenes/raster.hpp>
 
+#include <Eigen/Geometry>
+
 #include <stb_image.h>
 #include <stb_image_write.h>
 
