@@ -1,6 +1,8 @@
 // Control meshes: TetGen .node/.ele/.face, Gmsh .msh (2.2 and 4.1 ASCII), legacy VTK output.
 #include "io_common.hpp"
 
+#include <Eigen/Dense>
+
 #include <array>
 #include <cmath>
 #include <unordered_map>
@@ -277,7 +279,9 @@ ControlMesh read_gmsh(const path& file) {
       if (version != "2.2" && version != "4.1" && version != "2" && version != "4")
         fail(file, f.number, "format: version " + version + " not supported (2.2 or 4.1)");
       if (f.tok[1] != "0") fail(file, f.number, "format: binary .msh not supported (ASCII only)");
-      i += 2;
+      if (need(i + 2, "$EndMeshFormat").tok[0] != "$EndMeshFormat")
+        fail(file, lines[i + 2].number, "expected $EndMeshFormat");
+      i += 3;
     } else if (key == "$Nodes") {
       if (version.empty()) fail(file, l.number, "$Nodes before $MeshFormat");
       const Line& h = need(i + 1, "node count");

@@ -7,6 +7,8 @@
 // simplest with the small parsers below.
 #include "io_common.hpp"
 
+#include <Eigen/Dense>
+
 #include <array>
 #include <bit>
 #include <cmath>

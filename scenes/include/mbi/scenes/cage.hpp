@@ -5,10 +5,13 @@
 // triangle or a vertex touches, plus the cells enclosed by those, found by a flood fill from
 // outside). The union of these closed cells contains every dense vertex. Each cell is split
 // into simplices with one consistent Kuhn (Freudenthal) subdivision: 6 tetrahedra per cube in
-// 3D (dihedral angles 45, 60 and 90 degrees), 2 right triangles per square in 2D (angles 45 and
-// 90 degrees), so there are no slivers and the mesh is conforming. Parts of the shape farther
-// apart than about one cell stay separate. h is searched (deterministically) so that the number
-// of control vertices is as close as possible to the target.
+// 3D (dihedral angles 45, 60 and 90 degrees for cubic cells), 2 right triangles per square in 2D
+// (45 and 90 degrees), so the mesh is conforming and has no slivers. Parts of the shape farther
+// apart than about two cells stay separate. The cell size is searched (deterministically) so
+// that the number of control vertices is as close as possible to the target: first cubic cells,
+// then, where the count jumps too coarsely, cells whose edges differ per axis (aspect ratio at
+// most 1.6, which keeps every dihedral angle above 30 degrees); within 10% of the target the
+// most nearly cubic grid wins.
 //
 // 2D: when every dense vertex has the same z (e.g. the planar alligator and woody meshes), the
 // cage is a 2D triangle mesh in x, y (unless Options::force_3d).
@@ -25,7 +28,7 @@ struct CageOptions {
 struct CageResult {
   Eigen::MatrixXd U;            ///< n x d control vertices (d = 3, or 2 for planar input)
   Eigen::MatrixXi T;            ///< m x (d+1) tetrahedra / triangles, positive volume
-  double cell_size = 0.0;       ///< grid cell size h, in the units of the input
+  double cell_size = 0.0;       ///< longest grid cell edge, in the units of the input
   double min_dihedral_deg = 0;  ///< smallest dihedral angle (2D: smallest triangle angle), deg
   int outside_points = 0;       ///< dense vertices outside the cage (mbi::interp::embed)
   double seconds = 0.0;         ///< wall-clock time of the generation
