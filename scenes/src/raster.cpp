@@ -17,7 +17,7 @@ namespace {
 
 struct Projector {
   Eigen::Vector3d right, up, fwd;
-  double scale = 1, cx = 0, cy = 0;
+  double scale = 1, cx = 0, cy = 0, aspect = 1;
   int w = 0, h = 0;
   Projector(const View& v, int width, int height) : w(width), h(height) {
     fwd = v.direction.normalized();
@@ -35,6 +35,7 @@ struct Projector {
       y1 = std::max(y1, p.dot(up));
     }
     const double sx = (x1 - x0) * (1 + 2 * v.margin), sy = (y1 - y0) * (1 + 2 * v.margin);
+    aspect = sx / std::max(sy, 1e-300);
     scale = std::min(width / std::max(sx, 1e-300), height / std::max(sy, 1e-300));
     cx = 0.5 * (x0 + x1);
     cy = 0.5 * (y0 + y1);
@@ -83,6 +84,8 @@ Image::Image(int w, int h, Eigen::Vector3i background) : width(w), height(h) {
   for (size_t i = 0; i < rgb.size(); i += 3)
     for (int c = 0; c < 3; ++c) rgb[i + static_cast<size_t>(c)] = static_cast<std::uint8_t>(background[c]);
 }
+
+double view_aspect(const View& view) { return Projector(view, 1, 1).aspect; }
 
 View frame_points(const Eigen::Ref<const Eigen::MatrixXd>& V, const Eigen::Vector3d& direction,
                   const Eigen::Vector3d& up) {

@@ -207,8 +207,10 @@ class Outputs {
         const Eigen::MatrixXd* both[2] = {dense_bi ? dense_bi : &dense, &dense};
         v.bounds_min = both[0]->colwise().minCoeff().transpose().cwiseMin(both[1]->colwise().minCoeff().transpose());
         v.bounds_max = both[0]->colwise().maxCoeff().transpose().cwiseMax(both[1]->colwise().maxCoeff().transpose());
-        if (dense_bi) panels.push_back(render_mesh(*dense_bi, m_.dense.F, v, 480, 480));
-        panels.push_back(render_mesh(dense, m_.dense.F, v, 480, 480));
+        const int h = 480;
+        const int w = std::clamp(static_cast<int>(h * view_aspect(v)), 160, 960);
+        if (dense_bi) panels.push_back(render_mesh(*dense_bi, m_.dense.F, v, w, h));
+        panels.push_back(render_mesh(dense, m_.dense.F, v, w, h));
       } else if (m_.image) {
         const int W = m_.image->width, H = m_.image->height;
         const int ow = W * 3 / 2, oh = H * 3 / 2;

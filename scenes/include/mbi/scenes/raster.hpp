@@ -31,6 +31,9 @@ struct View {
   double margin = 0.05;  ///< fraction of the framed size
 };
 
+/// Width / height of the framed region as seen from the view (for choosing a picture size).
+double view_aspect(const View& view);
+
 /// View direction + up that frame the given points.
 View frame_points(const Eigen::Ref<const Eigen::MatrixXd>& V, const Eigen::Vector3d& direction,
                   const Eigen::Vector3d& up);

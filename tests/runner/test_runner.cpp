@@ -1,0 +1,112 @@
+// The headless runner: every shipped scene runs a few frames, its metrics parse, and
+// modified-BI's mean face discontinuity is below BI's; outputs are complete and protected.
+#include <catch2/catch.hpp>
+
+#include <mbi/scenes/io.hpp>
+#include <mbi/scenes/procedural.hpp>
+#include <mbi/scenes/runner.hpp>
+
+#include "common/temp_dir.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdlib>
+#include <fstream>
+
+namespace fs = std::filesystem;
+using namespace mbi::scenes;
+
+namespace {
+
+fs::path source_dir() {
+  const char* s = std::getenv("MBI_SOURCE_DIR");
+  REQUIRE(s != nullptr);
+  return s;
+}
+
+nlohmann::json read_json(const fs::path& p) {
+  std::ifstream in(p);
+  REQUIRE(in.good());
+  return nlohmann::json::parse(in);
+}
+
+void check_run(const std::string& scene_name, int frames) {
+  mbi::test::TempDir dir("run");
+  const Scene sc = load_scene(source_dir() / "scenes" / (scene_name + ".toml"));
+  RunOptions o;
+  o.out_dir = dir / "out";
+  o.frames = frames;
+  const RunResult r = run_scene(sc, o);
+  INFO(scene_name);
+  REQUIRE_FALSE(r.failed);
+  CHECK(r.frames == frames);
+  const nlohmann::json m = read_json(o.out_dir / "metrics.json");
+  CHECK(m["frames"].size() == static_cast<size_t>(frames + 1));
+  CHECK(m["frames_completed"] == frames);
+  CHECK(m["failure"].is_null());
+  CHECK(m["outside_points"] == 0);
+  for (const auto& f : m["frames"]) {
+    CHECK(f["solve_ms"].get<double>() >= 0);
+    CHECK(f["interp_ms"].get<double>() >= 0);
+  }
+  const auto& last = m["frames"].back()["disc"];
+  const double bi = last["bi"]["mean"], mbi_mean = last["modified_bi"]["mean"];
+  CHECK(bi > 0);
+  CHECK(mbi_mean < bi);
+  // outputs of the last frame and the point cache
+  if (sc.output.mesh_format != "none")
+    CHECK(fs::exists(frame_path(o.out_dir / "mesh", frames, "." + sc.output.mesh_format)));
+  CHECK(fs::exists(frame_path(o.out_dir / "frame", frames, ".png")));
+  CHECK(fs::exists(frame_path(o.out_dir / "control", frames, ".vtk")));
+  const PointCache pc = read_pc2(o.out_dir / "dense.pc2");
+  CHECK(pc.frames.size() == static_cast<size_t>(frames + 1));
+  CHECK(static_cast<long>(pc.frames.front().rows()) == static_cast<long>(m["dense_vertices"]));
+  // no temporary files left behind
+  for (const auto& e : fs::directory_iterator(o.out_dir))
+    CHECK(e.path().filename().string().find(".tmp") == std::string::npos);
+}
+
+}  // namespace
+
+TEST_CASE("scene twist-bar runs", "[runner]") { check_run("twist-bar", 4); }
+TEST_CASE("scene cantilever runs", "[runner]") { check_run("cantilever", 4); }
+TEST_CASE("scene poke runs", "[runner]") { check_run("poke", 4); }
+TEST_CASE("scene drag runs", "[runner]") { check_run("drag", 4); }
+TEST_CASE("scene image-warp runs", "[runner]") { check_run("image-warp", 3); }
+TEST_CASE("scene large runs", "[runner]") { check_run("large", 2); }
+
+TEST_CASE("outputs are not overwritten without force", "[runner]") {
+  mbi::test::TempDir dir("run");
+  const Scene sc = load_scene(source_dir() / "scenes" / "twist-bar.toml");
+  RunOptions o;
+  o.out_dir = dir / "out";
+  o.frames = 1;
+  run_scene(sc, o);
+  const auto stamp = fs::last_write_time(o.out_dir / "metrics.json");
+  CHECK_THROWS_WITH(run_scene(sc, o), Catch::Contains("use --force"));
+  CHECK(fs::last_write_time(o.out_dir / "metrics.json") == stamp);
+  o.force = true;
+  CHECK_NOTHROW(run_scene(sc, o));
+}
+
+TEST_CASE("--mesh replaces the dense model; --method bi gives BI output", "[runner]") {
+  mbi::test::TempDir dir("run");
+  Eigen::MatrixXd V;
+  Eigen::MatrixXi F;
+  cylinder_surface(0.3, 1.5, 24, 10, 3, V, F);
+  write_surface(dir / "user.obj", V, F);
+  const Scene sc = load_scene(source_dir() / "scenes" / "poke.toml");
+  RunOptions o;
+  o.out_dir = dir / "out";
+  o.frames = 2;
+  o.mesh = dir / "user.obj";
+  o.method = "bi";
+  const RunResult r = run_scene(sc, o);
+  REQUIRE_FALSE(r.failed);
+  const nlohmann::json m = read_json(o.out_dir / "metrics.json");
+  CHECK(m["dense_vertices"] == V.rows());
+  CHECK(m["method"] == "bi");
+  const SurfaceMesh out = read_surface(frame_path(o.out_dir / "mesh", 0, ".obj"));
+  CHECK(out.V.rows() == V.rows());
+  CHECK((out.V - V).cwiseAbs().maxCoeff() < 1e-9);  // frame 0 is the rest pose
+}
