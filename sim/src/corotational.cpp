@@ -106,12 +106,48 @@ Lame lame(const Material& m, const char* what) {
   return {E / (2.0 * (1.0 + nu)), E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))};
 }
 
-Eigen::Matrix3d rotation(const Eigen::Matrix3d& F) {
+namespace {
+
+Eigen::Matrix3d rotation_svd(const Eigen::Matrix3d& F) {
   const Eigen::JacobiSVD<Eigen::Matrix3d> svd(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Eigen::Matrix3d U = svd.matrixU();
   const Eigen::Matrix3d& V = svd.matrixV();
   // Singular values are sorted decreasingly: flip the smallest one's vector if needed.
   if (U.determinant() * V.determinant() < 0) U.col(2) = -U.col(2);
+  Eigen::Matrix3d R;
+  R.noalias() = U * V.transpose();
+  return R;
+}
+
+}  // namespace
+
+Eigen::Matrix3d rotation(const Eigen::Matrix3d& F) {
+  // Fast path: eigen-decomposition of F^T F (closed form) gives V and the singular values;
+  // U follows from F V by Gram-Schmidt, its last column as a cross product so that det U = +1
+  // (which flips the smallest singular value of an inverted F, as in Irving et al. 2004).
+  const double scale = F.cwiseAbs().maxCoeff();
+  if (!(scale > 0) || !std::isfinite(scale)) return Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d Fs = F / scale;
+  Eigen::Matrix3d C;
+  C.noalias() = Fs.transpose() * Fs;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  eig.computeDirect(C);
+  Eigen::Matrix3d V = eig.eigenvectors();  // ascending eigenvalues: column 2 is the largest
+  const Eigen::Vector3d lam = eig.eigenvalues();
+  // Near-repeated small singular values or a rank <= 1 F: the closed form loses accuracy.
+  if (!(lam(1) > 1e-8 * lam(2)) || !V.allFinite()) return rotation_svd(F);
+  if (V.determinant() < 0) V.col(0) = -V.col(0);
+  Eigen::Vector3d u2 = Fs * V.col(2);
+  u2.normalize();
+  Eigen::Vector3d u1 = Fs * V.col(1);
+  u1 -= u1.dot(u2) * u2;
+  const double n1 = u1.norm();
+  if (!(n1 > 1e-6 * std::sqrt(lam(2)))) return rotation_svd(F);
+  u1 /= n1;
+  Eigen::Matrix3d U;
+  U.col(2) = u2;
+  U.col(1) = u1;
+  U.col(0) = u1.cross(u2);
   Eigen::Matrix3d R;
   R.noalias() = U * V.transpose();
   return R;
