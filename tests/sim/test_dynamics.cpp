@@ -341,3 +341,60 @@ TEST_CASE("simulator rejects bad input with a clear error", "[sim][errors]") {
   CHECK(sim.positions() == M.U);  // unchanged
   CHECK(sim.step().success);
 }
+
+TEST_CASE("PCG and LDLT give the same trajectory; Auto falls back to LDLT when PCG cannot "
+          "converge",
+          "[sim][solver]") {
+  const auto M = mbi::test::bar(12, 3, 3, 1.0, 0.25);  // 13 x 4 x 4 nodes = 624 nodes
+  const Material mat{1e5, 0.45, 1000};
+  Parameters p;
+  p.mass_damping = 0.5;
+  p.stiffness_damping = 0.01;
+  p.pcg_tolerance = 1e-12;
+  p.solver = LinearSolver::LDLT;
+  Simulator a(M.U, M.T, mat, p);
+  p.solver = LinearSolver::PCG;
+  Simulator b(M.U, M.T, mat, p);
+  CHECK(a.solver() == LinearSolver::LDLT);
+  CHECK(b.solver() == LinearSolver::PCG);
+  for (Simulator* s : {&a, &b}) {
+    s->fix(nodes_at(M.U, 0, 0.0));
+    s->add_poke(static_cast<int>(M.T.rows()) - 1, Eigen::Vector4d(0.25, 0.25, 0.25, 0.25),
+                Eigen::Vector3d(1.2, 0.5, 0.1), 50.0);
+  }
+  int pcg_iterations = 0;
+  for (int s = 0; s < 40; ++s) {
+    REQUIRE(a.step().success);
+    const StepResult r = b.step();
+    REQUIRE(r.success);
+    pcg_iterations += r.solver_iterations;
+  }
+  CHECK(pcg_iterations > 0);
+  const double swing = (a.positions() - M.U).cwiseAbs().maxCoeff();
+  CHECK(swing > 0.05);
+  CHECK((a.positions() - b.positions()).cwiseAbs().maxCoeff() < 1e-8 * swing);
+
+  // A 1 mm bar with E = 1e9 Pa at dt = 1/60 s: h^2 K / M ~ 1e11, Jacobi-type PCG cannot reach
+  // the tolerance within its iteration cap; Auto must still step correctly (LDLT).
+  const auto S = mbi::test::bar(12, 3, 3, 1e-3, 2.5e-4);
+  Parameters q;
+  q.pcg_max_iterations = 50;
+  Simulator c(S.U, S.T, Material{1e9, 0.45, 1000}, q);
+  CHECK(c.solver() == LinearSolver::PCG);
+  c.fix(nodes_at(S.U, 0, 0.0));
+  for (int s = 0; s < 10; ++s) REQUIRE(c.step().success);
+  CHECK(c.solver() == LinearSolver::LDLT);
+  CHECK(c.positions().allFinite());
+  q.solver = LinearSolver::PCG;  // forced PCG reports the failure instead
+  Simulator d(S.U, S.T, Material{1e9, 0.45, 1000}, q);
+  d.fix(nodes_at(S.U, 0, 0.0));
+  bool failed = false;
+  for (int s = 0; s < 10 && !failed; ++s) {
+    const StepResult r = d.step();
+    if (!r.success) {
+      failed = true;
+      CHECK_THAT(r.message, Catch::Contains("PCG"));
+    }
+  }
+  CHECK(failed);
+}
