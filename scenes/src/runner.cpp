@@ -291,6 +291,7 @@ RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
   std::unique_ptr<sim::Simulator> simulator;
   std::unique_ptr<interp::HandleSolver> handles, handles_pinned;
   std::vector<int> drag_vertices;
+  std::vector<int> drag_of;  // which [[drags]] entry moves each handle
   struct PokeState {
     PokeSpec spec;
     int element = -1;
@@ -350,18 +351,28 @@ RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
       pokes.push_back(st);
     }
   } else {
-    for (const DragSpec& dr : sc.drags) {
-      int v = dr.vertex;
-      if (dr.near) {
-        Eigen::VectorXd dist = (m.U.rowwise() - dr.near->head(d).transpose()).rowwise().squaredNorm();
-        dist.minCoeff(&v);
+    for (size_t k = 0; k < sc.drags.size(); ++k) {
+      const DragSpec& dr = sc.drags[k];
+      std::vector<int> vs;
+      if (dr.select) {
+        vs = select_nodes(*dr.select, m.U);
+      } else if (dr.near) {
+        Eigen::Index v = 0;
+        (m.U.rowwise() - dr.near->head(d).transpose()).rowwise().squaredNorm().minCoeff(&v);
+        vs.push_back(static_cast<int>(v));
+      } else {
+        vs.push_back(dr.vertex);
       }
-      if (v >= m.U.rows())
-        throw SceneError(sc.file.string() + ": drags: vertex " + std::to_string(v) + " out of range (control mesh has " +
-                         std::to_string(m.U.rows()) + ")");
-      if (std::find(drag_vertices.begin(), drag_vertices.end(), v) != drag_vertices.end())
-        throw SceneError(sc.file.string() + ": drags: control vertex " + std::to_string(v) + " is dragged twice");
-      drag_vertices.push_back(v);
+      for (int v : vs) {
+        if (v >= m.U.rows())
+          throw SceneError(sc.file.string() + ": drags[" + std::to_string(k) + "]: vertex " + std::to_string(v) +
+                           " out of range (control mesh has " + std::to_string(m.U.rows()) + ")");
+        if (std::find(drag_vertices.begin(), drag_vertices.end(), v) != drag_vertices.end())
+          throw SceneError(sc.file.string() + ": drags[" + std::to_string(k) + "]: control vertex " +
+                           std::to_string(v) + " is dragged twice");
+        drag_vertices.push_back(v);
+        drag_of.push_back(static_cast<int>(k));
+      }
     }
     interp::ControlOptions co;
     co.interp = iopt;
@@ -431,7 +442,7 @@ RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
       Eigen::MatrixXd targets(static_cast<Eigen::Index>(drag_vertices.size()), d);
       for (size_t k = 0; k < drag_vertices.size(); ++k)
         targets.row(static_cast<Eigen::Index>(k)) =
-            m.U.row(drag_vertices[k]) + key_at(sc.drags[k], f).head(d).transpose();
+            m.U.row(drag_vertices[k]) + key_at(sc.drags[static_cast<size_t>(drag_of[k])], f).head(d).transpose();
       t0 = Clock::now();
       X = handles->solve(targets, X);
       M = handles->last_M();

@@ -112,7 +112,8 @@ class Table {
     if (!v.is_array()) fail(key, "expected an array of " + std::to_string(dims) + " numbers");
     const auto& a = v.as_array();
     if (static_cast<int>(a.size()) != dims && !(dims == 2 && a.size() == 3))
-      fail(key, "expected " + std::to_string(dims) + " numbers, got " + std::to_string(a.size()));
+      fail(key, std::string("expected ") + (dims == 2 ? "2 or 3" : std::to_string(dims)) +
+                    " numbers, got " + std::to_string(a.size()));
     Eigen::Vector3d out = Eigen::Vector3d::Zero();
     for (size_t i = 0; i < a.size(); ++i) {
       if (a[i].is_floating())
@@ -250,7 +251,9 @@ Scene load_scene(const std::filesystem::path& file) {
     if (given != 1)
       throw SceneError(t.where(t.value()) +
                        ": control: give exactly one of path, builtin or generate_vertices");
-    const Eigen::Vector3d c = t.vec("cells", Eigen::Vector3d(2, 2, 8));
+    Eigen::Vector3d c = t.vec("cells", Eigen::Vector3d(2, 2, 8), 2);
+    if (t.value().as_table().count("cells") && t.value().as_table().at("cells").as_array().size() == 2)
+      c.z() = 1;
     if (c.minCoeff() < 1 || c.maxCoeff() > 1000 || (c - c.array().round().matrix()).norm() > 0)
       t.fail("cells", "expected positive integers <= 1000");
     sc.control.cells = c.cast<int>();
@@ -326,9 +329,11 @@ Scene load_scene(const std::filesystem::path& file) {
   for (Table& t : top.array_of_tables("drags")) {
     DragSpec d;
     d.vertex = t.integer("vertex", -1, 0, 1 << 30);
-    if (t.has("near")) d.near = t.vec("near", Eigen::Vector3d::Zero());
-    if ((d.vertex >= 0) == d.near.has_value())
-      throw SceneError(t.where(t.value()) + ": " + t.key_name("") + ": give exactly one of vertex or near");
+    if (t.has("near")) d.near = t.vec("near", Eigen::Vector3d::Zero(), 2);
+    if (t.has("select")) d.select = parse_selection(t.sub("select"));
+    if (int(d.vertex >= 0) + int(d.near.has_value()) + int(d.select.has_value()) != 1)
+      throw SceneError(t.where(t.value()) + ": " + t.key_name("") +
+                       ": give exactly one of vertex, near or select");
     if (!t.has("keys")) throw SceneError(t.where(t.value()) + ": " + t.key_name("keys") + ": missing");
     const toml_value& keys = t.at("keys");
     if (!keys.is_array() || keys.as_array().empty())

@@ -93,8 +93,9 @@ struct PokeSpec {
 /// A dragged control vertex (no physics; paper Eq. 10/11): keyframes (frame, displacement from
 /// the vertex's rest position) linearly interpolated, held before the first and after the last.
 struct DragSpec {
-  int vertex = -1;                      ///< control vertex index, or -1 with `near`
+  int vertex = -1;                      ///< control vertex index, or -1 with `near` / `select`
   std::optional<Eigen::Vector3d> near;  ///< pick the control vertex nearest to this point
+  std::optional<Selection> select;      ///< every selected control vertex, same displacement
   std::vector<std::pair<double, Eigen::Vector3d>> keys;
 };
 
