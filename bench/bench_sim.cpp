@@ -5,13 +5,15 @@
 //
 //   mbi-bench --benchmark_filter=BM_SimStep
 //
-// Arguments: (mesh, solver) with mesh 0..3 = about 100, 1.3K, 5K, 20K tetrahedra and solver
-// 1 = LDLT (cached symbolic analysis), 2 = PCG (Jacobi, warm-started). Counters: tets,
-// Newton and PCG iterations per step, assembly and solve time per step (ms).
+// Arguments: (mesh, solver, tol) with mesh 0..3 = about 100, 1.3K, 5K, 20K tetrahedra, solver
+// 1 = LDLT (cached symbolic analysis), 2 = PCG (3x3 block-Jacobi, warm-started), and PCG
+// relative residual tolerance 10^-tol (Vega's PCG uses 1e-6). Counters: tets, Newton and PCG
+// iterations per step, assembly and solve time per step (ms).
 #include <benchmark/benchmark.h>
 #include <mbi/sim/simulator.hpp>
 
 #include <array>
+#include <cmath>
 #include <vector>
 
 namespace {
@@ -65,6 +67,7 @@ void BM_SimStep(benchmark::State& state) {
   p.dt = 1.0 / 60.0;
   p.newton_iterations = 1;
   p.solver = state.range(1) == 1 ? mbi::sim::LinearSolver::LDLT : mbi::sim::LinearSolver::PCG;
+  p.pcg_tolerance = std::pow(10.0, -static_cast<double>(state.range(2)));
   mbi::sim::Simulator sim(M.U, M.T, mbi::sim::Material{1e5, 0.45, 1000.0}, p);
   std::vector<int> fixed;
   for (Eigen::Index i = 0; i < M.U.rows(); ++i)
@@ -96,6 +99,9 @@ void BM_SimStep(benchmark::State& state) {
 }  // namespace
 
 BENCHMARK(BM_SimStep)
-    ->ArgsProduct({{0, 1, 2, 3}, {1, 2}})
+    ->Args({0, 1, 8})
+    ->Args({1, 1, 8})
+    ->Args({2, 1, 8})
+    ->ArgsProduct({{0, 1, 2, 3}, {2}, {6, 8}})
     ->Unit(benchmark::kMillisecond)
     ->MinTime(0.5);
