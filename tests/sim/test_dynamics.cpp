@@ -398,3 +398,74 @@ TEST_CASE("PCG and LDLT give the same trajectory; Auto falls back to LDLT when P
   }
   CHECK(failed);
 }
+
+TEST_CASE("Newton iterations solve the backward Euler equations; substeps equal smaller steps",
+          "[sim][integrator]") {
+  auto M = mbi::test::bar(8, 2, 2, 1.0, 0.25);
+  const Material mat{2e4, 0.4, 1000};  // soft: large deformation within a few steps
+  SECTION("converged Newton satisfies M (v+ - v) = h (f(x+) + m g)") {
+    Parameters p;
+    p.dt = 1.0 / 30.0;
+    p.newton_iterations = 100;
+    p.newton_tolerance = 1e-12;
+    Simulator sim(M.U, M.T, mat, p);
+    const auto fixed = nodes_at(M.U, 0, 0.0);
+    sim.fix(fixed);
+    const MeshRest rest = mesh_rest(M.U, M.T, mat);
+    for (int s = 0; s < 10; ++s) {
+      const Eigen::MatrixXd v0 = sim.velocities();
+      const StepResult r = sim.step();
+      REQUIRE(r.success);
+      CHECK(r.newton_iterations < 100);
+      const Eigen::MatrixXd f = elastic_forces(rest, M.T, sim.positions());
+      double worst = 0.0, scale = 0.0;
+      for (Eigen::Index i = 0; i < M.U.rows(); ++i) {
+        if (std::find(fixed.begin(), fixed.end(), i) != fixed.end()) continue;
+        const Eigen::RowVector3d fi = f.row(i) + sim.masses()(i) * p.gravity.transpose();
+        const Eigen::RowVector3d lhs = sim.masses()(i) * (sim.velocities().row(i) - v0.row(i));
+        worst = std::max(worst, (lhs - p.dt * fi).norm());
+        scale = std::max(scale, sim.masses()(i) * 9.81 * p.dt);
+      }
+      CHECK(worst < 1e-8 * scale);
+    }
+    CHECK(-mbi::test::tip_deflection(M.U, sim.positions(), 1.0) > 0.05);  // non-linear regime
+  }
+  SECTION("one step with 3 substeps equals 3 steps of dt / 3") {
+    Parameters p;
+    p.dt = 0.05;
+    p.substeps = 3;
+    p.stiffness_damping = 0.01;
+    Simulator a(M.U, M.T, mat, p);
+    p.dt = 0.05 / 3;
+    p.substeps = 1;
+    Simulator b(M.U, M.T, mat, p);
+    a.fix(nodes_at(M.U, 0, 0.0));
+    b.fix(nodes_at(M.U, 0, 0.0));
+    for (int s = 0; s < 5; ++s) {
+      REQUIRE(a.step().success);
+      for (int k = 0; k < 3; ++k) REQUIRE(b.step().success);
+    }
+    CHECK(a.time() == Approx(b.time()).epsilon(1e-12));
+    CHECK((a.positions() - b.positions()).cwiseAbs().maxCoeff() < 1e-10);
+  }
+  SECTION("with Rayleigh damping a released bar loses its energy, never gains") {
+    Parameters p;
+    p.gravity.setZero();
+    p.mass_damping = 0.5;
+    p.stiffness_damping = 0.02;
+    Simulator sim(M.U, M.T, mat, p);
+    sim.fix(nodes_at(M.U, 0, 0.0));
+    Eigen::MatrixXd X = M.U;
+    for (Eigen::Index i = 0; i < X.rows(); ++i) X(i, 1) += 0.2 * X(i, 0) * X(i, 0);  // bent
+    sim.set_positions(X);
+    const double E0 = sim.elastic_energy();
+    double previous = E0;
+    for (int s = 0; s < 300; ++s) {
+      REQUIRE(sim.step().success);
+      const double e = sim.kinetic_energy() + sim.elastic_energy();
+      CHECK(e <= previous * (1 + 1e-9));
+      previous = e;
+    }
+    CHECK(previous < 0.01 * E0);
+  }
+}
