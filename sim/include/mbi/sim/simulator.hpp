@@ -64,7 +64,7 @@ struct Parameters {
   /// 0 = always run newton_iterations.
   double newton_tolerance = 0.0;
   LinearSolver solver = LinearSolver::Auto;
-  double pcg_tolerance = 1e-8;                    ///< relative residual of PCG
+  double pcg_tolerance = 1e-8;                    ///< PCG stops at ||r||_2 <= tol ||b||_2
   int pcg_max_iterations = 1000;
   bool ground = false;                            ///< enable `ground_plane`
   GroundPlane ground_plane;
@@ -74,9 +74,12 @@ struct Parameters {
 };
 
 /// Scripted rigid motion of a node set, from the node positions p0 at the time the handle is
-/// added. With s = clamp(t, start, stop) - start:
+/// added. start and stop are absolute simulation times (s); p0 is taken as the pose at `start`.
+/// With s = clamp(t, start, stop) - start:
 ///   p(t) = center + velocity s + Rot(axis, angular_velocity s) (p0 - center)
-/// so the rotation axis passes through `center` and travels with the translation.
+/// so the rotation axis passes through `center` and travels with the translation. To start
+/// moving at run time, set start = Simulator::time() (an earlier start makes the nodes jump to
+/// the pose of the current time on the next step).
 struct RigidMotion {
   Eigen::Vector3d center = Eigen::Vector3d::Zero();  ///< m, a point on the rotation axis
   Eigen::Vector3d axis = Eigen::Vector3d::UnitX();   ///< direction (normalised); any if w = 0
@@ -93,7 +96,7 @@ struct StepResult {
   double time = 0.0;         ///< s, simulated time after the step (unchanged on failure)
   int newton_iterations = 0; ///< summed over substeps
   int solver_iterations = 0; ///< PCG iterations summed over solves; 0 for LDLT
-  double assemble_ms = 0.0;  ///< forces + warped stiffness + constraint elimination
+  double assemble_ms = 0.0;  ///< forces, rotations, warped stiffness, constraints (1 thread)
   double solve_ms = 0.0;     ///< factorisation + solve (or PCG)
   double total_ms = 0.0;
 };
@@ -146,8 +149,9 @@ class Simulator {
   /// (velocities set to 0): Newton iterations with the warped stiffness until the max free-node
   /// force imbalance is <= tolerance (N) or, if tolerance = 0, until either it is <= 1e-10 *
   /// (max |external force| + max elastic force at the first iterate) or the last update moved
-  /// no node by more than 1e-13 * (rest bounding-box diagonal). Failure leaves the state
-  /// unchanged.
+  /// no node by more than 1e-13 * (rest bounding-box diagonal). Always uses LDLT (exact
+  /// solves; slow beyond ~20K tetrahedra). Needs enough fixed/kinematic nodes or pokes to
+  /// remove the rigid motions, else it reports failure. Failure leaves the state unchanged.
   StaticResult solve_static(int max_iterations = 100, double tolerance = 0.0);
 
   // ------------------------------------------------------------ state
