@@ -28,7 +28,7 @@ struct Result {
 };
 
 // Runs mbi with arguments (already quoted where needed); captures stderr.
-Result mbi(const std::string& args, const TempDir& dir) {
+Result run_mbi(const std::string& args, const TempDir& dir) {
   const fs::path err = dir / "stderr.txt";
   const std::string cmd = std::string("\"") + MBI_EXE + "\" " + args + " > \"" +
                           (dir / "stdout.txt").string() + "\" 2> \"" + err.string() + "\"";
@@ -74,7 +74,7 @@ TEST_CASE("mbi deform on files matches the library and writes complete stats", "
   TempDir dir("cli");
   Files f(dir);
   const fs::path out = dir / "out.obj", stats = dir / "stats.json";
-  const Result r = mbi(f.args(out) + " --stats " + q(stats), dir);
+  const Result r = run_mbi(f.args(out) + " --stats " + q(stats), dir);
   INFO(r.err);
   REQUIRE(r.code == 0);
   const mbi::scenes::SurfaceMesh got = mbi::scenes::read_surface(out);
@@ -113,7 +113,7 @@ TEST_CASE("mbi deform: BI, Gmsh, point lists, 2D", "[cli]") {
     mbi::scenes::write_points(dir / "pts.xyz", f.V);
     a = "deform --control " + q(f.control) + " --deformed " + q(f.deformed) + " --mesh " +
         q(dir / "pts.xyz") + " --out " + q(out) + " --method bi";
-    REQUIRE(mbi(a, dir).code == 0);
+    REQUIRE(run_mbi(a, dir).code == 0);
     const Eigen::MatrixXd got = mbi::scenes::read_points(out);
     const mbi::interp::Embedding emb = mbi::interp::embed(f.U, f.T, f.V);
     Eigen::MatrixXd expected;
@@ -133,7 +133,7 @@ TEST_CASE("mbi deform: BI, Gmsh, point lists, 2D", "[cli]") {
     msh.close();
     const std::string a = "deform --control " + q(dir / "c.msh") + " --deformed " + q(f.deformed) +
                           " --mesh " + q(f.mesh) + " --out " + q(dir / "g.obj");
-    const Result r = mbi(a, dir);
+    const Result r = run_mbi(a, dir);
     INFO(r.err);
     CHECK(r.code == 0);
   }
@@ -150,7 +150,7 @@ TEST_CASE("mbi deform: BI, Gmsh, point lists, 2D", "[cli]") {
     const std::string a = "deform --control " + q(dir / "tri.ele") + " --deformed " + q(dir / "x2.txt") +
                           " --mesh " + q(dir / "p2.txt") + " --out " + q(dir / "o2.txt") +
                           " --alpha 0.5 --pin-boundary --stats " + q(dir / "s2.json");
-    const Result r = mbi(a, dir);
+    const Result r = run_mbi(a, dir);
     INFO(r.err);
     REQUIRE(r.code == 0);
     CHECK(mbi::scenes::read_points(dir / "o2.txt").rows() == P2.rows());
@@ -164,7 +164,7 @@ TEST_CASE("mbi deform: BI, Gmsh, point lists, 2D", "[cli]") {
 
 TEST_CASE("mbi deform --example twist-bar prints the table", "[cli]") {
   TempDir dir("cli");
-  const Result r = mbi("deform --example twist-bar --stats " + q(dir / "s.json"), dir);
+  const Result r = run_mbi("deform --example twist-bar --stats " + q(dir / "s.json"), dir);
   INFO(r.err);
   REQUIRE(r.code == 0);
   std::ifstream in(dir / "s.json");
@@ -185,7 +185,7 @@ TEST_CASE("mbi deform errors: exit 2, one line naming the culprit, nothing writt
   Files f(dir);
   const fs::path out = dir / "out.obj";
   auto expect_error = [&](const std::string& args, const std::string& needle) {
-    const Result r = mbi(args, dir);
+    const Result r = run_mbi(args, dir);
     INFO(args << "\n" << r.err);
     CHECK(r.code == 2);
     CHECK_THAT(r.err, Catch::Contains(needle));
@@ -228,7 +228,7 @@ TEST_CASE("mbi deform errors: exit 2, one line naming the culprit, nothing writt
   expect_error(f.args(out) + " --alpha -1", "--alpha");
   // an existing output survives a failed run untouched
   std::ofstream(out) << "keep me\n";
-  const Result r = mbi("deform --control " + q(dir / "degen") + " --deformed " + q(f.deformed) +
+  const Result r = run_mbi("deform --control " + q(dir / "degen") + " --deformed " + q(f.deformed) +
                            " --mesh " + q(f.mesh) + " --out " + q(out),
                        dir);
   CHECK(r.code == 2);
@@ -241,7 +241,7 @@ TEST_CASE("mbi deform errors: exit 2, one line naming the culprit, nothing writt
 TEST_CASE("mbi run: scene errors name file, line and key", "[cli]") {
   TempDir dir("cli");
   std::ofstream(dir / "bad.toml") << "[dense]\nbuiltin = \"paper-bar\"\n[control]\nbuiltin = \"paper-bar\"\n[simulation]\nfps = 30\n";
-  const Result r = mbi("run " + q(dir / "bad.toml") + " --out " + q(dir / "o"), dir);
+  const Result r = run_mbi("run " + q(dir / "bad.toml") + " --out " + q(dir / "o"), dir);
   CHECK(r.code == 2);
   CHECK_THAT(r.err, Catch::Contains("bad.toml:6") && Catch::Contains("simulation.fps"));
   CHECK_FALSE(fs::exists(dir / "o"));
@@ -251,7 +251,7 @@ TEST_CASE("mbi run writes the outputs of a scene", "[cli]") {
   TempDir dir("cli");
   const char* src = std::getenv("MBI_SOURCE_DIR");
   REQUIRE(src != nullptr);
-  const Result r = mbi("run " + q(fs::path(src) / "scenes" / "twist-bar.toml") + " --frames 2 --out " +
+  const Result r = run_mbi("run " + q(fs::path(src) / "scenes" / "twist-bar.toml") + " --frames 2 --out " +
                            q(dir / "o"),
                        dir);
   INFO(r.err);

@@ -5,6 +5,8 @@
 #include <mbi/interp/mesh.hpp>
 #include <mbi/scenes/procedural.hpp>
 
+#include <Eigen/Geometry>
+
 #include <cmath>
 #include <map>
 
