@@ -89,7 +89,7 @@ TEST_CASE("outputs are not overwritten without force", "[runner]") {
   CHECK_NOTHROW(run_scene(sc, o));
 }
 
-TEST_CASE("--mesh replaces the dense model; --method bi gives BI output", "[runner]") {
+TEST_CASE("a mesh override replaces the dense model and method bi gives BI output", "[runner]") {
   mbi::test::TempDir dir("run");
   Eigen::MatrixXd V;
   Eigen::MatrixXi F;

@@ -106,7 +106,7 @@ TEST_CASE("structural errors", "[scene]") {
              Catch::Contains("exactly one of path or builtin"));
   CHECK_THAT(error_of(write(dir, "[dense\nbuiltin = 1\n")), Catch::Contains("scene.toml:1: syntax error"));
   CHECK_THAT(error_of(dir / "missing.toml"), Catch::Contains("missing.toml: no such scene file"));
-  CHECK_THAT(error_of(write(dir, std::string(minimal) + "mode = \"drag\"\n")), Catch::Contains("at least one [[drags]]"));
+  CHECK_THAT(error_of(write(dir, "mode = \"drag\"\n" + std::string(minimal))), Catch::Contains("at least one [[drags]]"));
 }
 
 TEST_CASE("node selections", "[scene]") {
