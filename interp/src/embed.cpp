@@ -50,6 +50,7 @@ struct Locator {
   Eigen::MatrixXd U;                 // n x 3 (z = 0 in 2D)
   Eigen::MatrixXi T;
   std::vector<Eigen::Matrix3d> inv;  // inverse edge matrices (top-left d x d used)
+  std::vector<Vec3> box_lo, box_hi;  // element bounding boxes (prune the nearest search)
   Vec3 lo = Vec3::Zero();
   double h = 1.0;
   std::array<int, 3> dims{1, 1, 1};
@@ -96,6 +97,8 @@ Locator build_locator(const Eigen::Ref<const Eigen::MatrixXd>& U0,
   L.U.leftCols(d) = U0;
   L.T = T;
   L.inv.resize(m);
+  L.box_lo.resize(m);
+  L.box_hi.resize(m);
   for (int e = 0; e < m; ++e) {
     Eigen::MatrixXd E(d, d);
     for (int k = 0; k < d; ++k) E.col(k) = (U0.row(T(e, k + 1)) - U0.row(T(e, 0))).transpose();
@@ -130,6 +133,8 @@ Locator build_locator(const Eigen::Ref<const Eigen::MatrixXd>& U0,
       a = a.cwiseMin(L.U.row(T(e, k)).transpose());
       b = b.cwiseMax(L.U.row(T(e, k)).transpose());
     }
+    L.box_lo[e] = a;
+    L.box_hi[e] = b;
     const auto ca = L.cell_of(a), cb = L.cell_of(b);
     range[e] = {ca[0], ca[1], ca[2], cb[0], cb[1], cb[2]};
     for (int k = ca[2]; k <= cb[2]; ++k)
@@ -190,6 +195,9 @@ int locate(const Locator& L, const Vec3& p, std::vector<int>& stamp, int tag, do
       const int e = L.items[s];
       if (stamp[e] == tag) continue;
       stamp[e] = tag;
+      // the distance to the bounding box is a lower bound of the distance to the element
+      const Vec3 q = p.cwiseMax(L.box_lo[e]).cwiseMin(L.box_hi[e]);
+      if ((p - q).squaredNorm() > best_d2) continue;
       const double d2 = L.distance2(e, p);
       if (d2 < best_d2 || (d2 == best_d2 && e < best)) {
         best_d2 = d2;

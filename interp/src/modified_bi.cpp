@@ -430,9 +430,12 @@ BezierPoints bezier_points(const Eigen::Ref<const Eigen::MatrixXd>& U,
     for (int k = 0; k <= d; ++k) B.row(e * K + k) = X.row(T(e, k));
     for (size_t s = 0; s < edges.size(); ++s) {
       const int i = T(e, edges[s].first), j = T(e, edges[s].second);
-      const Eigen::VectorXd du = (U.row(j) - U.row(i)).transpose();
-      const Eigen::VectorXd dM = (M.middleRows(i * d, d) - M.middleRows(j * d, d)) * du;
-      B.row(e * K + d + 1 + s) = 0.5 * (X.row(i) + X.row(j)) + 0.5 * dM.transpose();
+      // P_ij = (x_i + x_j)/2 + (M_i - M_j)(u_j - u_i)/2  (fact 5)
+      for (int c = 0; c < d; ++c) {
+        double v = X(i, c) + X(j, c);
+        for (int r = 0; r < d; ++r) v += (M(i * d + c, r) - M(j * d + c, r)) * (U(j, r) - U(i, r));
+        B(e * K + d + 1 + static_cast<Eigen::Index>(s), c) = 0.5 * v;
+      }
     }
   }
   return B;

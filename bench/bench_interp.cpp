@@ -1,0 +1,150 @@
+// Modified-BI cost per stage (mbi::interp): precompute, per-frame solve (sparse triangular
+// solves vs dense operator, fact 11), Bezier control points, evaluation of embedded points
+// (float / double, 1 thread / all threads) and embedding.
+//
+//   mbi-bench --benchmark_filter='BM_Interp'
+//
+// Meshes (argument `mesh`): 0 = twisted bar 8x2x2 unit cells (81 vertices, 192 tets),
+// 1 = box cage 7x7x6 cells (448 vertices, 1764 tets), 2 = box cage 10x10x10 cells
+// (1331 vertices, 6000 tets). The point cloud is 1M random points in the box cage 1.
+#include <benchmark/benchmark.h>
+#include <mbi/interp.hpp>
+
+#include "../tests/common/grid_meshes.hpp"
+
+#include <random>
+#include <thread>
+
+namespace {
+
+using mbi::interp::BezierPoints;
+using mbi::interp::ModifiedBI;
+using mbi::interp::Options;
+using mbi::interp::SolvePath;
+
+struct Scene {
+  mbi::test::Mesh mesh;
+  Eigen::MatrixXd X;
+};
+
+const Scene& scene(int id) {
+  static Scene scenes[3];
+  static bool built[3] = {false, false, false};
+  if (!built[id]) {
+    Scene& s = scenes[id];
+    if (id == 0) s.mesh = mbi::test::box_tet_mesh(8, 2, 2, Eigen::Vector3d(8, 2, 2));
+    if (id == 1) s.mesh = mbi::test::box_tet_mesh(7, 7, 6, Eigen::Vector3d(7, 7, 6));
+    if (id == 2) s.mesh = mbi::test::box_tet_mesh(10, 10, 10, Eigen::Vector3d(10, 10, 10));
+    s.X = mbi::test::twist_bend(s.mesh.U, 1.5707963267948966, 0.1);
+    built[id] = true;
+  }
+  return scenes[id];
+}
+
+// 1M points in the box cage (mesh 1), embedded once.
+const mbi::interp::Embedding& cloud_embedding() {
+  static mbi::interp::Embedding emb;
+  static bool built = false;
+  if (!built) {
+    const Scene& s = scene(1);
+    std::mt19937 rng(1);
+    std::uniform_real_distribution<double> ux(0, 7), uz(0, 6);
+    Eigen::MatrixXd P(1000000, 3);
+    for (Eigen::Index i = 0; i < P.rows(); ++i) P.row(i) << ux(rng), ux(rng), uz(rng);
+    emb = mbi::interp::embed(s.mesh.U, s.mesh.T, P);
+    built = true;
+  }
+  return emb;
+}
+
+void BM_InterpPrecompute(benchmark::State& state) {
+  const Scene& s = scene(static_cast<int>(state.range(0)));
+  Options o;
+  o.solve_path = SolvePath::Sparse;
+  for (auto _ : state) {
+    ModifiedBI mbi(s.mesh.U, s.mesh.T, o);
+    benchmark::DoNotOptimize(mbi.beta());
+  }
+  state.counters["vertices"] = static_cast<double>(s.mesh.U.rows());
+  state.counters["tets"] = static_cast<double>(s.mesh.T.rows());
+}
+BENCHMARK(BM_InterpPrecompute)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+
+// Arguments: (mesh, path) with path 1 = sparse triangular solves, 2 = dense operator.
+void BM_InterpSolve(benchmark::State& state) {
+  const Scene& s = scene(static_cast<int>(state.range(0)));
+  Options o;
+  o.solve_path = state.range(1) == 2 ? SolvePath::Dense : SolvePath::Sparse;
+  const ModifiedBI mbi(s.mesh.U, s.mesh.T, o);
+  for (auto _ : state) {
+    mbi::interp::VertexMatrices M = mbi.solve(s.X);
+    benchmark::DoNotOptimize(M.data());
+  }
+  state.counters["unknowns"] = mbi.unknowns();
+}
+BENCHMARK(BM_InterpSolve)
+    ->Args({0, 1})->Args({0, 2})->Args({1, 1})->Args({1, 2})->Args({2, 1})->Args({2, 2})
+    ->Unit(benchmark::kMicrosecond);
+
+void BM_InterpBezier(benchmark::State& state) {
+  const Scene& s = scene(static_cast<int>(state.range(0)));
+  const ModifiedBI mbi(s.mesh.U, s.mesh.T);
+  const mbi::interp::VertexMatrices M = mbi.solve(s.X);
+  for (auto _ : state) {
+    BezierPoints B = mbi.bezier(s.X, M);
+    benchmark::DoNotOptimize(B.data());
+  }
+}
+BENCHMARK(BM_InterpBezier)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
+
+// Arguments: (scalar, threads, normals) with scalar 0 = float, 1 = double; threads 0 = all.
+void BM_InterpEvaluate(benchmark::State& state) {
+  const Scene& s = scene(1);
+  const auto& emb = cloud_embedding();
+  const ModifiedBI mbi(s.mesh.U, s.mesh.T);
+  const BezierPoints B = mbi.bezier(s.X, mbi.solve(s.X));
+  const int threads = static_cast<int>(state.range(1));
+  const bool normals = state.range(2) != 0;
+  Eigen::MatrixXd nr = Eigen::MatrixXd::Zero(emb.size(), 3);
+  nr.col(2).setOnes();
+  if (state.range(0) == 0) {
+    Eigen::MatrixXf pos, nout;
+    const Eigen::MatrixXf nrf = nr.cast<float>();
+    for (auto _ : state) {
+      if (normals) mbi::interp::evaluate<float>(B, emb, nrf, pos, nout, threads);
+      else mbi::interp::evaluate<float>(B, emb, pos, threads);
+      benchmark::DoNotOptimize(pos.data());
+    }
+  } else {
+    Eigen::MatrixXd pos, nout;
+    for (auto _ : state) {
+      if (normals) mbi::interp::evaluate<double>(B, emb, nr, pos, nout, threads);
+      else mbi::interp::evaluate<double>(B, emb, pos, threads);
+      benchmark::DoNotOptimize(pos.data());
+    }
+  }
+  state.counters["points"] = static_cast<double>(emb.size());
+  state.counters["threads"] = threads > 0 ? threads : std::thread::hardware_concurrency();
+  state.SetItemsProcessed(state.iterations() * emb.size());
+}
+BENCHMARK(BM_InterpEvaluate)
+    ->Args({0, 1, 0})->Args({0, 0, 0})->Args({1, 1, 0})->Args({1, 0, 0})
+    ->Args({0, 1, 1})->Args({0, 0, 1})->Args({1, 1, 1})->Args({1, 0, 1})
+    ->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_InterpEmbed(benchmark::State& state) {
+  const Scene& s = scene(1);
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<double> ux(-0.5, 7.5), uz(-0.5, 6.5);
+  Eigen::MatrixXd P(static_cast<Eigen::Index>(state.range(0)), 3);
+  for (Eigen::Index i = 0; i < P.rows(); ++i) P.row(i) << ux(rng), ux(rng), uz(rng);
+  for (auto _ : state) {
+    mbi::interp::Embedding emb = mbi::interp::embed(s.mesh.U, s.mesh.T, P);
+    benchmark::DoNotOptimize(emb.bary.data());
+    state.counters["outside"] = static_cast<double>(emb.outside.size());
+  }
+  state.SetItemsProcessed(state.iterations() * P.rows());
+}
+BENCHMARK(BM_InterpEmbed)->Arg(100000)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
