@@ -56,6 +56,41 @@ struct Elem {
   std::array<std::array<int, 4>, 4> blk;
 };
 
+/// Polar rotation of F by Newton iterations from a nearby rotation R (the element's rotation of
+/// the previous assembly): with S = R^T F, solve (tr(S) I - S) w = axial(S - S^T) and update
+/// R <- R cay(w) (Cayley, exactly orthogonal) until S is symmetric to round-off. tr(S) I - S is
+/// positive definite exactly when R is near the maximiser of tr(R^T F) over rotations, i.e. the
+/// proper polar rotation (also for inverted F whose two larger singular values dominate).
+/// Returns false (caller falls back to the closed form) if that fails or does not converge.
+bool refine_rotation(const Eigen::Matrix3d& F, Eigen::Matrix3d& R) {
+  const double fnorm = F.norm();
+  for (int it = 0; it < 4; ++it) {
+    Eigen::Matrix3d S;
+    S.noalias() = R.transpose() * F;
+    const Eigen::Vector3d a(S(2, 1) - S(1, 2), S(0, 2) - S(2, 0), S(1, 0) - S(0, 1));
+    if (a.norm() <= 1e-14 * fnorm) return true;
+    const double tr = S.trace();
+    Eigen::Matrix3d G = -0.5 * (S + S.transpose());
+    G.diagonal().array() += tr;
+    // Positive definiteness by leading minors, with a relative margin.
+    const double m1 = G(0, 0), m2 = G(0, 0) * G(1, 1) - G(0, 1) * G(1, 0), m3 = G.determinant();
+    const double g = std::abs(tr) + 1e-300;
+    if (!(m1 > 1e-6 * g && m2 > 1e-6 * g * g && m3 > 1e-6 * g * g * g)) return false;
+    Eigen::Vector3d c;
+    c.noalias() = 0.5 * (G.inverse() * a);
+    Eigen::Matrix3d C;
+    C << 0, -c.z(), c.y(), c.z(), 0, -c.x(), -c.y(), c.x(), 0;
+    Eigen::Matrix3d Q = Eigen::Matrix3d::Identity();
+    Q.noalias() += (2.0 / (1.0 + c.squaredNorm())) * (C + C * C);
+    const Eigen::Matrix3d Rn = R * Q;
+    R = Rn;
+  }
+  Eigen::Matrix3d S;
+  S.noalias() = R.transpose() * F;
+  const Eigen::Vector3d a(S(2, 1) - S(1, 2), S(0, 2) - S(2, 0), S(1, 0) - S(0, 1));
+  return a.norm() <= 1e-12 * fnorm;
+}
+
 struct Kinematic {
   std::vector<int> nodes;
   Eigen::MatrixXd p0;  // k x 3
@@ -132,6 +167,10 @@ struct Simulator::Impl {
   Eigen::VectorXd guess1, guess2;
   int newton_index = -1;  // Newton iteration of the current solve; -1: static solve
 
+  // element rotations of the last assembly (warm start of the next)
+  std::vector<Eigen::Matrix3d> rot;
+  bool have_rot = false;
+
   // scratch
   Eigen::VectorXd f_el, f_ext, Kv, r, delta;
   double last_elastic = 0.0;
@@ -201,6 +240,7 @@ void Simulator::Impl::build(const Eigen::Ref<const Eigen::MatrixXd>& U_,
   v = Eigen::VectorXd::Zero(3 * n);
   owner.assign(n, -1);
   constrained_dof.assign(3 * n, 0);
+  rot.assign(elems.size(), Eigen::Matrix3d::Identity());
   build_pattern();
   resolve_solver();
   sync_out();
@@ -349,7 +389,8 @@ double Simulator::Impl::assemble(const Eigen::VectorXd& xe, double cM, double cK
     for (int a = 0; a < 4; ++a) xc.col(a) = xe.segment<3>(3 * el.node[a]);
     Eigen::Matrix3d F;
     F.noalias() = xc * el.grad.transpose();
-    const Eigen::Matrix3d R = rotation(F);
+    Eigen::Matrix3d& R = rot[&el - elems.data()];
+    if (!have_rot || !refine_rotation(F, R)) R = rotation(F);
     Eigen::Matrix3d RtF;
     RtF.noalias() = R.transpose() * F;
     const double tr = RtF.trace() - 3.0;
@@ -361,6 +402,7 @@ double Simulator::Impl::assemble(const Eigen::VectorXd& xe, double cM, double cK
     for (int a = 0; a < 4; ++a) f_el.segment<3>(3 * el.node[a]) -= el.volume * fe.col(a);
     Eigen::Matrix<double, 3, 4> h;
     h.noalias() = R * el.grad;
+
     if (vd) {  // K_e vd = V R sigma(R^T grad vd) G
       Eigen::Matrix<double, 3, 4> vc;
       for (int a = 0; a < 4; ++a) vc.col(a) = vd->segment<3>(3 * el.node[a]);
@@ -396,6 +438,7 @@ double Simulator::Impl::assemble(const Eigen::VectorXd& xe, double cM, double cK
   }
   for (int i = 0; i < n; ++i) blk_val[blk_outer[i]].diagonal().array() += cM * mass(i);
   for (int p : zero_blocks) blk_val[p].setZero();
+  have_rot = true;
   return energy;
 }
 
@@ -841,6 +884,7 @@ void Simulator::reset() {
   s.steps = 0;
   s.guess1.resize(0);
   s.guess2.resize(0);
+  s.have_rot = false;
   s.sync_out();
 }
 
