@@ -65,6 +65,7 @@ const mbi::cli::Registrar reg(
         j["dim"] = cage.dim();
         j["vertices"] = cage.U.rows();
         j["tetrahedra"] = cage.dim() == 3 ? cage.T.rows() : 0;
+        j["triangles"] = cage.dim() == 2 ? cage.T.rows() : 0;
         j["elements"] = cage.T.rows();
         j["cell_size"] = cage.cell_size;
         j["min_dihedral_deg"] = cage.min_dihedral_deg;

@@ -5,9 +5,11 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <random>
 #include <string>
@@ -550,4 +552,86 @@ TEST_CASE("real models: read, write, read again gives the same mesh", "[io][mode
     write_surface(tmp / "m.ply", m, Encoding::binary);
     require_same(m, read_surface(tmp / "m.ply"));
   }
+}
+
+TEST_CASE("truncated and corrupted files of every format: IoError or success, nothing else",
+          "[io][robustness]") {
+  TempDir tmp("fuzz");
+  const SurfaceMesh m = awkward_mesh(true);
+  SurfaceMesh tri;
+  tri.V = m.V;
+  tri.F = m.F;
+  Eigen::MatrixXd U(5, 3);
+  U << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1;
+  Eigen::MatrixXi T(2, 4);
+  T << 0, 1, 2, 3, 1, 2, 3, 4;
+  // Valid originals.
+  write_surface(tmp / "s.obj", m);
+  write_surface(tmp / "s.off", m);
+  write_surface(tmp / "a.ply", m, Encoding::ascii);
+  write_surface(tmp / "b.ply", m, Encoding::binary);
+  write_surface(tmp / "a.stl", tri, Encoding::ascii);
+  write_surface(tmp / "b.stl", tri, Encoding::binary);
+  write_points(tmp / "p.xyz", U);
+  write_tetgen(tmp / "c", U, T);
+  {
+    Pc2Writer w(tmp / "c.pc2", 5);
+    w.append(U);
+    w.append(U);
+    w.finish();
+  }
+  write_text(tmp / "g.msh",
+             "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 5 1 5\n3 1 0 5\n1\n2\n3\n4\n5\n"
+             "0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 1 1\n$EndNodes\n$Elements\n1 2 1 2\n3 1 4 2\n"
+             "1 1 2 3 4\n2 2 3 4 5\n$EndElements\n");
+  struct Reader {
+    const char* file;
+    std::function<void(const fs::path&)> read;
+  };
+  const std::vector<Reader> readers = {
+      {"s.obj", [](const fs::path& p) { read_surface(p); }},
+      {"s.off", [](const fs::path& p) { read_surface(p); }},
+      {"a.ply", [](const fs::path& p) { read_surface(p); }},
+      {"b.ply", [](const fs::path& p) { read_surface(p); }},
+      {"a.stl", [](const fs::path& p) { read_surface(p); }},
+      {"b.stl", [](const fs::path& p) { read_surface(p); }},
+      {"p.xyz", [](const fs::path& p) { read_points(p); }},
+      {"c.node", [](const fs::path& p) { read_node(p); }},
+      {"c.ele", [](const fs::path& p) { read_tetgen(p); }},
+      {"c.pc2", [](const fs::path& p) { read_pc2(p); }},
+      {"g.msh", [](const fs::path& p) { read_gmsh(p); }},
+  };
+  std::mt19937 rng(2024);
+  const std::string junk[] = {"-1", "nan", "99999999999", "x", "\n", " ", "0", "1e308", "\xff"};
+  int errors = 0, successes = 0;
+  for (const auto& r : readers) {
+    const fs::path orig = tmp / r.file;
+    const std::string good = read_text(orig);
+    REQUIRE_NOTHROW(r.read(orig));
+    auto attempt = [&](const std::string& bytes) {
+      write_text(orig, bytes);
+      try {
+        r.read(orig);
+        ++successes;
+      } catch (const IoError& e) {
+        ++errors;
+        REQUIRE(std::string(e.what()).find(orig.string()) != std::string::npos);
+      }
+    };
+    const std::size_t stride = std::max<std::size_t>(1, good.size() / 400);
+    for (std::size_t len = 0; len < good.size(); len += stride) attempt(good.substr(0, len));
+    for (int k = 0; k < 300; ++k) {
+      std::string bad = good;
+      const std::size_t at = rng() % bad.size();
+      switch (k % 3) {
+        case 0: bad[at] = static_cast<char>(rng() & 0xff); break;
+        case 1: bad.erase(at, 1 + rng() % 8); break;
+        default: bad.insert(at, junk[rng() % std::size(junk)]); break;
+      }
+      attempt(bad);
+    }
+    write_text(orig, good);
+  }
+  INFO(errors << " errors, " << successes << " successes");
+  REQUIRE(errors > 1000);  // the corruptions were mostly detected, not silently accepted
 }
