@@ -233,7 +233,7 @@ void Simulator::Impl::build(const Eigen::Ref<const Eigen::MatrixXd>& U_,
     const Material& m = per_element.empty() ? material : per_element[e];
     max_E = std::max(max_E, m.youngs_modulus);
   }
-  energy_limit = 1e3 * max_E * total_volume;
+  energy_limit = 1e6 * max_E * total_volume;
   bbox_diagonal = (U.colwise().maxCoeff() - U.colwise().minCoeff()).norm();
   x.resize(3 * n);
   for (int i = 0; i < n; ++i) x.segment<3>(3 * i) = U.row(i).transpose();
@@ -619,7 +619,12 @@ std::string Simulator::Impl::substep(double h, int& newton, int& iters, double& 
   if (params.ground) ground();
   if (!x.allFinite() || !v.allFinite()) return "non-finite positions or velocities";
   const double kinetic = 0.5 * v.dot(mass_dof.cwiseProduct(v));
-  const double limit = params.max_energy > 0 ? params.max_energy : energy_limit;
+  double limit = params.max_energy;
+  if (limit == 0.0) {  // automatic: material scale plus what the pokes can put in
+    limit = energy_limit;
+    for (const auto& [id, pk] : pokes)
+      limit += 10.0 * pk.stiffness * (pk.target - material_point(x_old, pk.element, pk.bary)).squaredNorm();
+  }
   if (!(kinetic + last_elastic <= limit))
     return "runaway energy " + std::to_string(kinetic + last_elastic) + " J (limit " +
            std::to_string(limit) + " J)";
