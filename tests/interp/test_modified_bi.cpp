@@ -456,3 +456,40 @@ TEST_CASE("fact 12: twisted bar, modified-BI discontinuity at least 100x below B
     if (alpha == 0.1) CHECK(t.ratio.mean >= 100);
   }
 }
+
+TEST_CASE("fact 4 and 13 on structured meshes: gauge only with alpha > 0, extra E_disc null modes", "[modified_bi]") {
+  for (int d : {2, 3}) {
+    const Mesh M = d == 3 ? box_tet_mesh(3, 3, 3) : square_tri_mesh(5, 4);  // no jitter
+    const ModifiedBI mbi(M.U, M.T);
+    const int expected = d + d * (d - 1) / 2;
+    auto nulls = [](const Eigen::MatrixXd& H) {
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
+      const Eigen::VectorXd ev = es.eigenvalues();
+      int k = 0;
+      for (int i = 0; i < ev.size(); ++i) k += ev(i) < 1e-9 * ev.maxCoeff();
+      return k;
+    };
+    const Eigen::MatrixXd Hd = Eigen::MatrixXd(mbi.disc_hessian_mm());
+    const Eigen::MatrixXd Ht = Eigen::MatrixXd(mbi.alpha() * mbi.vibr_hessian_mm()) + mbi.beta() * Hd;
+    CHECK(nulls(Ht) == expected);
+    const int disc_nulls = nulls(Hd);
+    std::printf("structured %dD mesh: E_disc alone has %d null modes, E_total %d\n", d, disc_nulls, expected);
+    CHECK(disc_nulls > expected);  // why alpha must be > 0
+  }
+}
+
+TEST_CASE("rigid motion of the rest mesh: the field moves with it", "[modified_bi]") {
+  for (int d : {2, 3}) {
+    const Mesh M = jittered_mesh(d, 25);
+    const Eigen::MatrixXd X = smooth_deform(M.U, 0.4);
+    const Eigen::MatrixXd Q = random_rotation(d, 26);
+    const Eigen::RowVectorXd t = random_matrix(1, d, 27);
+    Mesh R = M;
+    R.U = (M.U * Q.transpose()).rowwise() + t;  // rotated rest mesh, same deformed X
+    const ModifiedBI a(M.U, M.T), b(R.U, R.T);
+    // x(u) is a function of the rest point: x_R(Q u + t) = x(u)
+    const Eigen::MatrixXd fa = sample_field(M, X, a.solve(X), 100, 28);
+    const Eigen::MatrixXd fb = sample_field(R, X, b.solve(X), 100, 28);  // same elements/bary
+    CHECK(rel(fb, fa) < 1e-9);
+  }
+}

@@ -16,13 +16,20 @@ struct ControlOptions {
   Options interp;                     ///< alpha, beta, pin_boundary of the underlying energy
   HandleMode mode = HandleMode::Hard;
   double gamma = 0.0;                 ///< Soft only; 0 = automatic
-  /// Weight of the weak pull toward the previous pose, relative to the Frobenius norm of the
-  /// position block; keeps the problem well-posed with fewer than d+1 affinely independent
-  /// handles (any affine motion fixing the handles would otherwise be free).
+  /// Weight of the weak pull toward the previous pose, lambda sum_i |x_i - previous_i|^2 over the
+  /// position unknowns, with lambda = regularization * ||H_xx||_F / sqrt(#position unknowns)
+  /// (H_xx: position block of E_total's Hessian). It keeps the problem well-posed with fewer
+  /// than d+1 affinely independent handles (any affine motion fixing the handles would
+  /// otherwise be free) and is applied ONLY then, so d+1 or more spanning handles give the exact
+  /// minimiser. Its bias on the result is proportional to it (about 1e-3 relative at 1e-6).
   double regularization = 1e-6;
 };
 
-/// Factorised once per handle set; solve() per drag.
+/// Factorised once per handle set; solve() per drag. Unknowns per output component: m (gauge
+/// pinned as in ModifiedBI, boundary dropped with pin_boundary) and the free positions (all
+/// positions in Soft mode). Throws Error on an empty or repeated handle set, an index out of
+/// range, alpha/beta/gamma/regularization < 0, or fewer than d+1 spanning handles with
+/// regularization 0.
 class HandleSolver {
  public:
   HandleSolver(const Eigen::Ref<const Eigen::MatrixXd>& U,
@@ -37,7 +44,7 @@ class HandleSolver {
   Eigen::MatrixXd solve(const Eigen::Ref<const Eigen::MatrixXd>& targets,
                         const Eigen::MatrixXd& previous = Eigen::MatrixXd());
   const VertexMatrices& last_M() const;
-  double gamma() const;
+  double gamma() const;  ///< Soft: the gamma used (automatic or given); Hard: 0
   const std::vector<int>& handles() const;
 
  private:

@@ -13,7 +13,9 @@ void evaluate(const BezierPoints& B, const Embedding& emb,
               Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& positions, int threads = 0);
 
 /// Positions and mapped normals: normals_rest (p x d, unit rest normals) map by cof(J) n and are
-/// renormalised (fact 6). normals_out is p x d.
+/// renormalised (fact 6); a zero mapped normal (singular J) is returned as 0. normals_out is
+/// p x d. Needs emb.gradients (filled by embed()); throws Error otherwise.
+/// Points outside the mesh (emb.outside) are extrapolated with their element's quadratic.
 template <typename Scalar>
 void evaluate(const BezierPoints& B, const Embedding& emb,
               const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& normals_rest,
