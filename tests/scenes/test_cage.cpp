@@ -160,6 +160,25 @@ TEST_CASE("cage of a sphere", "[cage]") {
   }
 }
 
+TEST_CASE("cage of an open surface (sphere with a hole) and of a point cloud", "[cage]") {
+  Surf s = sphere(1.0);
+  // Remove the faces around the north pole: the surface is no longer closed.
+  Eigen::MatrixXi kept(s.F.rows(), 3);
+  int k = 0;
+  for (Eigen::Index f = 0; f < s.F.rows(); ++f) {
+    double z = 0;
+    for (int c = 0; c < 3; ++c) z += s.V(s.F(f, c), 2) / 3;
+    if (z < 0.6) kept.row(k++) = s.F.row(f);
+  }
+  REQUIRE(k < s.F.rows());
+  s.F = kept.topRows(k);
+  CageOptions opt;
+  opt.target_vertices = 200;
+  check_cage(s, make_cage(s.V, s.F, opt), 200);
+  const Surf cloud{s.V, Eigen::MatrixXi(0, 3)};
+  check_cage(cloud, make_cage(cloud.V, cloud.F, opt), 200);
+}
+
 TEST_CASE("cage of a torus keeps the hole open", "[cage]") {
   const Surf s = torus_like(48, 16, [](double u, double v) {
     const double R = 2.0, r = 0.5;
