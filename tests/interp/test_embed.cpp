@@ -106,3 +106,41 @@ TEST_CASE("embedding errors", "[embed]") {
   CHECK_THROWS_WITH(embed(M.U, M.T, P), Catch::Contains("point 2"));
   CHECK_THROWS_AS(embed(M.U, M.T, Eigen::MatrixXd::Zero(3, 2)), Error);
 }
+
+TEST_CASE("points in the notch of an L-shaped mesh find the nearest element", "[embed]") {
+  // 2D: 6x6 squares on [0,1]^2 without the top-right 3x3 block (an L); 3D: 4x4x2 cells without
+  // the cells with x > 0.5 and y > 0.5. The notch lies inside the grid's bounding box.
+  for (int d : {2, 3}) {
+    const mbi::test::Mesh full = d == 2 ? mbi::test::square_tri_mesh(6, 6)
+                                        : mbi::test::box_tet_mesh(4, 4, 2);
+    std::vector<int> keep;
+    for (int e = 0; e < full.T.rows(); ++e) {
+      Eigen::RowVectorXd c = Eigen::RowVectorXd::Zero(d);
+      for (int k = 0; k <= d; ++k) c += full.U.row(full.T(e, k)) / (d + 1);
+      if (!(c(0) > 0.5 && c(1) > 0.5)) keep.push_back(e);
+    }
+    Eigen::MatrixXi T(keep.size(), d + 1);
+    for (size_t i = 0; i < keep.size(); ++i) T.row(i) = full.T.row(keep[i]);
+    std::mt19937 rng(4);
+    std::uniform_real_distribution<double> uni(0.0, 1.0);
+    Eigen::MatrixXd P(300, d);
+    for (int i = 0; i < P.rows(); ++i)
+      for (int c = 0; c < d; ++c) P(i, c) = uni(rng);
+    const Embedding emb = embed(full.U, T, P);
+    double max_dist = 0;
+    int expected = 0;
+    for (int i = 0; i < P.rows(); ++i) {
+      const bool notch = P(i, 0) > 0.5 && P(i, 1) > 0.5;
+      expected += notch;
+      if (!notch) continue;
+      // exact distance to the L: the nearer of the two arms' boundaries x = 0.5, y = 0.5
+      const double dist = std::min(P(i, 0) - 0.5, P(i, 1) - 0.5);
+      max_dist = std::max(max_dist, dist);
+      const Eigen::MatrixXi Te = T.row(emb.element(i));
+      CHECK(lattice_distance(full.U, Te, P.row(i), 40) <= dist + 0.02);
+    }
+    CHECK(static_cast<int>(emb.outside.size()) == expected);
+    CHECK(emb.max_outside_distance == Approx(max_dist).epsilon(1e-9));
+    CHECK((embedded_positions(full.U, T, emb) - P).cwiseAbs().maxCoeff() < 1e-9);
+  }
+}
