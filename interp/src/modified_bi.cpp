@@ -319,6 +319,9 @@ ModifiedBI::ModifiedBI(const Eigen::Ref<const Eigen::MatrixXd>& U,
       I.dense = static_cast<long long>(I.n_red) * n <= kDenseOperatorMaxEntries;
       break;
   }
+  if (I.dense && static_cast<long long>(I.n_red) * n > (1LL << 28))
+    throw Error("ModifiedBI: the dense operator would need " + std::to_string(I.n_red) + " x " +
+                std::to_string(n) + " doubles; use SolvePath::Sparse or Automatic");
   if (I.n_red > 0) {
     const SpMat A = I.alpha * I.Hmm_vibr_red + I.beta * I.Hmm_disc_red;
     I.llt.analyzePattern(A);
