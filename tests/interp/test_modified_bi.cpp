@@ -493,3 +493,36 @@ TEST_CASE("rigid motion of the rest mesh: the field moves with it", "[modified_b
     CHECK(rel(fb, fa) < 1e-9);
   }
 }
+
+TEST_CASE("fact 4 per face-connected part: two separate meshes, and parts joined at a vertex", "[modified_bi]") {
+  for (int d : {2, 3}) {
+    const Mesh A = jittered_mesh(d, 29);
+    const int n = static_cast<int>(A.U.rows());
+    Mesh B;
+    B.U.resize(2 * n, d);
+    B.U << A.U, A.U.rowwise() + Eigen::RowVectorXd::Constant(d, 3.0);  // disjoint copy
+    B.T.resize(2 * A.T.rows(), d + 1);
+    B.T << A.T, A.T.array() + n;
+    const ModifiedBI two(B.U, B.T);
+    const int k = d + d * (d - 1) / 2;
+    CHECK(two.null_space_dim() == 2 * k);
+    // each part behaves as if alone
+    const ModifiedBI one(A.U, A.T);
+    const Eigen::MatrixXd X = smooth_deform(A.U, 0.4);
+    Eigen::MatrixXd XB(2 * n, d);
+    XB << X, X;
+    const Eigen::MatrixXd f1 = sample_field(A, X, one.solve(X), 100, 30);
+    Mesh B2 = B;  // sample the second copy: same elements shifted by A.T.rows()
+    B2.T = B.T.bottomRows(A.T.rows());
+    const Eigen::MatrixXd f2 = sample_field(B2, XB, two.solve(XB), 100, 30);
+    CHECK(rel(f2, f1) < 1e-9);
+    // the copy's elements use vertex `shared` of the first part instead of their own: the
+    // parts share a vertex but no face -> rejected with an error naming the vertex
+    Mesh C = B;
+    const int shared = A.T(0, 0);
+    for (int e = static_cast<int>(A.T.rows()); e < C.T.rows(); ++e)
+      for (int j = 0; j <= d; ++j)
+        if (C.T(e, j) == n + shared) C.T(e, j) = shared;
+    CHECK_THROWS_WITH(ModifiedBI(C.U, C.T), Catch::Contains("vertex " + std::to_string(shared)));
+  }
+}
