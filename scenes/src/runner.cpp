@@ -5,6 +5,7 @@
 #include <mbi/scenes/runner.hpp>
 #include <mbi/sim/simulator.hpp>
 
+#include <Eigen/Geometry>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Tools/Subdivider/Uniform/LoopT.hh>
 
@@ -175,7 +176,15 @@ class Outputs {
   Outputs(const Scene& sc, const SceneModels& m, const fs::path& dir, int frames)
       : sc_(sc), m_(m), dir_(dir) {
     if (sc.output.pc2) pc2_ = std::make_unique<Pc2Writer>(dir / "dense.pc2", static_cast<int>(m.dense.V.rows()), 0.0f, 1.0f);
-    if (m.dim() == 3) view_ = frame_points(m.U, Eigen::Vector3d(-0.55, -0.45, -0.35), Eigen::Vector3d::UnitZ());
+    if (m.dim() == 3) {
+      // look from the front-right and slightly above, relative to the scene's up axis
+      const Eigen::Vector3d up = sc.output.up.normalized();
+      Eigen::Vector3d side = up.cross(Eigen::Vector3d::UnitX());
+      if (side.norm() < 0.5) side = up.cross(Eigen::Vector3d::UnitY());
+      side.normalize();
+      const Eigen::Vector3d front = side.cross(up);
+      view_ = frame_points(m.U, -(0.75 * front + 0.6 * side + 0.45 * up), up);
+    }
     (void)frames;
   }
   bool due(int frame, int last) const { return frame % sc_.output.every == 0 || frame == last; }

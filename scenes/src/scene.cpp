@@ -377,6 +377,8 @@ Scene load_scene(const std::filesystem::path& file) {
     o.control_vtk = t.boolean("control_vtk", o.control_vtk);
     o.metrics = t.boolean("metrics", o.metrics);
     o.image = t.boolean("image", o.image);
+    o.up = t.vec("up", o.up);
+    if (o.up.norm() == 0) t.fail("up", "must be non-zero");
     t.finish();
   }
   top.finish();

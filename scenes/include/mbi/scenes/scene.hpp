@@ -113,7 +113,8 @@ struct OutputSpec {
   bool pc2 = true;
   bool control_vtk = true;
   bool metrics = true;
-  bool image = true;               ///< 2D scenes: warped PNG of written frames
+  bool image = true;               ///< PNG pictures of written frames
+  Eigen::Vector3d up{0.0, 1.0, 0.0};  ///< 3D pictures: the direction shown upwards
 };
 
 struct Scene {
