@@ -4,6 +4,7 @@
 #include "detail.hpp"
 
 #include <Eigen/SparseCholesky>
+#include <array>
 #include <cmath>
 #include <numeric>
 
@@ -20,111 +21,128 @@ constexpr long long kDenseOperatorMaxEntries = 1LL << 21;
 
 namespace detail {
 
-Hessians assemble(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T) {
-  const int d = static_cast<int>(U.cols());
+namespace {
+
+// Fixed-size assembly for dimension D (the same code path serves triangles and tetrahedra).
+template <int D>
+Hessians assemble_fixed(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T) {
+  using VecD = Eigen::Matrix<double, D, 1>;
+  using Grad = Eigen::Matrix<double, D + 1, D>;  // row k = a_k^T
+  constexpr int NV = D * (D + 1);                // local m unknowns of one element
+  constexpr int NL = D + 2;                      // local vertices of a face pair
+  constexpr int NZ = NL * (D + 1);               // local unknowns: m (D each) then x (1 each)
+  constexpr int XOFF = NL * D;
   const int n = static_cast<int>(U.rows());
   const int m = static_cast<int>(T.rows());
-  std::vector<Eigen::MatrixXd> A(m);
+  auto u = [&](int i) -> VecD { return U.row(i).transpose(); };
+  std::vector<Grad> A(m);
   Triplets tv;
-  tv.reserve(static_cast<size_t>(m) * d * d * (d + 1) * (d + 1));
-  Eigen::MatrixXd L(d * d, d * (d + 1));
+  tv.reserve(static_cast<size_t>(m) * NV * NV);
   for (int e = 0; e < m; ++e) {
-    A[e] = basis_gradients(U, T, e);
-    const double vol = std::abs(element_volume(U, T, e));
+    Eigen::Matrix<double, D, D> E;
+    for (int k = 0; k < D; ++k) E.col(k) = u(T(e, k + 1)) - u(T(e, 0));
+    const double det = E.determinant();
+    const Eigen::Matrix<double, D, D> Einv = E.inverse();
+    A[e].template bottomRows<D>() = Einv;
+    A[e].row(0) = -Einv.colwise().sum();
+    const double vol = std::abs(det) / (D == 2 ? 2.0 : 6.0);
     // vec(Hess x_c) = L m_local: Hess_pq = sum_k a_k[p] m_k[q] + m_k[p] a_k[q] (fact 2)
-    L.setZero();
-    for (int k = 0; k <= d; ++k)
-      for (int p = 0; p < d; ++p)
-        for (int q = 0; q < d; ++q) {
-          L(p * d + q, k * d + q) += A[e](k, p);
-          L(p * d + q, k * d + p) += A[e](k, q);
+    Eigen::Matrix<double, D * D, NV> L = Eigen::Matrix<double, D * D, NV>::Zero();
+    for (int k = 0; k <= D; ++k)
+      for (int p = 0; p < D; ++p)
+        for (int q = 0; q < D; ++q) {
+          L(p * D + q, k * D + q) += A[e](k, p);
+          L(p * D + q, k * D + p) += A[e](k, q);
         }
-    const Eigen::MatrixXd H = vol * (L.transpose() * L);
-    for (int k = 0; k <= d; ++k)
-      for (int r = 0; r < d; ++r)
-        for (int l = 0; l <= d; ++l)
-          for (int s = 0; s < d; ++s)
-            tv.emplace_back(T(e, k) * d + r, T(e, l) * d + s, H(k * d + r, l * d + s));
+    const Eigen::Matrix<double, NV, NV> H = vol * (L.transpose() * L);
+    for (int k = 0; k <= D; ++k)
+      for (int r = 0; r < D; ++r)
+        for (int l = 0; l <= D; ++l)
+          for (int s = 0; s < D; ++s)
+            tv.emplace_back(T(e, k) * D + r, T(e, l) * D + s, H(k * D + r, l * D + s));
   }
 
   // E_disc: the jump of grad x_c across a face is linear; at a face vertex v the phi_v m_v terms
   // of both sides cancel, leaving sum_k +-a_k (x_k + m_k . (u_v - u_k)) (fact 3).
   const Eigen::MatrixXi F = interior_faces(T);
-  const int nl = d + 2;             // local vertices: d face vertices + 2 opposite ones
-  const int nz = nl * (d + 1);      // local unknowns: m (d each) then x (1 each)
-  const int xoff = nl * d;
   Triplets tmm, tmx, txx;
-  tmm.reserve(static_cast<size_t>(F.rows()) * xoff * xoff);
-  tmx.reserve(static_cast<size_t>(F.rows()) * xoff * nl);
-  txx.reserve(static_cast<size_t>(F.rows()) * nl * nl);
-  std::vector<Eigen::MatrixXd> G(d, Eigen::MatrixXd(d, nz));
-  std::vector<int> local(nl);
+  tmm.reserve(static_cast<size_t>(F.rows()) * XOFF * XOFF);
+  tmx.reserve(static_cast<size_t>(F.rows()) * XOFF * NL);
+  txx.reserve(static_cast<size_t>(F.rows()) * NL * NL);
+  std::array<Eigen::Matrix<double, D, NZ>, D> G;
+  std::array<int, NL> local{};
   for (int f = 0; f < F.rows(); ++f) {
-    for (int j = 0; j < d; ++j) local[j] = F(f, j);
+    for (int j = 0; j < D; ++j) local[j] = F(f, j);
     for (int s = 0; s < 2; ++s) {
-      const int e = F(f, d + s);
-      for (int k = 0; k <= d; ++k) {
+      const int e = F(f, D + s);
+      for (int k = 0; k <= D; ++k) {
         bool on_face = false;
-        for (int j = 0; j < d; ++j) on_face = on_face || T(e, k) == F(f, j);
-        if (!on_face) local[d + s] = T(e, k);
+        for (int j = 0; j < D; ++j) on_face = on_face || T(e, k) == F(f, j);
+        if (!on_face) local[D + s] = T(e, k);
       }
     }
     auto local_of = [&](int g) {
-      for (int j = 0; j < nl; ++j)
+      for (int j = 0; j < NL; ++j)
         if (local[j] == g) return j;
       return -1;
     };
     for (auto& g : G) g.setZero();
     for (int s = 0; s < 2; ++s) {
-      const int e = F(f, d + s);
+      const int e = F(f, D + s);
       const double sgn = s == 0 ? 1.0 : -1.0;
-      for (int k = 0; k <= d; ++k) {
+      for (int k = 0; k <= D; ++k) {
         const int j = local_of(T(e, k));
-        const Eigen::VectorXd a = A[e].row(k).transpose();
-        for (int v = 0; v < d; ++v) {
-          const Eigen::RowVectorXd w = U.row(F(f, v)) - U.row(T(e, k));
-          G[v].col(xoff + j) += sgn * a;
-          G[v].block(0, j * d, d, d) += sgn * (a * w);
+        const VecD a = sgn * A[e].row(k).transpose();
+        for (int v = 0; v < D; ++v) {
+          const VecD w = u(F(f, v)) - u(T(e, k));
+          G[v].col(XOFF + j) += a;
+          G[v].template block<D, D>(0, j * D) += a * w.transpose();
         }
       }
     }
     double area;
-    if (d == 2) {
-      area = (U.row(F(f, 1)) - U.row(F(f, 0))).norm();
+    if constexpr (D == 2) {
+      area = (u(F(f, 1)) - u(F(f, 0))).norm();
     } else {
-      const Eigen::Vector3d e1 = (U.row(F(f, 1)) - U.row(F(f, 0))).transpose();
-      const Eigen::Vector3d e2 = (U.row(F(f, 2)) - U.row(F(f, 0))).transpose();
-      area = 0.5 * e1.cross(e2).norm();
+      area = 0.5 * (u(F(f, 1)) - u(F(f, 0))).cross(u(F(f, 2)) - u(F(f, 0))).norm();
     }
-    // integral over a (d-1)-simplex of |g|^2, g linear: |F|/(d(d+1)) (sum |g_v|^2 + |sum g_v|^2)
-    Eigen::MatrixXd Gs = Eigen::MatrixXd::Zero(d, nz);
-    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(nz, nz);
-    for (int v = 0; v < d; ++v) {
+    // integral over a (D-1)-simplex of |g|^2, g linear: |F|/(D(D+1)) (sum |g_v|^2 + |sum g_v|^2)
+    Eigen::Matrix<double, D, NZ> Gs = Eigen::Matrix<double, D, NZ>::Zero();
+    Eigen::Matrix<double, NZ, NZ> H = Eigen::Matrix<double, NZ, NZ>::Zero();
+    for (int v = 0; v < D; ++v) {
       Gs += G[v];
       H.noalias() += G[v].transpose() * G[v];
     }
     H.noalias() += Gs.transpose() * Gs;
-    H *= area / (d * (d + 1));
-    auto global_m = [&](int a) { return local[a / d] * d + a % d; };
-    for (int a = 0; a < nz; ++a)
-      for (int b = 0; b < nz; ++b) {
+    H *= area / (D * (D + 1));
+    auto global_m = [&](int a) { return local[a / D] * D + a % D; };
+    for (int a = 0; a < NZ; ++a)
+      for (int b = 0; b < NZ; ++b) {
         const double h = H(a, b);
         if (h == 0.0) continue;
-        if (a < xoff && b < xoff) tmm.emplace_back(global_m(a), global_m(b), h);
-        else if (a < xoff) tmx.emplace_back(global_m(a), local[b - xoff], h);
-        else if (b >= xoff) txx.emplace_back(local[a - xoff], local[b - xoff], h);
+        if (a < XOFF && b < XOFF) tmm.emplace_back(global_m(a), global_m(b), h);
+        else if (a < XOFF) tmx.emplace_back(global_m(a), local[b - XOFF], h);
+        else if (b >= XOFF) txx.emplace_back(local[a - XOFF], local[b - XOFF], h);
       }
   }
   Hessians Hs;
-  Hs.vibr_mm.resize(d * n, d * n);
+  Hs.vibr_mm.resize(D * n, D * n);
   Hs.vibr_mm.setFromTriplets(tv.begin(), tv.end());
-  Hs.disc_mm.resize(d * n, d * n);
+  Hs.disc_mm.resize(D * n, D * n);
   Hs.disc_mm.setFromTriplets(tmm.begin(), tmm.end());
-  Hs.disc_mx.resize(d * n, n);
+  Hs.disc_mx.resize(D * n, n);
   Hs.disc_mx.setFromTriplets(tmx.begin(), tmx.end());
   Hs.disc_xx.resize(n, n);
   Hs.disc_xx.setFromTriplets(txx.begin(), txx.end());
   return Hs;
+}
+
+}  // namespace
+
+Hessians assemble(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T) {
+  if (U.cols() == 2) return assemble_fixed<2>(U, T);
+  if (U.cols() == 3) return assemble_fixed<3>(U, T);
+  throw Error("assemble: dimension must be 2 or 3");
 }
 
 std::vector<char> gauge_pins(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T,
