@@ -1,5 +1,5 @@
-// mbi cage DENSE --vertices N --out BASE [--stats STATS.json]: builds a control mesh around a
-// dense surface and writes BASE.node / BASE.ele (TetGen format).
+// mbi cage DENSE --vertices N --out BASE [--stats STATS.json] [--mesher voxel|tetgen]: builds a
+// control mesh around a dense surface and writes BASE.node / BASE.ele (TetGen format).
 #include "commands.hpp"
 
 #include <mbi/scenes/cage.hpp>
@@ -37,7 +37,7 @@ const mbi::cli::Registrar reg(
             "surface",
     [](CLI::App& sub) -> mbi::cli::Action {
       struct Args {
-        std::string dense, out, stats, vtk;
+        std::string dense, out, stats, vtk, mesher = "voxel";
         int vertices = 200;
         bool force_3d = false;
       };
@@ -50,11 +50,16 @@ const mbi::cli::Registrar reg(
       sub.add_option("--stats", a->stats, "write statistics as JSON to this file");
       sub.add_option("--vtk", a->vtk, "also write the control mesh as legacy VTK");
       sub.add_flag("--force-3d", a->force_3d, "tetrahedra even for a planar input");
+      sub.add_option("--mesher", a->mesher,
+                     "voxel: 6 Kuhn tetrahedra per envelope cell (default); tetgen: the "
+                     "envelope's boundary tetrahedralised by TetGen (3D)")
+          ->check(CLI::IsMember({"voxel", "tetgen"}));
       return [a]() {
         const mbi::scenes::SurfaceMesh dense = mbi::scenes::read_surface(a->dense);
         mbi::scenes::CageOptions opt;
         opt.target_vertices = a->vertices;
         opt.force_3d = a->force_3d;
+        opt.mesher = mbi::scenes::parse_mesher(a->mesher);
         const mbi::scenes::CageResult cage = mbi::scenes::make_cage(dense.V, dense.F, opt);
         mbi::scenes::write_tetgen(a->out, cage.U, cage.T);
         if (!a->vtk.empty()) mbi::scenes::write_vtk(a->vtk, cage.U, cage.T);
@@ -62,6 +67,8 @@ const mbi::cli::Registrar reg(
         j["input"] = a->dense;
         j["dense_vertices"] = dense.V.rows();
         j["target_vertices"] = a->vertices;
+        j["mesher"] = mbi::scenes::mesher_name(cage.mesher);
+        if (!cage.tetgen_switches.empty()) j["tetgen_switches"] = cage.tetgen_switches;
         j["dim"] = cage.dim();
         j["vertices"] = cage.U.rows();
         j["tetrahedra"] = cage.dim() == 3 ? cage.T.rows() : 0;
@@ -72,8 +79,9 @@ const mbi::cli::Registrar reg(
         j["outside_points"] = cage.outside_points;
         j["seconds"] = cage.seconds;
         if (!a->stats.empty()) write_json_atomically(a->stats, j);
-        std::printf("%s: %lld control vertices, %lld %s, min angle %.2f deg, %d outside, %.3f s\n",
-                    a->out.c_str(), static_cast<long long>(cage.U.rows()),
+        std::printf("%s (%s): %lld control vertices, %lld %s, min angle %.2f deg, %d outside, %.3f s\n",
+                    a->out.c_str(), mbi::scenes::mesher_name(cage.mesher),
+                    static_cast<long long>(cage.U.rows()),
                     static_cast<long long>(cage.T.rows()),
                     cage.dim() == 3 ? "tetrahedra" : "triangles", cage.min_dihedral_deg,
                     cage.outside_points, cage.seconds);

@@ -9,6 +9,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 using namespace mbi::scenes;
@@ -246,6 +248,51 @@ TEST_CASE("planar input gives a 2D triangle cage; force_3d gives tetrahedra", "[
   check_cage(s, c3, 120);
 }
 
+TEST_CASE("mesher names", "[cage]") {
+  REQUIRE(std::string(mesher_name(Mesher::Voxel)) == "voxel");
+  REQUIRE(std::string(mesher_name(Mesher::TetGen)) == "tetgen");
+  REQUIRE(parse_mesher("tetgen") == Mesher::TetGen);
+  REQUIRE(parse_mesher("voxel") == Mesher::Voxel);
+  REQUIRE_THROWS_AS(parse_mesher("delaunay"), std::invalid_argument);
+  REQUIRE(CageOptions{}.mesher == Mesher::Voxel);
+}
+
+TEST_CASE("TetGen cage of a sphere", "[cage][tetgen]") {
+  const Surf s = sphere(1.3);
+  for (int target : {60, 200}) {
+    CageOptions opt;
+    opt.target_vertices = target;
+    opt.mesher = Mesher::TetGen;
+    const CageResult c = make_cage(s.V, s.F, opt);
+    check_cage(s, c, target);
+    REQUIRE(c.dim() == 3);
+    REQUIRE(c.mesher == Mesher::TetGen);
+    REQUIRE_FALSE(c.tetgen_switches.empty());
+    if (target == 200) check_deterministic(s, opt, c);
+  }
+}
+
+TEST_CASE("TetGen cage of a U shape keeps the legs apart", "[cage][tetgen]") {
+  Surf s;
+  s.V.resize(0, 3);
+  s.F.resize(0, 3);
+  add_box(s, {0, 0, 0}, {1, 4, 1}, 4);
+  add_box(s, {3, 0, 0}, {4, 4, 1}, 4);
+  add_box(s, {0, -1, 0}, {4, 0, 1}, 4);
+  CageOptions opt;
+  opt.target_vertices = 150;
+  opt.mesher = Mesher::TetGen;
+  const CageResult c = make_cage(s.V, s.F, opt);
+  check_cage(s, c, 150);
+  for (double y : {1.5, 2.5, 3.5}) {
+    INFO("gap point y = " << y);
+    REQUIRE_FALSE(inside_cage(c, Eigen::RowVector3d(2.0, y, 0.5)));
+  }
+  REQUIRE(inside_cage(c, Eigen::RowVector3d(0.5, 2.5, 0.5)));
+  REQUIRE(inside_cage(c, Eigen::RowVector3d(3.5, 2.5, 0.5)));
+  check_deterministic(s, opt, c);
+}
+
 TEST_CASE("make_cage rejects bad input", "[cage]") {
   const Surf s = sphere(1.0);
   CageOptions opt;
@@ -287,5 +334,29 @@ TEST_CASE("cages of the real models", "[cage][models]") {
     const CageResult c = make_cage(s.V, s.F, opt);
     check_cage(s, c, j.target);
     if (j.target == 450 && std::string(j.name) == "stanford-bunny") check_deterministic(s, opt, c);
+  }
+}
+
+TEST_CASE("TetGen cages of the bunny", "[cage][models][tetgen]") {
+  const char* dir = std::getenv("MBI_MODELS_DIR");
+  if (!dir) {
+    WARN("MBI_MODELS_DIR not set: skipping the TetGen bunny cage test");
+    return;
+  }
+  const std::filesystem::path p = std::filesystem::path(dir) / "stanford-bunny.obj";
+  if (!std::filesystem::exists(p)) {
+    WARN(p << " missing: skipped");
+    return;
+  }
+  const SurfaceMesh m = read_surface(p);
+  const Surf s{m.V, m.F};
+  for (int target : {100, 450}) {
+    CageOptions opt;
+    opt.target_vertices = target;
+    opt.mesher = Mesher::TetGen;
+    const CageResult c = make_cage(s.V, s.F, opt);
+    check_cage(s, c, target);
+    REQUIRE(c.mesher == Mesher::TetGen);
+    if (target == 100) check_deterministic(s, opt, c);
   }
 }

@@ -94,12 +94,41 @@ TEST_CASE("mbi cage writes a containing control mesh and its statistics", "[cli]
   REQUIRE(j["outside_points"].get<int>() == 0);
   REQUIRE(j["min_dihedral_deg"].get<double>() >= 5.0);
   REQUIRE(j["seconds"].get<double>() >= 0.0);
+  REQUIRE(j["mesher"].get<std::string>() == "voxel");
 
   // Same input, same files.
   const std::string node = slurp(base + ".node"), ele = slurp(base + ".ele");
   REQUIRE(run("cage \"" + dense.string() + "\" --vertices 120 --out \"" + base + "\"", err) == 0);
   REQUIRE(slurp(base + ".node") == node);
   REQUIRE(slurp(base + ".ele") == ele);
+}
+
+TEST_CASE("mbi cage --mesher tetgen", "[cli][cage][tetgen]") {
+  TempDir tmp;
+  const fs::path dense = tmp.dir / "e.obj";
+  write_surface(dense, ellipsoid());
+  const SurfaceMesh m = read_surface(dense);
+  const fs::path err = tmp.dir / "err.txt";
+  const std::string base = (tmp.dir / "cage").string();
+  REQUIRE(run("cage \"" + dense.string() + "\" --vertices 120 --mesher tetgen --out \"" + base +
+                  "\" --stats \"" + base + ".json\"",
+              err) == 0);
+  const ControlMesh c = read_tetgen(base);
+  REQUIRE(c.dim() == 3);
+  REQUIRE(std::abs(c.U.rows() - 120) <= 36);
+  REQUIRE(mbi::interp::embed(c.U, c.T, m.V).outside.empty());
+  const auto j = nlohmann::json::parse(slurp(base + ".json"));
+  REQUIRE(j["mesher"].get<std::string>() == "tetgen");
+  REQUIRE(j["vertices"].get<long long>() == c.U.rows());
+  REQUIRE(j["tetrahedra"].get<long long>() == c.T.rows());
+  REQUIRE(j["outside_points"].get<int>() == 0);
+  REQUIRE(j["min_dihedral_deg"].get<double>() >= 5.0);
+
+  REQUIRE(run("cage \"" + dense.string() + "\" --vertices 120 --mesher delaunay --out \"" +
+                  (tmp.dir / "x").string() + "\"",
+              err) != 0);
+  REQUIRE(slurp(err).find("mesher") != std::string::npos);
+  REQUIRE_FALSE(fs::exists(tmp.dir / "x.node"));
 }
 
 TEST_CASE("mbi cage reports bad input on one line with exit code 2", "[cli][cage]") {

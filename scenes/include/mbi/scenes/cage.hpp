@@ -15,14 +15,36 @@
 //
 // 2D: when every dense vertex has the same z (e.g. the planar alligator and woody meshes), the
 // cage is a 2D triangle mesh in x, y (unless Options::force_3d).
+//
+// Mesher::TetGen (alternative, 3D only: planar input is treated as with force_3d): the same voxel
+// envelope, but only its boundary (the boundary quads of the union of the closed cells, each split
+// into two triangles along the diagonal through its lowest corner) is given to TetGen (-p -Y: no
+// Steiner points on the boundary, so the union and therefore containment are unchanged; -q with a
+// radius-edge bound only, which adds a few interior points). Since few vertices lie inside, the
+// same vertex budget buys a finer envelope: the cell size is searched on the TetGen vertex count.
+// A TetGen mesh whose smallest dihedral angle is below 5 degrees is rejected (other cell sizes and
+// switches are tried); if none qualifies make_cage throws std::runtime_error.
 #include <Eigen/Core>
 
+#include <string>
+
 namespace mbi::scenes {
+
+enum class Mesher {
+  Voxel,   ///< every envelope cell split into 6 Kuhn tetrahedra (default)
+  TetGen,  ///< the envelope's boundary tetrahedralised by TetGen
+};
+
+/// "voxel" / "tetgen".
+const char* mesher_name(Mesher m);
+/// Parses "voxel" / "tetgen"; throws std::invalid_argument otherwise.
+Mesher parse_mesher(const std::string& name);
 
 struct CageOptions {
   int target_vertices = 200;  ///< desired number of control vertices (>= 8 in 3D, >= 4 in 2D)
   bool force_3d = false;      ///< build tetrahedra even for a planar input
   int search_steps = 48;      ///< number of cell sizes tried around the best estimate
+  Mesher mesher = Mesher::Voxel;
 };
 
 struct CageResult {
@@ -32,13 +54,16 @@ struct CageResult {
   double min_dihedral_deg = 0;  ///< smallest dihedral angle (2D: smallest triangle angle), deg
   int outside_points = 0;       ///< dense vertices outside the cage (mbi::interp::embed)
   double seconds = 0.0;         ///< wall-clock time of the generation
+  Mesher mesher = Mesher::Voxel;  ///< the mesher that built U, T
+  std::string tetgen_switches;  ///< TetGen switches of the returned mesh (empty for Voxel)
   int dim() const { return static_cast<int>(U.cols()); }
 };
 
 /// Builds a cage around the dense surface V (n x 3, finite), F (t x 3, 0-based; may be empty
 /// for a point cloud). Deterministic: the same input and options give the same mesh. Throws
 /// std::invalid_argument on bad input (empty V, non-finite coordinates, bad indices, target out
-/// of range) and std::runtime_error if no cell size contains every vertex.
+/// of range) and std::runtime_error if no cell size contains every vertex (TetGen: or if no
+/// TetGen mesh has every dihedral angle >= 5 degrees within 30% of the target vertex count).
 CageResult make_cage(const Eigen::Ref<const Eigen::MatrixXd>& V,
                      const Eigen::Ref<const Eigen::MatrixXi>& F, const CageOptions& options = {});
 
