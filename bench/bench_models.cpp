@@ -4,7 +4,6 @@
 // benchmarks report an error and are skipped.
 //
 //   MBI_MODELS_DIR=../shared/models build/release/mbi-bench --benchmark_filter=Model
-#ifdef MBI_HAVE_SCENES
 #include <mbi/interp.hpp>
 #include <mbi/scenes/cage.hpp>
 #include <mbi/scenes/io.hpp>
@@ -131,4 +130,3 @@ BENCHMARK(BM_ModelBunnyEmbed)->Arg(100)->Arg(450)->Unit(benchmark::kMillisecond)
 BENCHMARK(BM_ModelBunnyPrecompute)->Arg(100)->Arg(450)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_ModelBunnySolve)->Arg(100)->Arg(450)->Unit(benchmark::kMicrosecond)->UseRealTime();
 BENCHMARK(BM_ModelBunnyEvaluate)->Arg(100)->Arg(450)->Unit(benchmark::kMillisecond)->UseRealTime();
-#endif

@@ -10,6 +10,7 @@
 // relative residual tolerance 10^-tol (Vega's PCG uses 1e-6). Counters: tets, Newton and PCG
 // iterations per step, assembly and solve time per step (ms).
 #include <benchmark/benchmark.h>
+#include <mbi/scenes/procedural.hpp>
 #include <mbi/sim/simulator.hpp>
 
 #include <array>
@@ -26,29 +27,8 @@ struct BarMesh {
 // Bar of nx x n x n cells (cell size 0.1 m), each hex split into 6 tetrahedra.
 BarMesh bar_mesh(int nx, int n) {
   BarMesh M;
-  const int ny = n, nz = n;
-  auto id = [&](int i, int j, int k) { return (k * (ny + 1) + j) * (nx + 1) + i; };
-  M.U.resize((nx + 1) * (ny + 1) * (nz + 1), 3);
-  for (int k = 0; k <= nz; ++k)
-    for (int j = 0; j <= ny; ++j)
-      for (int i = 0; i <= nx; ++i) M.U.row(id(i, j, k)) << 0.1 * i, 0.1 * j, 0.1 * k;
-  static const std::array<std::array<int, 3>, 6> perms{
-      {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}}};
-  M.T.resize(6 * nx * ny * nz, 4);
-  int t = 0;
-  for (int k = 0; k < nz; ++k)
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i)
-        for (const auto& p : perms) {
-          std::array<int, 3> c{i, j, k};
-          std::array<int, 4> v{};
-          v[0] = id(c[0], c[1], c[2]);
-          for (int s = 0; s < 3; ++s) {
-            ++c[p[s]];
-            v[s + 1] = id(c[0], c[1], c[2]);
-          }
-          M.T.row(t++) << v[0], v[1], v[2], v[3];
-        }
+  mbi::scenes::box_tets(Eigen::Vector3d::Zero(), Eigen::Vector3d(0.1 * nx, 0.1 * n, 0.1 * n),
+                        Eigen::Vector3i(nx, n, n), M.U, M.T);
   return M;
 }
 
