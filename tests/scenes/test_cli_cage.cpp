@@ -124,6 +124,14 @@ TEST_CASE("mbi cage --mesher tetgen", "[cli][cage][tetgen]") {
   REQUIRE(j["outside_points"].get<int>() == 0);
   REQUIRE(j["min_dihedral_deg"].get<double>() >= 5.0);
 
+  // Same input, same files.
+  const std::string node = slurp(base + ".node"), ele = slurp(base + ".ele");
+  REQUIRE(run("cage \"" + dense.string() + "\" --vertices 120 --mesher tetgen --out \"" + base +
+                  "\"",
+              err) == 0);
+  REQUIRE(slurp(base + ".node") == node);
+  REQUIRE(slurp(base + ".ele") == ele);
+
   REQUIRE(run("cage \"" + dense.string() + "\" --vertices 120 --mesher delaunay --out \"" +
                   (tmp.dir / "x").string() + "\"",
               err) != 0);
