@@ -144,11 +144,13 @@ SceneModels load_models(const Scene& sc, const fs::path& mesh_override) {
   } else {
     CageOptions co;
     co.target_vertices = sc.control.generate_vertices;
+    co.mesher = parse_mesher(sc.control.mesher);
     const CageResult cage = make_cage(m.dense.V, m.dense.F, co);
     m.U = cage.U;
     m.T = cage.T;
     m.generate_seconds = cage.seconds;
-    m.control_name = "generated control mesh (" + std::to_string(cage.U.rows()) + " vertices, min dihedral " +
+    m.control_name = std::string("generated control mesh (") + mesher_name(cage.mesher) + ", " +
+                     std::to_string(cage.U.rows()) + " vertices, min dihedral " +
                      format_num(cage.min_dihedral_deg) + " deg)";
   }
   if (m.U.cols() != m.dense.V.cols())

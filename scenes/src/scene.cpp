@@ -246,6 +246,7 @@ Scene load_scene(const std::filesystem::path& file) {
     if (t.has("path")) sc.control.path = t.string("path", "");
     sc.control.builtin = t.string("builtin", "", {"paper-bar", "box", "grid-2d"});
     sc.control.generate_vertices = t.integer("generate_vertices", 0, 4, 100000);
+    sc.control.mesher = t.string("mesher", "voxel", {"voxel", "tetgen"});
     const int given = int(!sc.control.path.empty()) + int(!sc.control.builtin.empty()) +
                       int(sc.control.generate_vertices > 0);
     if (given != 1)

@@ -30,7 +30,8 @@ struct DenseSpec {
 struct ControlSpec {
   std::filesystem::path path;  ///< TetGen .node/.ele (or base) or Gmsh .msh
   std::string builtin;         ///< "paper-bar", "box", "grid-2d"
-  int generate_vertices = 0;   ///< > 0: generate with TetGen to about this many vertices
+  int generate_vertices = 0;   ///< > 0: generate a control mesh of about this many vertices
+  std::string mesher = "voxel";  ///< generation: "voxel" (default) or "tetgen"
   Eigen::Vector3i cells{2, 2, 8};  ///< for builtin "box" / "grid-2d" (z ignored in 2D)
 };
 
