@@ -416,6 +416,32 @@ const std::vector<std::string>& tetgen_switch_ladder() {
   return ladder;
 }
 
+// Cell-size search shared by both meshers: bracket from h0 downwards by halving until eval(h)
+// (the vertex count at cell size h; every call is recorded by the caller) reaches the target,
+// bisect in log h, then scan `steps` sizes within a factor `spread` either side, because the
+// count is not monotone in h. The caller picks the best of what eval recorded.
+template <typename Eval>
+void search_cell_size(Eval&& eval, double h0, int target, int steps, double spread) {
+  double h_hi = h0, h_lo = h0;
+  int c_lo = eval(h_lo);
+  for (int it = 0; it < 60 && c_lo < target; ++it) {
+    h_hi = h_lo;
+    h_lo *= 0.5;
+    c_lo = eval(h_lo);
+  }
+  for (int it = 0; it < 30 && c_lo != target; ++it) {
+    const double h = std::sqrt(h_lo * h_hi);
+    const int c = eval(h);
+    if (c >= target)
+      h_lo = h;
+    else
+      h_hi = h;
+    if (h_hi / h_lo < 1.0 + 1e-4) break;
+  }
+  const double h_mid = std::sqrt(h_lo * h_hi);
+  for (int s = 0; s < steps; ++s) eval(h_mid * std::pow(spread, -1.0 + 2.0 * (s + 0.5) / steps));
+}
+
 CageResult make_cage_tetgen(const Eigen::MatrixXd& P, const Eigen::MatrixXi& Fi,
                             const CageOptions& options) {
   const int target = options.target_vertices;
@@ -432,26 +458,8 @@ CageResult make_cage_tetgen(const Eigen::MatrixXd& P, const Eigen::MatrixXi& Fi,
     tried.push_back({h, c});
     return c;
   };
-  // Bracket and bisect on the boundary vertex count, then scan around (counts are not monotone).
-  double h_hi = 1.01 * scale, h_lo = h_hi;
-  int c_lo = eval(h_lo);
-  for (int it = 0; it < 60 && c_lo < target; ++it) {
-    h_hi = h_lo;
-    h_lo *= 0.5;
-    c_lo = eval(h_lo);
-  }
-  for (int it = 0; it < 30 && c_lo != target; ++it) {
-    const double h = std::sqrt(h_lo * h_hi);
-    const int c = eval(h);
-    if (c >= target) h_lo = h;
-    else h_hi = h;
-    if (h_hi / h_lo < 1.0 + 1e-4) break;
-  }
-  const double h_mid = std::sqrt(h_lo * h_hi);
-  for (int s = 0; s < options.search_steps; ++s) {
-    const double f = -1.0 + 2.0 * (s + 0.5) / options.search_steps;
-    eval(h_mid * std::pow(1.5, f));
-  }
+  // Search on the boundary vertex count (TetGen adds few vertices inside).
+  search_cell_size(eval, 1.01 * scale, target, options.search_steps, 1.5);
   std::stable_sort(tried.begin(), tried.end(), [](const Tried& a, const Tried& b) { return a.h > b.h; });
 
   // Run TetGen on the candidate whose boundary count plus the interior points seen so far is
@@ -628,27 +636,7 @@ CageResult make_cage(const Eigen::Ref<const Eigen::MatrixXd>& V,
     return c;
   };
   auto eval = [&](double h) { return eval_h({h, h, h}); };
-  // Bracket: h_hi gives <= target vertices, h_lo gives >= target.
-  double h_hi = 1.01 * scale, h_lo = h_hi;
-  int c_lo = eval(h_lo);
-  for (int it = 0; it < 60 && c_lo < target; ++it) {
-    h_hi = h_lo;
-    h_lo *= 0.5;
-    c_lo = eval(h_lo);
-  }
-  for (int it = 0; it < 30 && c_lo != target; ++it) {  // bisection in log h
-    const double h = std::sqrt(h_lo * h_hi);
-    const int c = eval(h);
-    if (c >= target) h_lo = h;
-    else h_hi = h;
-    if (h_hi / h_lo < 1.0 + 1e-4) break;
-  }
-  // Local scan: vertex count is not monotone in h; look for the closest count nearby.
-  const double h_mid = std::sqrt(h_lo * h_hi);
-  for (int s = 0; s < options.search_steps; ++s) {
-    const double f = -1.0 + 2.0 * (s + 0.5) / options.search_steps;
-    eval(h_mid * std::pow(1.2, f));
-  }
+  search_cell_size(eval, 1.01 * scale, target, options.search_steps, 1.2);
   // Coarse grids jump in large steps; cells with slightly different edges per axis (one cell
   // more or less along some axes, aspect ratio <= 1.6) fill the gaps between those steps.
   auto by_distance = [&](const Tried& a, const Tried& b) {
