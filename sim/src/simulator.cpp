@@ -4,6 +4,7 @@
 #include <Eigen/LU>
 #include <Eigen/SparseCholesky>
 #include <algorithm>
+#include <cstdio>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -625,9 +626,11 @@ std::string Simulator::Impl::substep(double h, int& newton, int& iters, double& 
     for (const auto& [id, pk] : pokes)
       limit += 10.0 * pk.stiffness * (pk.target - material_point(x_old, pk.element, pk.bary)).squaredNorm();
   }
-  if (!(kinetic + last_elastic <= limit))
-    return "runaway energy " + std::to_string(kinetic + last_elastic) + " J (limit " +
-           std::to_string(limit) + " J)";
+  if (!(kinetic + last_elastic <= limit)) {
+    char msg[128];
+    std::snprintf(msg, sizeof msg, "runaway energy %.3g J (limit %.3g J)", kinetic + last_elastic, limit);
+    return msg;
+  }
   return {};
 }
 

@@ -110,3 +110,41 @@ TEST_CASE("a mesh override replaces the dense model and method bi gives BI outpu
   CHECK(out.V.rows() == V.rows());
   CHECK((out.V - V).cwiseAbs().maxCoeff() < 1e-9);  // frame 0 is the rest pose
 }
+
+TEST_CASE("a failing simulation step stops the run and keeps what was written", "[runner]") {
+  mbi::test::TempDir dir("run");
+  // an absurd force on a soft bar: the simulator's energy guard fails step 3
+  std::ofstream(dir / "fail.toml") << R"(
+[dense]
+builtin = "paper-bar"
+[control]
+builtin = "paper-bar"
+[material]
+young = 1000
+[simulation]
+frames = 20
+[[constraints]]
+select = { box_relative = { min = [0, 0, 0], max = [1, 1, 0] } }
+[[pokes]]
+first = 3
+last = 20
+point = [0.0, 0.0, 6.0]
+force = [1e15, 0, 0]
+[output]
+every = 2
+)";
+  const Scene sc = load_scene(dir / "fail.toml");
+  RunOptions o;
+  o.out_dir = dir / "out";
+  const RunResult r = run_scene(sc, o);
+  CHECK(r.failed);
+  CHECK_THAT(r.message, Catch::Contains("step 3"));
+  CHECK(r.frames == 2);
+  const nlohmann::json m = read_json(o.out_dir / "metrics.json");
+  CHECK(m["frames_completed"] == 2);
+  CHECK_THAT(m["failure"].get<std::string>(), Catch::Contains("step 3"));
+  CHECK(read_pc2(o.out_dir / "dense.pc2").frames.size() == 3);  // frames 0, 1, 2
+  const SurfaceMesh last = read_surface(frame_path(o.out_dir / "mesh", 2, ".obj"));
+  CHECK(last.V.allFinite());
+  CHECK_FALSE(fs::exists(frame_path(o.out_dir / "mesh", 4, ".obj")));
+}
