@@ -148,3 +148,58 @@ every = 2
   CHECK(last.V.allFinite());
   CHECK_FALSE(fs::exists(frame_path(o.out_dir / "mesh", 4, ".obj")));
 }
+
+TEST_CASE("dense.subdivide densifies with Loop subdivision", "[runner]") {
+  mbi::test::TempDir dir("run");
+  Eigen::MatrixXd V;
+  Eigen::MatrixXi F;
+  cylinder_surface(0.4, 2.0, 16, 6, 2, V, F);
+  write_surface(dir / "c.obj", V, F);
+  std::ofstream(dir / "s.toml") << "[dense]\npath = \"c.obj\"\nsubdivide = 1\n[control]\nbuiltin = \"box\"\n"
+                                   "cells = [2, 2, 4]\n[simulation]\nframes = 1\n";
+  const SceneModels m = load_models(load_scene(dir / "s.toml"));
+  // Loop: one new vertex per edge; a closed triangle mesh has 3F/2 edges
+  CHECK(m.dense.V.rows() == V.rows() + 3 * F.rows() / 2);
+  CHECK(m.dense.F.rows() == 4 * F.rows());
+  // the smoothed surface shrinks slightly but stays inside the (padded) box control mesh
+  RunOptions o;
+  o.out_dir = dir / "out";
+  const RunResult r = run_scene(load_scene(dir / "s.toml"), o);
+  CHECK_FALSE(r.failed);
+  CHECK(r.outside_points == 0);
+}
+
+TEST_CASE("image-warp with a user PNG writes warped pictures of its size", "[runner]") {
+  mbi::test::TempDir dir("run");
+  write_png(dir / "pic.png", test_pattern(120, 80));
+  std::ofstream(dir / "w.toml") << R"(
+mode = "drag"
+[dense]
+builtin = "image-grid"
+image = "pic.png"
+grid = 24
+[control]
+builtin = "grid-2d"
+cells = [3, 2]
+[[drags]]
+select = { box_relative = { min = [0, 0, 0], max = [1, 0, 0] } }
+keys = [[0, 0, 0]]
+[[drags]]
+near = [60, 80]
+keys = [[0, 0, 0], [2, 10, 15]]
+[simulation]
+frames = 2
+[interpolation]
+compare_pinned = true
+[output]
+mesh_format = "none"
+)";
+  RunOptions o;
+  o.out_dir = dir / "out";
+  const RunResult r = run_scene(load_scene(dir / "w.toml"), o);
+  REQUIRE_FALSE(r.failed);
+  const Image img = read_png(frame_path(o.out_dir / "frame", 2, ".png"));
+  // three panels (BI, modified-BI, pinned) of 1.5 x the picture, 8-pixel gaps
+  CHECK(img.width == 3 * 180 + 2 * 8);
+  CHECK(img.height == 120);
+}
