@@ -175,8 +175,7 @@ Eigen::Vector3d key_at(const DragSpec& d, double f) {
 
 class Outputs {
  public:
-  Outputs(const Scene& sc, const SceneModels& m, const fs::path& dir, int frames)
-      : sc_(sc), m_(m), dir_(dir) {
+  Outputs(const Scene& sc, const SceneModels& m, const fs::path& dir) : sc_(sc), m_(m), dir_(dir) {
     if (sc.output.pc2) pc2_ = std::make_unique<Pc2Writer>(dir / "dense.pc2", static_cast<int>(m.dense.V.rows()), 0.0f, 1.0f);
     if (m.dim() == 3) {
       // look from the front-right and slightly above, relative to the scene's up axis
@@ -187,7 +186,6 @@ class Outputs {
       const Eigen::Vector3d front = side.cross(up);
       view_ = frame_points(m.U, -(0.75 * front + 0.6 * side + 0.45 * up), up);
     }
-    (void)frames;
   }
   bool due(int frame, int last) const { return frame % sc_.output.every == 0 || frame == last; }
 
@@ -413,7 +411,7 @@ RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
 
   // ---------------------------------------------------------------- frames
   fs::create_directories(res.out_dir);
-  Outputs out(sc, m, res.out_dir, frames);
+  Outputs out(sc, m, res.out_dir);
   Eigen::MatrixXd X = m.U, dense, dense_bi, dense_pinned;
   Eigen::MatrixXd X_pinned = m.U;
   double sum_ratio = 0;
