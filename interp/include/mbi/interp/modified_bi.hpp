@@ -16,8 +16,6 @@
 
 namespace mbi::interp {
 
-enum class Method { BI, ModifiedBI };
-
 /// How solve() maps X to M (fact 11): sparse triangular solves with the cached Cholesky factor,
 /// or one dense product with the precomputed operator -H_mm^-1 H_mx ((d n) x n doubles).
 /// Automatic picks the dense operator for small meshes (see modified_bi.cpp for the measured
