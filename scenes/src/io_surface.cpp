@@ -542,6 +542,18 @@ void write_surface(const path& file, const SurfaceMesh& mesh, Encoding encoding)
   const auto faces = faces_of(mesh, file, ext == ".stl");
   const Eigen::MatrixXd& V = mesh.V;
   detail::write_atomic(file, [&](std::FILE* f) {
+    // OFF and ASCII PLY share these lines: "x y z" per vertex, "k i0 .. ik-1" per face (0-based).
+    auto put_ascii_vertices = [&] {
+      for (Eigen::Index i = 0; i < V.rows(); ++i)
+        put(f, fmt(V(i, 0)) + " " + fmt(V(i, 1)) + " " + fmt(V(i, 2)) + "\n", file);
+    };
+    auto put_counted_faces = [&] {
+      for (const auto& p : faces) {
+        std::string s = std::to_string(p.size());
+        for (int x : p) s += " " + std::to_string(x);
+        put(f, s + "\n", file);
+      }
+    };
     if (ext == ".obj") {
       for (Eigen::Index i = 0; i < V.rows(); ++i)
         put(f, "v " + fmt(V(i, 0)) + " " + fmt(V(i, 1)) + " " + fmt(V(i, 2)) + "\n", file);
@@ -553,13 +565,8 @@ void write_surface(const path& file, const SurfaceMesh& mesh, Encoding encoding)
     } else if (ext == ".off") {
       put(f, "OFF\n" + std::to_string(V.rows()) + " " + std::to_string(faces.size()) + " 0\n",
           file);
-      for (Eigen::Index i = 0; i < V.rows(); ++i)
-        put(f, fmt(V(i, 0)) + " " + fmt(V(i, 1)) + " " + fmt(V(i, 2)) + "\n", file);
-      for (const auto& p : faces) {
-        std::string s = std::to_string(p.size());
-        for (int x : p) s += " " + std::to_string(x);
-        put(f, s + "\n", file);
-      }
+      put_ascii_vertices();
+      put_counted_faces();
     } else if (ext == ".ply") {
       std::size_t max_k = 0;
       for (const auto& p : faces) max_k = std::max(max_k, p.size());
@@ -581,13 +588,8 @@ void write_surface(const path& file, const SurfaceMesh& mesh, Encoding encoding)
           for (int x : p) put_le<std::int32_t>(f, x, file);
         }
       } else {
-        for (Eigen::Index i = 0; i < V.rows(); ++i)
-          put(f, fmt(V(i, 0)) + " " + fmt(V(i, 1)) + " " + fmt(V(i, 2)) + "\n", file);
-        for (const auto& p : faces) {
-          std::string s = std::to_string(p.size());
-          for (int x : p) s += " " + std::to_string(x);
-          put(f, s + "\n", file);
-        }
+        put_ascii_vertices();
+        put_counted_faces();
       }
     } else {  // .stl
       auto normal = [&](const std::vector<int>& p) {
