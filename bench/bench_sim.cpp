@@ -10,7 +10,7 @@
 // relative residual tolerance 10^-tol (Vega's PCG uses 1e-6). Counters: tets, Newton and PCG
 // iterations per step, assembly and solve time per step (ms).
 #include <benchmark/benchmark.h>
-#include <mbi/scenes/procedural.hpp>
+#include <mbi/generate/procedural.hpp>
 #include <mbi/sim/simulator.hpp>
 
 #include <array>
@@ -27,7 +27,7 @@ struct BarMesh {
 // Bar of nx x n x n cells (cell size 0.1 m), each hex split into 6 tetrahedra.
 BarMesh bar_mesh(int nx, int n) {
   BarMesh M;
-  mbi::scenes::box_tets(Eigen::Vector3d::Zero(), Eigen::Vector3d(0.1 * nx, 0.1 * n, 0.1 * n),
+  mbi::generate::box_tets(Eigen::Vector3d::Zero(), Eigen::Vector3d(0.1 * nx, 0.1 * n, 0.1 * n),
                         Eigen::Vector3i(nx, n, n), M.U, M.T);
   return M;
 }

@@ -90,6 +90,20 @@ class Table {
     if (!v.is_boolean()) fail(key, "expected true or false");
     return v.as_boolean();
   }
+  /// A string key mapped to an enum value: unknown values list the accepted names.
+  template <typename E>
+  E choice(const std::string& key, E def, std::initializer_list<std::pair<const char*, E>> names) {
+    if (!has(key)) return def;
+    const toml_value& v = at(key);
+    if (!v.is_string()) fail(key, "expected a string");
+    const std::string s = v.as_string();
+    std::string list;
+    for (const auto& [name, value] : names) {
+      if (s == name) return value;
+      list += std::string(list.empty() ? "" : ", ") + name;
+    }
+    fail(key, "unknown value \"" + s + "\" (expected one of: " + list + ")");
+  }
   std::string string(const std::string& key, const std::string& def,
                      std::initializer_list<const char*> allowed = {}) {
     if (!has(key)) return def;
@@ -209,6 +223,38 @@ Selection parse_selection(Table t) {
 
 }  // namespace
 
+const char* mode_name(Mode m) { return m == Mode::Simulate ? "simulate" : "drag"; }
+
+const char* builtin_name(DenseBuiltin b) {
+  switch (b) {
+    case DenseBuiltin::PaperBar: return "paper-bar";
+    case DenseBuiltin::Cylinder: return "cylinder";
+    case DenseBuiltin::BumpySphere: return "bumpy-sphere";
+    case DenseBuiltin::ImageGrid: return "image-grid";
+    case DenseBuiltin::None: break;
+  }
+  return "";
+}
+
+const char* builtin_name(ControlBuiltin b) {
+  switch (b) {
+    case ControlBuiltin::PaperBar: return "paper-bar";
+    case ControlBuiltin::Box: return "box";
+    case ControlBuiltin::Grid2D: return "grid-2d";
+    case ControlBuiltin::None: break;
+  }
+  return "";
+}
+
+const char* format_name(MeshFormat f) {
+  switch (f) {
+    case MeshFormat::Obj: return "obj";
+    case MeshFormat::Ply: return "ply";
+    case MeshFormat::None: return "none";
+  }
+  return "";
+}
+
 Scene load_scene(const std::filesystem::path& file) {
   const std::string fname = file.string();
   if (!std::filesystem::is_regular_file(file)) throw SceneError(fname + ": no such scene file");
@@ -225,15 +271,18 @@ Scene load_scene(const std::filesystem::path& file) {
   sc.file = file;
   Table top(root, "", fname);
   sc.name = top.string("name", file.stem().string());
-  sc.mode = top.string("mode", "simulate", {"simulate", "drag"});
+  sc.mode = top.choice("mode", Mode::Simulate, {{"simulate", Mode::Simulate}, {"drag", Mode::Drag}});
 
   if (!top.has("dense")) throw SceneError(fname + ":1: dense: missing table [dense]");
   {
     Table t = top.sub("dense");
     if (t.has("path")) sc.dense.path = t.string("path", "");
-    sc.dense.builtin =
-        t.string("builtin", "", {"paper-bar", "cylinder", "bumpy-sphere", "image-grid"});
-    if (sc.dense.path.empty() == sc.dense.builtin.empty())
+    sc.dense.builtin = t.choice("builtin", DenseBuiltin::None,
+                                {{"paper-bar", DenseBuiltin::PaperBar},
+                                 {"cylinder", DenseBuiltin::Cylinder},
+                                 {"bumpy-sphere", DenseBuiltin::BumpySphere},
+                                 {"image-grid", DenseBuiltin::ImageGrid}});
+    if (sc.dense.path.empty() == (sc.dense.builtin == DenseBuiltin::None))
       throw SceneError(t.where(t.value()) + ": dense: give exactly one of path or builtin");
     sc.dense.subdivide = t.integer("subdivide", 0, 0, 4);
     if (t.has("image")) sc.dense.image = t.string("image", "");
@@ -244,10 +293,15 @@ Scene load_scene(const std::filesystem::path& file) {
   {
     Table t = top.sub("control");
     if (t.has("path")) sc.control.path = t.string("path", "");
-    sc.control.builtin = t.string("builtin", "", {"paper-bar", "box", "grid-2d"});
+    sc.control.builtin = t.choice("builtin", ControlBuiltin::None,
+                                  {{"paper-bar", ControlBuiltin::PaperBar},
+                                   {"box", ControlBuiltin::Box},
+                                   {"grid-2d", ControlBuiltin::Grid2D}});
     sc.control.generate_vertices = t.integer("generate_vertices", 0, 4, 100000);
-    sc.control.mesher = t.string("mesher", "voxel", {"voxel", "tetgen"});
-    const int given = int(!sc.control.path.empty()) + int(!sc.control.builtin.empty()) +
+    sc.control.mesher = t.choice("mesher", generate::Mesher::Voxel,
+                                 {{"voxel", generate::Mesher::Voxel},
+                                  {"tetgen", generate::Mesher::TetGen}});
+    const int given = int(!sc.control.path.empty()) + int(sc.control.builtin != ControlBuiltin::None) +
                       int(sc.control.generate_vertices > 0);
     if (given != 1)
       throw SceneError(t.where(t.value()) +
@@ -282,8 +336,9 @@ Scene load_scene(const std::filesystem::path& file) {
   }
   for (Table& t : top.array_of_tables("constraints")) {
     ConstraintSpec c;
-    const std::string kind = t.string("type", "fixed", {"fixed", "kinematic"});
-    c.kind = kind == "fixed" ? ConstraintSpec::Kind::Fixed : ConstraintSpec::Kind::Kinematic;
+    c.kind = t.choice("type", ConstraintSpec::Kind::Fixed,
+                      {{"fixed", ConstraintSpec::Kind::Fixed},
+                       {"kinematic", ConstraintSpec::Kind::Kinematic}});
     if (!t.has("select")) throw SceneError(t.where(t.value()) + ": " + t.key_name("select") + ": missing");
     c.select = parse_selection(t.sub("select"));
     if (t.has("motion")) {
@@ -362,18 +417,21 @@ Scene load_scene(const std::filesystem::path& file) {
   if (top.has("interpolation")) {
     Table t = top.sub("interpolation");
     auto& i = sc.interpolation;
-    i.method = t.string("method", i.method, {"bi", "modified-bi"});
+    i.method = t.choice("method", i.method,
+                        {{"bi", pipeline::Method::BI}, {"modified-bi", pipeline::Method::ModifiedBI}});
     i.alpha = t.number("alpha", 0.0, 0, 1e6, true);
     i.pin_boundary = t.boolean("pin_boundary", false);
     i.compare_pinned = t.boolean("compare_pinned", false);
-    i.handles = t.string("handles", i.handles, {"hard", "soft"});
+    i.handles = t.choice("handles", i.handles,
+                         {{"hard", interp::HandleMode::Hard}, {"soft", interp::HandleMode::Soft}});
     t.finish();
   }
   if (top.has("output")) {
     Table t = top.sub("output");
     auto& o = sc.output;
     o.every = t.integer("every", o.every, 1, 1 << 30);
-    o.mesh_format = t.string("mesh_format", o.mesh_format, {"obj", "ply", "none"});
+    o.mesh_format = t.choice("mesh_format", o.mesh_format,
+                             {{"obj", MeshFormat::Obj}, {"ply", MeshFormat::Ply}, {"none", MeshFormat::None}});
     o.pc2 = t.boolean("pc2", o.pc2);
     o.control_vtk = t.boolean("control_vtk", o.control_vtk);
     o.metrics = t.boolean("metrics", o.metrics);
@@ -383,9 +441,9 @@ Scene load_scene(const std::filesystem::path& file) {
     t.finish();
   }
   top.finish();
-  if (sc.mode == "drag" && sc.drags.empty())
+  if (sc.mode == Mode::Drag && sc.drags.empty())
     throw SceneError(fname + ":1: drags: a drag scene needs at least one [[drags]] entry");
-  if (sc.mode == "simulate" && !sc.drags.empty())
+  if (sc.mode == Mode::Simulate && !sc.drags.empty())
     throw SceneError(fname + ":1: drags: only drag scenes (mode = \"drag\") take [[drags]]");
   return sc;
 }

@@ -1,6 +1,7 @@
 // Real model (Stanford bunny, 35,947 vertices) in a box cage: embedding, evaluation and the
 // affine-reproduction / float-double properties on real data. Needs MBI_MODELS_DIR (SKIPs
 // otherwise).
+#include "common/skip.hpp"
 #include <catch2/catch.hpp>
 
 #include "test_support.hpp"
@@ -31,11 +32,7 @@ Eigen::MatrixXd read_obj_vertices(const std::string& path) {
 }  // namespace
 
 TEST_CASE("bunny in a box cage: embedding, twist, float vs double", "[models]") {
-  const char* dir = std::getenv("MBI_MODELS_DIR");
-  if (!dir) {
-    WARN("MBI_MODELS_DIR not set: skipping the real-model interp test");
-    return;
-  }
+  const std::string dir = mbi::test::models_dir_or_skip().string();
   const Eigen::MatrixXd P = read_obj_vertices(std::string(dir) + "/stanford-bunny.obj");
   REQUIRE(P.rows() == 35947);
   // cage: bounding box grown by 5%, 5x5x5 cells

@@ -5,6 +5,8 @@
 //   U : n x d   rest positions of the control vertices (d = 2 or 3)
 //   T : m x (d+1) element vertex indices (triangles in 2D, tetrahedra in 3D), 0-based
 //   X : n x d   deformed positions of the control vertices
+#include <mbi/error.hpp>
+
 #include <Eigen/Core>
 #include <stdexcept>
 #include <string>
@@ -12,9 +14,9 @@
 namespace mbi::interp {
 
 /// Every error the library reports. The message names the element, face, point or argument.
-class Error : public std::runtime_error {
+class Error : public mbi::Error {
  public:
-  using std::runtime_error::runtime_error;
+  using mbi::Error::Error;
 };
 
 /// Checks that U is n x d with d in {2,3}, finite, and T is m x (d+1) with indices in [0,n),

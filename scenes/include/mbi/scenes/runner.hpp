@@ -1,6 +1,6 @@
 #pragma once
-// The headless scene runner behind `mbi run`: loads a scene's models, simulates the control mesh
-// (or drags its handles), interpolates the dense model each frame and writes the outputs:
+// The headless scene runner behind `mbi run`: loads a scene's models, builds its frame pipeline
+// (simulation or drags, method, alpha) and writes the outputs of each frame:
 //   <out>/mesh_NNNN.obj|ply    dense mesh at the written frames (every output.every, and last)
 //   <out>/dense.pc2            point cache of every frame (Blender Mesh Cache, 3ds Max)
 //   <out>/control_NNNN.vtk     control mesh at the written frames (ParaView)
@@ -8,8 +8,9 @@
 //   <out>/metrics.json         per-frame timings and the discontinuity table (BI vs modified-BI)
 #include <mbi/interp/embed.hpp>
 #include <mbi/interp/metrics.hpp>
-#include <mbi/scenes/io.hpp>
-#include <mbi/scenes/raster.hpp>
+#include <mbi/io/image.hpp>
+#include <mbi/io/io.hpp>
+#include <mbi/pipeline/frame_pipeline.hpp>
 #include <mbi/scenes/scene.hpp>
 
 #include <filesystem>
@@ -21,25 +22,34 @@ namespace mbi::scenes {
 
 /// A scene's models, ready to run: the dense model and the control mesh in one dimension d.
 struct SceneModels {
-  SurfaceMesh dense;           ///< 3D: the surface; 2D: V n x 2 grid, F triangles
-  Eigen::MatrixXd U;           ///< control rest positions n x d
-  Eigen::MatrixXi T;           ///< control elements m x (d+1)
-  std::optional<Image> image;  ///< 2D: the texture (pixels; dense V are pixel coordinates)
+  io::SurfaceMesh dense;           ///< 3D: the surface; 2D: V n x 2 grid, F triangles
+  Eigen::MatrixXd U;               ///< control rest positions n x d
+  Eigen::MatrixXi T;               ///< control elements m x (d+1)
+  std::optional<io::Image> image;  ///< 2D: the texture (pixels; dense V are pixel coordinates)
   std::string dense_name, control_name;
-  double generate_seconds = 0; ///< time spent generating the control mesh, s
+  double generate_seconds = 0;     ///< time spent generating the control mesh, s
   int dim() const { return static_cast<int>(U.cols()); }
 };
 
 /// Loads (or builds) the dense model and the control mesh of a scene. mesh_override replaces the
-/// scene's dense model. Throws SceneError / IoError naming the file.
+/// scene's dense model. Throws SceneError / io::IoError naming the file.
 SceneModels load_models(const Scene& scene, const std::filesystem::path& mesh_override = {});
 
+/// The frame pipeline of a scene: a SimulatorDriver (material, time stepping, constraints,
+/// scripted pokes) in simulate mode, a HandleDriver following the [[drags]] keyframes in drag
+/// mode; the scene's method, alpha and pin_boundary. Everything that runs a scene (the runner,
+/// benchmarks, the viewer) builds it here. evaluator: nullptr = CPU, double. Throws SceneError
+/// (pokes outside the control mesh, drag vertices out of range or repeated, simulate in 2D).
+pipeline::FramePipeline make_pipeline(const Scene& scene, const SceneModels& models,
+                                      interp::Embedding embedding,
+                                      std::unique_ptr<pipeline::Evaluator> evaluator = nullptr);
+
 struct RunOptions {
-  std::filesystem::path out_dir;  ///< empty: "out/<scene name>"
-  int frames = 0;                 ///< 0: the scene's
-  std::filesystem::path mesh;     ///< replaces the scene's dense model
-  std::string method;             ///< "", "bi" or "modified-bi": replaces the scene's
-  bool force = false;             ///< overwrite a non-empty output folder
+  std::filesystem::path out_dir;         ///< empty: "out/<scene name>"
+  int frames = 0;                        ///< 0: the scene's
+  std::filesystem::path mesh;            ///< replaces the scene's dense model
+  std::optional<pipeline::Method> method;  ///< replaces the scene's
+  bool force = false;                    ///< overwrite a non-empty output folder
   /// Progress callback (frame done, frames total); may be empty.
   std::function<void(int, int)> progress;
   /// Log lines (warnings, summary); may be empty.
@@ -55,8 +65,8 @@ struct RunResult {
   int outside_points = 0;
 };
 
-/// Runs a scene headless. Throws on bad input before anything is written (SceneError, IoError,
-/// mbi::interp::Error, mbi::sim::Error). A failing simulation step ends the run with
+/// Runs a scene headless. Throws on bad input before anything is written (mbi::Error: SceneError,
+/// io::IoError, interp::Error, sim::Error). A failing simulation step ends the run with
 /// RunResult::failed and keeps what was written.
 RunResult run_scene(const Scene& scene, const RunOptions& options);
 

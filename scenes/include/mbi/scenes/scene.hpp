@@ -2,25 +2,46 @@
 // Scene files (TOML): what to load, how to simulate or drag it, how to interpolate, what to write.
 // The format is documented key by key in docs/scene-format.md. load_scene() checks every key:
 // unknown keys, wrong types and out-of-range values throw SceneError "<file>:<line>: <key>: ...".
+// After parsing, a scene holds enums and typed values only: nothing downstream compares strings.
+#include <mbi/error.hpp>
+#include <mbi/generate/cage.hpp>
+#include <mbi/interp/control.hpp>
+#include <mbi/pipeline/method.hpp>
+
 #include <Eigen/Core>
 
 #include <filesystem>
 #include <optional>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
 namespace mbi::scenes {
 
-class SceneError : public std::runtime_error {
+/// A scene file that cannot be used: "<file>:<line>: <key>: <what is wrong>".
+class SceneError : public mbi::Error {
  public:
-  using std::runtime_error::runtime_error;
+  using mbi::Error::Error;
 };
+
+/// How the control mesh moves.
+enum class Mode {
+  Simulate,  ///< co-rotational FEM (3D)
+  Drag,      ///< handles dragged without physics (paper Eq. 10/11), 2D or 3D
+};
+enum class DenseBuiltin { None, PaperBar, Cylinder, BumpySphere, ImageGrid };
+enum class ControlBuiltin { None, PaperBar, Box, Grid2D };
+enum class MeshFormat { Obj, Ply, None };
+
+/// Scene-file names of the enums ("simulate", "paper-bar", "grid-2d", "ply", ...).
+const char* mode_name(Mode m);
+const char* builtin_name(DenseBuiltin b);
+const char* builtin_name(ControlBuiltin b);
+const char* format_name(MeshFormat f);
 
 /// Dense model: a file (path relative to the scene file) or a built-in procedural mesh.
 struct DenseSpec {
   std::filesystem::path path;  ///< empty when builtin is set
-  std::string builtin;         ///< "paper-bar", "cylinder", "bumpy-sphere", "image-grid"
+  DenseBuiltin builtin = DenseBuiltin::None;
   int subdivide = 0;           ///< Loop subdivision steps (OpenMesh), 3D surfaces only
   std::filesystem::path image; ///< 2D: PNG texture (relative to the scene file); "" = checker
   int grid = 128;              ///< 2D image grid: cells along the longer side
@@ -29,9 +50,9 @@ struct DenseSpec {
 /// Control mesh: a file, a built-in, or generated around the dense model.
 struct ControlSpec {
   std::filesystem::path path;  ///< TetGen .node/.ele (or base) or Gmsh .msh
-  std::string builtin;         ///< "paper-bar", "box", "grid-2d"
+  ControlBuiltin builtin = ControlBuiltin::None;
   int generate_vertices = 0;   ///< > 0: generate a control mesh of about this many vertices
-  std::string mesher = "voxel";  ///< generation: "voxel" (default) or "tetgen"
+  generate::Mesher mesher = generate::Mesher::Voxel;  ///< how a control mesh is generated
   Eigen::Vector3i cells{2, 2, 8};  ///< for builtin "box" / "grid-2d" (z ignored in 2D)
 };
 
@@ -101,16 +122,16 @@ struct DragSpec {
 };
 
 struct InterpolationSpec {
-  std::string method = "modified-bi";  ///< "bi" or "modified-bi"
+  pipeline::Method method = pipeline::Method::ModifiedBI;
   double alpha = 0.0;                  ///< 0 = default (0.1 in 3D, 0.2 in 2D)
   bool pin_boundary = false;
   bool compare_pinned = false;         ///< 2D drag scenes: also write the pinned variant
-  std::string handles = "hard";        ///< drag scenes: "hard" (Eq. 10) or "soft" (Eq. 11)
+  interp::HandleMode handles = interp::HandleMode::Hard;  ///< drag scenes: Eq. 10 or Eq. 11
 };
 
 struct OutputSpec {
   int every = 10;                  ///< write meshes every N frames (and the last)
-  std::string mesh_format = "obj"; ///< "obj", "ply" or "none"
+  MeshFormat mesh_format = MeshFormat::Obj;
   bool pc2 = true;
   bool control_vtk = true;
   bool metrics = true;
@@ -121,7 +142,7 @@ struct OutputSpec {
 struct Scene {
   std::filesystem::path file;  ///< the scene file itself
   std::string name;
-  std::string mode = "simulate";  ///< "simulate" (FEM) or "drag" (handles, paper Eq. 10/11)
+  Mode mode = Mode::Simulate;
   DenseSpec dense;
   ControlSpec control;
   MaterialSpec material;

@@ -1,12 +1,12 @@
 #pragma once
-#include <stdexcept>
+#include <mbi/error.hpp>
 
 namespace mbi::sim {
 
 /// Every error mbi::sim throws. The message names the element, node, handle or argument.
-class Error : public std::runtime_error {
+class Error : public mbi::Error {
  public:
-  using std::runtime_error::runtime_error;
+  using mbi::Error::Error;
 };
 
 }  // namespace mbi::sim

@@ -1,0 +1,256 @@
+// mbi deform: the interpolation as a command-line tool, for users with their own simulator.
+//
+//   mbi deform --control REST --deformed X --mesh DENSE --out OUT
+//              [--method bi|modified-bi] [--alpha A] [--pin-boundary] [--stats STATS.json]
+//   mbi deform --example twist-bar [--out OUT] [--stats STATS.json]
+#include "commands.hpp"
+
+#include <mbi/generate/procedural.hpp>
+#include <mbi/interp.hpp>
+#include <mbi/io/atomic_file.hpp>
+#include <mbi/io/io.hpp>
+#include <mbi/pipeline/frame_pipeline.hpp>
+#include <mbi/scenes/report.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+namespace fs = std::filesystem;
+
+namespace mbi::cli {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+std::string lower_ext(const fs::path& p) {
+  std::string e = p.extension().string();
+  for (char& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return e;
+}
+bool is_point_list(const fs::path& p) {
+  const std::string e = lower_ext(p);
+  return e == ".txt" || e == ".xyz";
+}
+
+struct DeformArgs {
+  std::string control, deformed, mesh, out, stats, example;
+  std::string method = "modified-bi";
+  double alpha = 0.0;
+  bool alpha_given = false;
+  bool pin_boundary = false;
+  int threads = 0;
+};
+
+// What the command works on, wherever it came from (files or the built-in example).
+struct Problem {
+  Eigen::MatrixXd U, X;       // control rest / deformed, n x d
+  Eigen::MatrixXi T;          // m x (d+1)
+  Eigen::MatrixXd P;          // dense rest points, p x d
+  Eigen::MatrixXd P_extra;    // columns beyond d kept as they are (2D control, 3D surface)
+  std::optional<io::SurfaceMesh> surface;  // when the dense model is a surface
+  std::string control_name, deformed_name, mesh_name;
+};
+
+Problem load_files(const DeformArgs& a) {
+  Problem pb;
+  pb.control_name = a.control;
+  pb.deformed_name = a.deformed;
+  pb.mesh_name = a.mesh;
+  const io::ControlMesh cm = io::read_control_mesh(a.control);
+  pb.U = cm.U;
+  pb.T = cm.T;
+  const int d = cm.dim();
+  pb.X = lower_ext(a.deformed) == ".node" ? io::read_node(a.deformed)
+                                          : io::read_points(a.deformed);
+  if (pb.X.rows() != pb.U.rows())
+    throw std::runtime_error(a.deformed + ": " + std::to_string(pb.X.rows()) +
+                             " deformed positions, but the control mesh " + a.control + " has " +
+                             std::to_string(pb.U.rows()) + " vertices");
+  if (pb.X.cols() != d)
+    throw std::runtime_error(a.deformed + ": positions have " + std::to_string(pb.X.cols()) +
+                             " coordinates, but the control mesh " + a.control + " is " +
+                             std::to_string(d) + "D");
+  Eigen::MatrixXd P;
+  if (is_point_list(a.mesh)) {
+    P = io::read_points(a.mesh);
+  } else {
+    pb.surface = io::read_surface(a.mesh);
+    P = pb.surface->V;
+  }
+  if (P.rows() == 0) throw std::runtime_error(a.mesh + ": no points");
+  if (P.cols() < d)
+    throw std::runtime_error(a.mesh + ": points have " + std::to_string(P.cols()) +
+                             " coordinates, the control mesh is " + std::to_string(d) + "D");
+  pb.P = P.leftCols(d);
+  pb.P_extra = P.rightCols(P.cols() - d);
+  return pb;
+}
+
+Problem load_example(const std::string& name) {
+  if (name != "twist-bar")
+    throw std::runtime_error("--example: unknown example \"" + name + "\" (known: twist-bar)");
+  Problem pb;
+  pb.control_name = "built-in paper bar (35 vertices)";
+  pb.deformed_name = "built-in twist (90 degrees, mild bend)";
+  pb.mesh_name = "built-in bar surface";
+  generate::paper_bar_control(pb.U, pb.T);
+  io::SurfaceMesh s;
+  generate::paper_bar_surface(s.V, s.F);
+  pb.P = s.V;
+  pb.P_extra.resize(s.V.rows(), 0);
+  pb.surface = s;
+  const double pi = std::acos(-1.0);
+  pb.X = generate::twist_bend(pb.U, 0.0, 0.0, 0.0, 6.0, pi / 2, 0.05);
+  return pb;
+}
+
+int run_deform(const DeformArgs& a) {
+  const bool example = !a.example.empty();
+  if (!example) {
+    for (const auto& [flag, v] : {std::pair{"--control", &a.control}, {"--deformed", &a.deformed},
+                                  {"--mesh", &a.mesh}, {"--out", &a.out}})
+      if (v->empty()) throw std::runtime_error(std::string(flag) + " is required (or use --example)");
+  }
+  if (a.alpha_given && !(a.alpha > 0) )
+    throw std::runtime_error("--alpha must be > 0 (E_disc alone has extra null modes)");
+
+  Problem pb = example ? load_example(a.example) : load_files(a);
+  const int d = static_cast<int>(pb.U.cols());
+  if (!pb.X.allFinite()) throw std::runtime_error(pb.deformed_name + ": non-finite position");
+
+  // Embed
+  auto t0 = Clock::now();
+  interp::Embedding emb;
+  try {
+    emb = interp::embed(pb.U, pb.T, pb.P);
+  } catch (const interp::Error& e) {
+    throw std::runtime_error(pb.mesh_name + ": " + e.what());
+  }
+  const double embed_ms = ms_since(t0);
+  if (!emb.outside.empty())
+    std::fprintf(stderr,
+                 "mbi deform: warning: %zu of %d points lie outside the control mesh (farthest "
+                 "%.3g); they follow the nearest element by extrapolation\n",
+                 emb.outside.size(), emb.size(), emb.max_outside_distance);
+
+  // One frame through the pipeline: the given positions drive it, BI skips the solve.
+  pipeline::PipelineOptions po;
+  po.method = *pipeline::parse_method(a.method);
+  po.interp.alpha = a.alpha_given ? a.alpha : 0.0;
+  po.interp.pin_boundary = a.pin_boundary;
+  auto given = std::make_unique<pipeline::GivenDriver>(pb.U);
+  given->set(pb.X);
+  std::optional<pipeline::FramePipeline> pipe;
+  const interp::ModifiedBI* solver = nullptr;
+  try {
+    pipe.emplace(pb.U, pb.T, std::move(emb), std::move(given), po,
+                 std::make_unique<pipeline::CpuEvaluator>(pipeline::Precision::Double, a.threads));
+    solver = &pipe->solver();  // the comparison table needs modified-BI in any case
+  } catch (const interp::Error& e) {
+    throw std::runtime_error(pb.control_name + ": " + e.what());
+  }
+  const pipeline::FrameResult fr = pipe->step();
+  if (!fr.ok) throw std::runtime_error(fr.message);
+  const Eigen::MatrixXd& out = pipe->positions();
+  const double precompute_ms = pipe->precompute_ms();
+  const double solve_ms = pipe->timings().solve_ms;
+  const double evaluate_ms = pipe->timings().bezier_ms + pipe->timings().evaluate_ms;
+  if (!out.allFinite()) throw std::runtime_error("evaluation produced non-finite positions");
+
+  const interp::DiscontinuityTable table =
+      interp::discontinuity_table(*solver, pb.X, pipe->modified_bi_M());
+  const interp::Embedding& embedding = pipe->embedding();
+
+  // Outputs: nothing is written unless everything above succeeded.
+  if (!a.out.empty()) {
+    Eigen::MatrixXd full(out.rows(), d + pb.P_extra.cols());
+    full << out, pb.P_extra;
+    const fs::path op(a.out);
+    if (is_point_list(op) || !pb.surface) {
+      io::write_points(op, full);
+    } else {
+      io::SurfaceMesh s = *pb.surface;
+      s.V = full;
+      io::write_surface(op, s);
+    }
+  }
+  if (!a.stats.empty()) {
+    nlohmann::json j;
+    j["method"] = a.method;
+    j["dim"] = d;
+    j["alpha"] = solver->alpha();
+    j["beta"] = solver->beta();
+    j["pin_boundary"] = a.pin_boundary;
+    j["control_vertices"] = pb.U.rows();
+    j["elements"] = pb.T.rows();
+    j["points"] = pb.P.rows();
+    j["outside_points"] = embedding.outside.size();
+    j["max_outside_distance"] = embedding.max_outside_distance;
+    j["null_space_dim"] = solver->null_space_dim();
+    j["disc"] = scenes::disc_json(table);
+    j["e_vibr"] = table.e_vibr;
+    j["e_disc"] = table.e_disc;
+    j["e_total"] = table.e_total;
+    j["timings_ms"] = {{"embed", embed_ms},
+                       {"precompute", precompute_ms},
+                       {"solve", solve_ms},
+                       {"evaluate", evaluate_ms}};
+    io::write_text_atomic(a.stats, j.dump(2) + "\n");
+  }
+
+  std::printf("control: %s: %d vertices, %d %s (%dD)\n", pb.control_name.c_str(),
+              static_cast<int>(pb.U.rows()), static_cast<int>(pb.T.rows()),
+              d == 3 ? "tetrahedra" : "triangles", d);
+  std::printf("dense:   %s: %d points (%zu outside)\n", pb.mesh_name.c_str(),
+              static_cast<int>(pb.P.rows()), embedding.outside.size());
+  std::printf("method:  %s, alpha %.4g, beta %.4g%s, gauge null space %d\n", a.method.c_str(),
+              solver->alpha(), solver->beta(), a.pin_boundary ? ", boundary pinned" : "",
+              solver->null_space_dim());
+  std::printf("\nface discontinuity over %d interior faces (paper Table 2):\n%s", table.faces,
+              scenes::format_table(table).c_str());
+  std::printf("E_vibr %.6g  E_disc %.6g  E_total %.6g\n", table.e_vibr, table.e_disc,
+              table.e_total);
+  std::printf("\ntimes (ms): embed %.2f  precompute %.2f  solve %.3f  evaluate %.2f\n", embed_ms,
+              precompute_ms, solve_ms, evaluate_ms);
+  if (!a.out.empty()) std::printf("wrote %s\n", a.out.c_str());
+  return 0;
+}
+
+const Registrar reg{
+    "deform", "Deform a dense mesh by a deformed control mesh (modified-BI or BI)",
+    [](CLI::App& sub) -> Action {
+      auto a = std::make_shared<DeformArgs>();
+      sub.add_option("--control", a->control,
+                     "rest control mesh: TetGen .node/.ele (or base name) or Gmsh .msh");
+      sub.add_option("--deformed", a->deformed,
+                     "deformed control positions: .node or plain text (n lines of d numbers)");
+      sub.add_option("--mesh", a->mesh, "dense model: .obj/.ply/.off/.stl, or points .txt/.xyz");
+      sub.add_option("--out", a->out, "output: same kind as --mesh (written atomically)");
+      sub.add_option("--method", a->method, "interpolation")
+          ->check(CLI::IsMember({"bi", "modified-bi"}));
+      sub.add_option_function<double>(
+          "--alpha",
+          [a](double v) {
+            a->alpha = v;
+            a->alpha_given = true;
+          },
+          "weight of E_vibr (> 0; default 0.1 in 3D, 0.2 in 2D)");
+      sub.add_flag("--pin-boundary", a->pin_boundary, "M = 0 on the control mesh boundary");
+      sub.add_option("--stats", a->stats, "write statistics and timings as JSON");
+      sub.add_option("--example", a->example, "built-in example instead of files: twist-bar");
+      sub.add_option("--threads", a->threads, "evaluation threads (0 = all cores)")
+          ->check(CLI::Range(0, 1024));
+      return [a] { return run_deform(*a); };
+    }};
+
+}  // namespace
+}  // namespace mbi::cli

@@ -1,0 +1,66 @@
+#include <mbi/error.hpp>
+#include <mbi/interp/evaluate.hpp>
+#include <mbi/pipeline/evaluator.hpp>
+
+#include <thread>
+
+namespace mbi::pipeline {
+
+CpuEvaluator::CpuEvaluator(Precision precision, int threads)
+    : precision_(precision), threads_(threads) {
+  if (threads < 0) throw Error("CpuEvaluator: threads must be >= 0 (0 = all cores)");
+}
+
+std::string CpuEvaluator::name() const {
+  const int t = threads_ > 0 ? threads_ : static_cast<int>(std::thread::hardware_concurrency());
+  return std::string("cpu ") + (precision_ == Precision::Float ? "float" : "double") + ", " +
+         std::to_string(t) + (t == 1 ? " thread" : " threads");
+}
+
+void CpuEvaluator::set_points(std::shared_ptr<const interp::Embedding> embedding,
+                              const Eigen::MatrixXd& rest_normals) {
+  if (!embedding) throw Error("CpuEvaluator: no embedding");
+  if (rest_normals.size() != 0 &&
+      (rest_normals.rows() != embedding->size() || rest_normals.cols() != embedding->dim()))
+    throw Error("CpuEvaluator: rest normals must be " + std::to_string(embedding->size()) + " x " +
+                std::to_string(embedding->dim()));
+  embedding_ = std::move(embedding);
+  rest_normals_ = rest_normals;
+  rest_normals_f_ = rest_normals.cast<float>();
+}
+
+void CpuEvaluator::evaluate(const interp::BezierPoints& B, bool normals) {
+  if (!embedding_) throw Error("CpuEvaluator: evaluate() before set_points()");
+  if (normals && rest_normals_.size() == 0)
+    throw Error("CpuEvaluator: normals asked for, but no rest normals were given");
+  if (precision_ == Precision::Double) {
+    if (normals)
+      interp::evaluate<double>(B, *embedding_, rest_normals_, positions_, normals_, threads_);
+    else
+      interp::evaluate<double>(B, *embedding_, positions_, threads_);
+  } else {
+    if (normals)
+      interp::evaluate<float>(B, *embedding_, rest_normals_f_, positions_f_, normals_f_, threads_);
+    else
+      interp::evaluate<float>(B, *embedding_, positions_f_, threads_);
+    if (!normals) normals_f_.resize(0, 0);
+    stale_ = true;
+  }
+  if (!normals && precision_ == Precision::Double) normals_.resize(0, 0);
+}
+
+const Eigen::MatrixXd& CpuEvaluator::positions() {
+  if (stale_) {
+    positions_ = positions_f_.cast<double>();
+    normals_ = normals_f_.cast<double>();
+    stale_ = false;
+  }
+  return positions_;
+}
+
+const Eigen::MatrixXd& CpuEvaluator::normals() {
+  positions();
+  return normals_;
+}
+
+}  // namespace mbi::pipeline

@@ -1,0 +1,180 @@
+#pragma once
+// File formats of mbi: dense surfaces (OBJ, OFF, PLY, STL), point lists (.txt/.xyz), control
+// meshes (TetGen .node/.ele/.face, Gmsh .msh 2.2/4.1 ASCII, legacy VTK output) and animation
+// output (OBJ/PLY frame sequences, PC2 point caches).
+//
+// Conventions: positions are n x d Eigen::MatrixXd (d = 2 or 3), elements m x (d+1) 0-based
+// Eigen::MatrixXi, as in mbi::interp. Units are whatever the file uses (no scaling).
+//
+// Errors: every function throws IoError. The message starts with "<file>:<line>: " when a line
+// of a text file is at fault, "<file>: " otherwise, and names the field (header count, vertex,
+// face, element, index) at fault. Counts in headers are checked against the size of the file
+// before anything is allocated for them. Non-finite coordinates are rejected.
+//
+// Writers never leave a half-written file: they write through AtomicFile (atomic_file.hpp), a
+// temporary file in the same folder renamed over the target at the end. Text writers print reals with %.17g, so reading a
+// written file gives back the same doubles bit for bit.
+#include <mbi/error.hpp>
+
+#include <Eigen/Core>
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace mbi::io {
+
+/// Every error of the IO functions (message: "<file>[:<line>]: <what is wrong>").
+class IoError : public mbi::Error {
+ public:
+  using mbi::Error::Error;
+};
+
+class AtomicFile;
+
+// ----------------------------------------------------------------------------------------------
+// Dense surfaces
+// ----------------------------------------------------------------------------------------------
+
+/// A surface mesh as stored in a file. Vertex order and count are exactly the file's: vertices
+/// that no face uses, duplicated positions, holes, several components and non-manifold faces
+/// are all kept as they are.
+struct SurfaceMesh {
+  Eigen::MatrixXd V;  ///< n x 3 vertex positions (file order)
+  Eigen::MatrixXi F;  ///< t x 3 triangles, 0-based; polygons are fan-triangulated (v0, vk, vk+1)
+  /// Faces as written in the file (0-based, any size >= 3). Writers use these when non-empty
+  /// (so polygons are written back unchanged), otherwise F.
+  std::vector<std::vector<int>> polygons;
+};
+
+/// Reads .obj, .off, .ply (ASCII or binary, little or big endian) or .stl (ASCII or binary),
+/// chosen by extension (case-insensitive). OBJ: "v" and "f" lines (v, v/t, v//n, v/t/n, negative
+/// relative indices); other records are ignored. OFF: ASCII. PLY: vertex x,y,z of any scalar
+/// type, face "vertex_indices"/"vertex_index" list; other properties and elements are skipped.
+/// STL has no shared vertices: the corners of its triangles are merged when bitwise equal, in
+/// order of first appearance (STL stores float32).
+SurfaceMesh read_surface(const std::filesystem::path& file);
+
+enum class Encoding { ascii, binary };
+
+/// Writes `mesh` to .obj, .off, .ply or .stl (by extension). Encoding applies to PLY (binary =
+/// little endian, float64 coordinates, int32 indices) and STL (binary = float32, the format's
+/// only precision); OBJ and OFF are always ASCII. STL writes the triangles F (polygons cannot be
+/// stored). Throws IoError on out-of-range indices or non-finite positions (nothing written).
+void write_surface(const std::filesystem::path& file, const SurfaceMesh& mesh,
+                   Encoding encoding = Encoding::ascii);
+/// Same, from plain arrays: V n x 3, F t x 3 (0-based).
+void write_surface(const std::filesystem::path& file, const Eigen::Ref<const Eigen::MatrixXd>& V,
+                   const Eigen::Ref<const Eigen::MatrixXi>& F, Encoding encoding = Encoding::ascii);
+
+// ----------------------------------------------------------------------------------------------
+// Point lists (.txt, .xyz): one point per line, d numbers separated by blanks or commas; blank
+// lines and '#' comments are allowed. Every line must have the same count d.
+// ----------------------------------------------------------------------------------------------
+
+/// n x d. An empty file gives a 0 x 0 matrix.
+Eigen::MatrixXd read_points(const std::filesystem::path& file);
+/// One row per line, %.17g.
+void write_points(const std::filesystem::path& file, const Eigen::Ref<const Eigen::MatrixXd>& P);
+
+// ----------------------------------------------------------------------------------------------
+// Control meshes
+// ----------------------------------------------------------------------------------------------
+
+/// A control mesh as read from TetGen or Gmsh files.
+struct ControlMesh {
+  Eigen::MatrixXd U;             ///< n x d rest positions, d = 2 or 3
+  Eigen::MatrixXi T;             ///< m x (d+1) elements (triangles / tetrahedra), 0-based
+  Eigen::MatrixXi faces;         ///< b x d boundary faces from a .face file (may be empty)
+  Eigen::VectorXi face_markers;  ///< b boundary markers of those faces (0 when absent)
+  int dim() const { return static_cast<int>(U.cols()); }
+};
+
+/// Reads a control mesh from TetGen files or a Gmsh file, chosen by extension: ".msh" -> Gmsh,
+/// ".node"/".ele"/".face" or no extension -> TetGen base name.
+ControlMesh read_control_mesh(const std::filesystem::path& file);
+
+/// TetGen: `path` is the base name or any of BASE.node / BASE.ele. Reads BASE.node and
+/// BASE.ele, and BASE.face when present (3D). Point numbering may start at 0 or 1 (the first
+/// point's number decides; numbers must then be consecutive); attributes and boundary markers
+/// are read past. 2D: .node with dimension 2 and .ele with 3 (or 6) nodes per triangle.
+/// 10-node tetrahedra keep their 4 corners.
+ControlMesh read_tetgen(const std::filesystem::path& path);
+/// Positions only, from a .node file (e.g. deformed positions X): n x d.
+Eigen::MatrixXd read_node(const std::filesystem::path& file);
+/// Writes BASE.node and BASE.ele (0-based numbering, no attributes, no markers), and BASE.face
+/// when `faces` has rows (3D only). `base` may also end in .node/.ele.
+void write_tetgen(const std::filesystem::path& base, const Eigen::Ref<const Eigen::MatrixXd>& U,
+                  const Eigen::Ref<const Eigen::MatrixXi>& T,
+                  const Eigen::Ref<const Eigen::MatrixXi>& faces = Eigen::MatrixXi(0, 3));
+/// Writes one .node file (0-based): n x d positions.
+void write_node(const std::filesystem::path& file, const Eigen::Ref<const Eigen::MatrixXd>& X);
+
+/// Gmsh .msh, ASCII format 2.2 or 4.1. Tetrahedra (type 4) make a 3D mesh; without tetrahedra,
+/// triangles (type 2) make a 2D mesh (z must then be the same for all used nodes and is dropped).
+/// Other element types are skipped. Node tags are remapped to 0-based indices in file order;
+/// nodes that no kept element uses are dropped.
+ControlMesh read_gmsh(const std::filesystem::path& file);
+
+/// Legacy VTK unstructured grid (ASCII, for ParaView): tetrahedra (cell type 10) or triangles
+/// (type 5, z = 0). Optional per-point vectors (n x d, e.g. displacements) named `point_data`.
+void write_vtk(const std::filesystem::path& file, const Eigen::Ref<const Eigen::MatrixXd>& U,
+               const Eigen::Ref<const Eigen::MatrixXi>& T,
+               const Eigen::Ref<const Eigen::MatrixXd>& point_vectors = Eigen::MatrixXd(0, 3),
+               const std::string& point_data = "displacement");
+
+// ----------------------------------------------------------------------------------------------
+// Animation output
+// ----------------------------------------------------------------------------------------------
+
+/// "<base>_<frame, zero-padded to `digits`><ext>", e.g. frame_path("out/bunny", 7, ".obj") ->
+/// "out/bunny_0007.obj". Throws IoError on a negative frame.
+std::filesystem::path frame_path(const std::filesystem::path& base, int frame,
+                                 const std::string& ext, int digits = 4);
+/// Writes one frame of a sequence: the positions V (n x 3) with the faces of `topology`
+/// (its polygons when present) to frame_path(base, frame, ext); ext is ".obj" or ".ply" (PLY
+/// binary when encoding says so). Returns the path written.
+std::filesystem::path write_frame(const std::filesystem::path& base, int frame,
+                                  const std::string& ext, const SurfaceMesh& topology,
+                                  const Eigen::Ref<const Eigen::MatrixXd>& V,
+                                  Encoding encoding = Encoding::ascii);
+
+/// PC2 point cache (Blender "Mesh Cache" modifier): header "POINTCACHE2\0", int32 version 1,
+/// int32 numPoints, float32 startFrame, float32 sampleRate, int32 numSamples, then float32 x,y,z
+/// per point per sample, all little endian. Frames are appended as they come to a temporary
+/// file; finish() fixes numSamples and renames it to the target. If the writer is destroyed
+/// before finish() (e.g. by an exception), the temporary file is removed and the target is left
+/// untouched.
+class Pc2Writer {
+ public:
+  Pc2Writer(const std::filesystem::path& file, int num_points, float start_frame = 0.0f,
+            float sample_rate = 1.0f);
+  ~Pc2Writer();
+  Pc2Writer(const Pc2Writer&) = delete;
+  Pc2Writer& operator=(const Pc2Writer&) = delete;
+
+  /// Appends one sample: P is numPoints x 3 (or x 2: z = 0), finite.
+  void append(const Eigen::Ref<const Eigen::MatrixXd>& P);
+  /// Writes numSamples into the header, flushes, and moves the file into place.
+  void finish();
+  int samples() const { return samples_; }
+
+ private:
+  std::filesystem::path file_;
+  std::unique_ptr<AtomicFile> out_;
+  int num_points_ = 0;
+  int samples_ = 0;
+};
+
+/// A PC2 file read back (float32 values widened to double).
+struct PointCache {
+  float start_frame = 0.0f;
+  float sample_rate = 1.0f;
+  std::vector<Eigen::MatrixXd> frames;  ///< numSamples matrices of numPoints x 3
+};
+PointCache read_pc2(const std::filesystem::path& file);
+
+}  // namespace mbi::io

@@ -1,0 +1,137 @@
+// Animation output: OBJ/PLY frame sequences and PC2 point caches.
+#include "io_common.hpp"
+
+#include <mbi/io/atomic_file.hpp>
+
+#include <bit>
+#include <cfloat>
+#include <cmath>
+#include <cstring>
+
+namespace mbi::io {
+
+using detail::fail;
+using std::filesystem::path;
+
+path frame_path(const path& base, int frame, const std::string& ext, int digits) {
+  if (frame < 0) fail(base, 0, "negative frame number " + std::to_string(frame));
+  if (digits < 1 || digits > 12) fail(base, 0, "frame digits must be in [1, 12]");
+  char num[32];
+  std::snprintf(num, sizeof num, "_%0*d", digits, frame);
+  path p = base;
+  p += num;
+  p += ext;
+  return p;
+}
+
+path write_frame(const path& base, int frame, const std::string& ext, const SurfaceMesh& topology,
+                 const Eigen::Ref<const Eigen::MatrixXd>& V, Encoding encoding) {
+  const path p = frame_path(base, frame, ext);
+  const std::string e = detail::extension(p);
+  if (e != ".obj" && e != ".ply") fail(p, 0, "frame sequences are .obj or .ply");
+  const Eigen::Index n = topology.V.rows() > 0 ? topology.V.rows() : V.rows();
+  if (V.rows() != n || V.cols() != 3)
+    fail(p, 0, "frame positions must be " + std::to_string(n) + " x 3, got " +
+                   std::to_string(V.rows()) + " x " + std::to_string(V.cols()));
+  detail::write_surface_positions(p, topology, V, encoding);
+  return p;
+}
+
+namespace {
+template <typename T>
+void put_le(AtomicFile& f, T x) {
+  unsigned char b[sizeof(T)];
+  std::memcpy(b, &x, sizeof(T));
+  if constexpr (std::endian::native == std::endian::big)
+    for (std::size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(b[i], b[sizeof(T) - 1 - i]);
+  f.write(b, sizeof(T));
+}
+template <typename T>
+T get_le(const std::string& data, std::size_t at) {
+  unsigned char b[sizeof(T)];
+  std::memcpy(b, data.data() + at, sizeof(T));
+  if constexpr (std::endian::native == std::endian::big)
+    for (std::size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(b[i], b[sizeof(T) - 1 - i]);
+  T x;
+  std::memcpy(&x, b, sizeof(T));
+  return x;
+}
+constexpr char kMagic[12] = {'P', 'O', 'I', 'N', 'T', 'C', 'A', 'C', 'H', 'E', '2', '\0'};
+}  // namespace
+
+Pc2Writer::Pc2Writer(const path& file, int num_points, float start_frame, float sample_rate)
+    : file_(file), num_points_(num_points) {
+  if (num_points < 0) fail(file, 0, "negative number of points");
+  if (!std::isfinite(start_frame) || !std::isfinite(sample_rate))
+    fail(file, 0, "start frame and sample rate must be finite");
+  out_ = std::make_unique<AtomicFile>(file);
+  out_->write(kMagic, 12);
+  put_le<std::int32_t>(*out_, 1);
+  put_le<std::int32_t>(*out_, num_points);
+  put_le<float>(*out_, start_frame);
+  put_le<float>(*out_, sample_rate);
+  put_le<std::int32_t>(*out_, 0);
+}
+
+Pc2Writer::~Pc2Writer() = default;
+
+void Pc2Writer::append(const Eigen::Ref<const Eigen::MatrixXd>& P) {
+  if (!out_) fail(file_, 0, "append after finish()");
+  if (P.rows() != num_points_ || (P.cols() != 3 && P.cols() != 2))
+    fail(file_, 0, "sample " + std::to_string(samples_) + ": expected " +
+                       std::to_string(num_points_) + " x 3 positions, got " +
+                       std::to_string(P.rows()) + " x " + std::to_string(P.cols()));
+  for (Eigen::Index i = 0; i < P.rows(); ++i)
+    for (Eigen::Index c = 0; c < P.cols(); ++c)
+      if (!std::isfinite(P(i, c)) || std::abs(P(i, c)) > FLT_MAX)
+        fail(file_, 0, "sample " + std::to_string(samples_) + " point " + std::to_string(i) +
+                           ": coordinate not finite as float32");
+  std::vector<float> buf(static_cast<std::size_t>(P.rows()) * 3, 0.0f);
+  for (Eigen::Index i = 0; i < P.rows(); ++i)
+    for (Eigen::Index c = 0; c < P.cols(); ++c)
+      buf[static_cast<std::size_t>(3 * i + c)] = static_cast<float>(P(i, c));
+  if constexpr (std::endian::native == std::endian::big) {
+    for (float x : buf) put_le<float>(*out_, x);
+  } else {
+    out_->write(buf.data(), buf.size() * sizeof(float));
+  }
+  ++samples_;
+}
+
+void Pc2Writer::finish() {
+  if (!out_) fail(file_, 0, "finish() called twice");
+  out_->seek(28);
+  put_le<std::int32_t>(*out_, samples_);
+  out_->commit();
+  out_.reset();
+}
+
+PointCache read_pc2(const path& file) {
+  const std::string data = detail::slurp(file);
+  if (data.size() < 32) fail(file, 0, "too short for a PC2 header (32 bytes)");
+  if (std::memcmp(data.data(), kMagic, 12) != 0) fail(file, 0, "not a PC2 file (magic)");
+  const auto version = get_le<std::int32_t>(data, 12);
+  if (version != 1) fail(file, 0, "version " + std::to_string(version) + " (expected 1)");
+  const auto np = get_le<std::int32_t>(data, 16);
+  const auto ns = get_le<std::int32_t>(data, 28);
+  if (np < 0 || ns < 0) fail(file, 0, "negative numPoints or numSamples");
+  const unsigned long long need = 32ull + 12ull * static_cast<unsigned long long>(np) *
+                                              static_cast<unsigned long long>(ns);
+  if (need != data.size())
+    fail(file, 0, "header says " + std::to_string(np) + " points x " + std::to_string(ns) +
+                      " samples (" + std::to_string(need) + " bytes) but the file has " +
+                      std::to_string(data.size()));
+  PointCache pc;
+  pc.start_frame = get_le<float>(data, 20);
+  pc.sample_rate = get_le<float>(data, 24);
+  std::size_t at = 32;
+  for (int s = 0; s < ns; ++s) {
+    Eigen::MatrixXd P(np, 3);
+    for (int i = 0; i < np; ++i)
+      for (int c = 0; c < 3; ++c, at += 4) P(i, c) = static_cast<double>(get_le<float>(data, at));
+    pc.frames.push_back(std::move(P));
+  }
+  return pc;
+}
+
+}  // namespace mbi::io
