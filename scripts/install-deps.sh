@@ -4,13 +4,14 @@
 # Run as root (or with sudo).
 set -euo pipefail
 
+# Only what the build uses: Eigen (interp, sim, pipeline), TetGen and OpenMesh (control meshes,
+# subdivision), stb (PNG), toml11 (scenes), CLI11 (command line), nlohmann-json (reports),
+# Catch2 (tests), Google Benchmark (mbi-bench).
 packages=(
   build-essential cmake ninja-build pkg-config git
-  libeigen3-dev libtet1.5-dev libopenmesh-dev libsuitesparse-dev libtbb-dev
+  libeigen3-dev libtet1.5-dev libopenmesh-dev
   libtoml11-dev libcli11-dev nlohmann-json3-dev libstb-dev
   catch2 libbenchmark-dev
-  libglfw3-dev libegl-dev libgl-dev libegl-mesa0 libglx-mesa0 libgl1-mesa-dri libepoxy-dev
-  libimgui-dev xvfb xauth
 )
 
 missing=()
