@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -260,4 +261,54 @@ TEST_CASE("mbi run writes the outputs of a scene", "[cli]") {
   CHECK(fs::exists(dir / "o" / "dense.pc2"));
   CHECK(fs::exists(dir / "o" / "mesh_0002.obj"));
   CHECK(fs::exists(dir / "o" / "frame_0002.png"));
+}
+
+TEST_CASE("mbi run: a failing simulation step exits 3, keeps the outputs so far, one error line",
+          "[cli]") {
+  TempDir dir("cli");
+  // as in the runner test "a failing simulation step stops the run and keeps what was written":
+  // an absurd force on a soft bar makes the simulator's energy guard fail step 3
+  std::ofstream(dir / "fail.toml") << R"(
+[dense]
+builtin = "paper-bar"
+[control]
+builtin = "paper-bar"
+[material]
+young = 1000
+[simulation]
+frames = 20
+[[constraints]]
+select = { box_relative = { min = [0, 0, 0], max = [1, 1, 0] } }
+[[pokes]]
+first = 3
+last = 20
+point = [0.0, 0.0, 6.0]
+force = [1e15, 0, 0]
+[output]
+every = 2
+)";
+  const fs::path out = dir / "o";
+  const Result r = run_mbi("run " + q(dir / "fail.toml") + " --out " + q(out) + " --quiet", dir);
+  INFO(r.err);
+  CHECK(r.code == 3);
+  // --quiet: stderr holds the error alone, on one line, naming the step and the frames kept
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  CHECK_THAT(r.err, Catch::StartsWith("mbi run: error: ") && Catch::Contains("step 3") &&
+                        Catch::Contains("up to frame 2 kept"));
+  // the outputs of frames 0 to 2 are kept and complete, nothing after them
+  std::ifstream in(out / "metrics.json");
+  REQUIRE(in.good());
+  const nlohmann::json m = nlohmann::json::parse(in);
+  CHECK(m["frames_completed"] == 2);
+  CHECK_THAT(m["failure"].get<std::string>(), Catch::Contains("step 3"));
+  CHECK(mbi::io::read_pc2(out / "dense.pc2").frames.size() == 3);
+  for (int f : {0, 2}) {
+    const mbi::io::SurfaceMesh mesh = mbi::io::read_surface(mbi::io::frame_path(out / "mesh", f, ".obj"));
+    CHECK(mesh.V.allFinite());
+    CHECK(fs::exists(mbi::io::frame_path(out / "control", f, ".vtk")));
+    CHECK(fs::exists(mbi::io::frame_path(out / "frame", f, ".png")));
+  }
+  CHECK_FALSE(fs::exists(mbi::io::frame_path(out / "mesh", 4, ".obj")));
+  for (const auto& e : fs::directory_iterator(out))  // no temporary files left behind
+    CHECK(e.path().filename().string().find(".tmp") == std::string::npos);
 }

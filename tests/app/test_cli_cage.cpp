@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -79,12 +80,16 @@ TEST_CASE("mbi cage writes a containing control mesh and its statistics", "[cli]
   const SurfaceMesh m = read_surface(dense);
   const fs::path err = tmp.dir / "err.txt";
   const std::string base = (tmp.dir / "cage").string();
+  const auto t0 = std::chrono::steady_clock::now();
   REQUIRE(run("cage \"" + dense.string() + "\" --vertices 120 --out \"" + base + "\" --stats \"" +
                   base + ".json\"",
               err) == 0);
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const ControlMesh c = read_tetgen(base);
   REQUIRE(c.dim() == 3);
-  REQUIRE(std::abs(c.U.rows() - 120) <= 36);
+  // cage.hpp: the voxel mesher's vertex count is within 10% of the target, every dihedral angle
+  // >= 30 degrees (>= 45 with cubic cells; test_cage.cpp tells the two apart)
+  REQUIRE(std::abs(c.U.rows() - 120) <= 12);
   REQUIRE(mbi::interp::embed(c.U, c.T, m.V).outside.empty());
   const auto j = nlohmann::json::parse(slurp(base + ".json"));
   for (const char* key : {"vertices", "tetrahedra", "min_dihedral_deg", "outside_points", "seconds"})
@@ -92,8 +97,12 @@ TEST_CASE("mbi cage writes a containing control mesh and its statistics", "[cli]
   REQUIRE(j["vertices"].get<long long>() == c.U.rows());
   REQUIRE(j["tetrahedra"].get<long long>() == c.T.rows());
   REQUIRE(j["outside_points"].get<int>() == 0);
-  REQUIRE(j["min_dihedral_deg"].get<double>() >= 5.0);
-  REQUIRE(j["seconds"].get<double>() >= 0.0);
+  REQUIRE(j["min_dihedral_deg"].get<double>() >= 30.0);
+  // the generation time: finite, within the wall time of the whole command measured here
+  const double seconds = j["seconds"].get<double>();
+  REQUIRE(std::isfinite(seconds));
+  REQUIRE(seconds >= 0.0);
+  REQUIRE(seconds <= wall_s);
   REQUIRE(j["mesher"].get<std::string>() == "voxel");
 
   // Same input, same files.
@@ -115,7 +124,7 @@ TEST_CASE("mbi cage --mesher tetgen", "[cli][cage][tetgen]") {
               err) == 0);
   const ControlMesh c = read_tetgen(base);
   REQUIRE(c.dim() == 3);
-  REQUIRE(std::abs(c.U.rows() - 120) <= 36);
+  REQUIRE(std::abs(c.U.rows() - 120) <= 36);  // cage.hpp: TetGen within 30% of the target
   REQUIRE(mbi::interp::embed(c.U, c.T, m.V).outside.empty());
   const auto j = nlohmann::json::parse(slurp(base + ".json"));
   REQUIRE(j["mesher"].get<std::string>() == "tetgen");

@@ -7,6 +7,9 @@
 
 #include <catch2/catch.hpp>
 
+#include <Eigen/Geometry>
+
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -106,10 +109,63 @@ bool inside_cage(const CageResult& c, const Eigen::RowVectorXd& p) {
   return mbi::interp::embed(c.U, c.T, P).outside.empty();
 }
 
-/// The properties every cage must have, checked independently of the generator's own report.
+/// Smallest angle (degrees) computed here, independently of min_dihedral_angle_deg: 3D from the
+/// outward face normals (dihedral angle = pi - angle between the normals of the two faces at an
+/// edge), 2D from atan2(|cross|, dot) at each corner.
+double smallest_angle_deg(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T) {
+  double best = 180.0;
+  for (Eigen::Index e = 0; e < T.rows(); ++e) {
+    if (U.cols() == 2) {
+      for (int a = 0; a < 3; ++a) {
+        const Eigen::Vector2d p = U.row(T(e, a)).transpose();
+        const Eigen::Vector2d u = U.row(T(e, (a + 1) % 3)).transpose() - p;
+        const Eigen::Vector2d w = U.row(T(e, (a + 2) % 3)).transpose() - p;
+        best = std::min(best, std::atan2(std::abs(u.x() * w.y() - u.y() * w.x()), u.dot(w)) * 180 / M_PI);
+      }
+      continue;
+    }
+    Eigen::Vector3d n[4];  // n[k]: outward unit normal of the face opposite vertex k
+    for (int k = 0; k < 4; ++k) {
+      const Eigen::Vector3d a = U.row(T(e, (k + 1) % 4)).transpose(), b = U.row(T(e, (k + 2) % 4)).transpose(),
+                            c = U.row(T(e, (k + 3) % 4)).transpose(), o = U.row(T(e, k)).transpose();
+      n[k] = (b - a).cross(c - a).normalized();
+      if (n[k].dot(o - a) > 0) n[k] = -n[k];
+    }
+    for (int k = 0; k < 4; ++k)
+      for (int l = k + 1; l < 4; ++l)
+        best = std::min(best, 180.0 - std::acos(std::clamp(n[k].dot(n[l]), -1.0, 1.0)) * 180 / M_PI);
+  }
+  return best;
+}
+
+/// Voxel cages: every element spans exactly one grid cell (its bounding box), and all cells are
+/// the same; returns the cell's edge lengths (d of them).
+Eigen::VectorXd voxel_cell(const CageResult& c) {
+  const int d = c.dim();
+  Eigen::VectorXd cell(d);
+  for (Eigen::Index e = 0; e < c.T.rows(); ++e) {
+    Eigen::VectorXd lo = c.U.row(c.T(e, 0)).transpose(), hi = lo;
+    for (int k = 1; k <= d; ++k) {
+      lo = lo.cwiseMin(c.U.row(c.T(e, k)).transpose());
+      hi = hi.cwiseMax(c.U.row(c.T(e, k)).transpose());
+    }
+    if (e == 0) cell = hi - lo;
+    REQUIRE((hi - lo - cell).cwiseAbs().maxCoeff() <= 1e-9 * cell.maxCoeff());
+  }
+  return cell;
+}
+
+/// The properties every cage must have, checked independently of the generator's own report,
+/// with the bounds that cage.hpp and the README promise:
+///   voxel:  vertex count within 10% of the target (the cell size search prefers such counts);
+///           smallest dihedral angle >= 45 deg with cubic cells, >= 30 deg otherwise, where the
+///           cell aspect ratio is at most 1.6 (2D: smallest triangle angle, same bounds);
+///   TetGen: vertex count within 30% of the target, smallest dihedral angle >= 5 deg.
 void check_cage(const Surf& s, const CageResult& c, int target) {
+  const double angle = smallest_angle_deg(c.U, c.T);
   INFO("target " << target << ": " << c.U.rows() << " vertices, " << c.T.rows()
-                 << " elements, min angle " << c.min_dihedral_deg << ", h " << c.cell_size);
+                 << " elements, min angle " << c.min_dihedral_deg << " (here " << angle << "), h "
+                 << c.cell_size << ", mesher " << mesher_name(c.mesher));
   REQUIRE(c.T.cols() == c.dim() + 1);
   REQUIRE_NOTHROW(mbi::interp::validate_mesh(c.U, c.T));
   for (Eigen::Index e = 0; e < c.T.rows(); ++e)
@@ -118,9 +174,24 @@ void check_cage(const Surf& s, const CageResult& c, int target) {
   const auto emb = mbi::interp::embed(c.U, c.T, P);
   REQUIRE(emb.outside.empty());
   REQUIRE(c.outside_points == 0);
-  REQUIRE(std::abs(c.U.rows() - target) <= 0.3 * target);
-  REQUIRE(c.min_dihedral_deg >= 5.0);
   REQUIRE(c.min_dihedral_deg == Approx(min_dihedral_angle_deg(c.U, c.T)));
+  REQUIRE(angle == Approx(c.min_dihedral_deg).epsilon(1e-9));
+  if (c.mesher == Mesher::Voxel) {
+    CHECK(std::abs(c.U.rows() - target) <= 0.1 * target);
+    const Eigen::VectorXd cell = voxel_cell(c);
+    const double aspect = cell.maxCoeff() / cell.minCoeff();
+    INFO("cell aspect ratio " << aspect);
+    REQUIRE(c.cell_size == Approx(cell.maxCoeff()).epsilon(1e-9));
+    if (aspect <= 1 + 1e-9) {
+      CHECK(angle >= 45.0 - 1e-9);
+    } else {
+      CHECK(aspect <= 1.6 + 1e-9);
+      CHECK(angle >= 30.0);
+    }
+  } else {
+    CHECK(std::abs(c.U.rows() - target) <= 0.3 * target);
+    CHECK(angle >= 5.0);
+  }
   // Every control vertex is used by an element.
   Eigen::VectorXi used = Eigen::VectorXi::Zero(c.U.rows());
   for (Eigen::Index i = 0; i < c.T.size(); ++i) used(c.T.data()[i]) = 1;
