@@ -418,7 +418,7 @@ double Simulator::Impl::assemble_elastic(const Eigen::VectorXd& xe, double cK,
     for (int a = 0; a < 4; ++a)
       for (int b = 0; b < 4; ++b) {
         const int q = el.blk[a][b];
-        if (q >= 0) blocks[q] += warped_tet_block(el.grad, RG, el.lame, scale, a, b);
+        if (q >= 0) add_warped_tet_block(el.grad, RG, el.lame, scale, a, b, blocks[q]);
       }
   }
   return energy;

@@ -99,16 +99,16 @@ inline Eigen::Matrix<double, 3, 4> tet_forces(const Eigen::Matrix<double, 3, 4>&
   return f;
 }
 
-/// Block (a, b) of scale * R K R^T (3 x 3), the warped element stiffness divided by V, where
-/// RG = R G. With scale = V it is the block of warped_tet_stiffness (N/m); K_ab below.
-inline Eigen::Matrix3d warped_tet_block(const Eigen::Matrix<double, 3, 4>& G,
-                                        const Eigen::Matrix<double, 3, 4>& RG, const Lame& lame,
-                                        double scale, int a, int b) {
-  Eigen::Matrix3d B;
-  B.noalias() = (scale * lame.lambda) * RG.col(a) * RG.col(b).transpose();
+/// Adds block (a, b) of scale * R K R^T / V (3 x 3) to B, where RG = R G: with scale = V that
+/// is block (a, b) of warped_tet_stiffness (N/m), K_ab below. Accumulates in place because the
+/// simulator sums it into its global blocks (measured: returning it by value cost ~8% of the
+/// assembly time).
+inline void add_warped_tet_block(const Eigen::Matrix<double, 3, 4>& G,
+                                 const Eigen::Matrix<double, 3, 4>& RG, const Lame& lame,
+                                 double scale, int a, int b, Eigen::Matrix3d& B) {
+  B.noalias() += (scale * lame.lambda) * RG.col(a) * RG.col(b).transpose();
   B.noalias() += (scale * lame.mu) * RG.col(b) * RG.col(a).transpose();
   B.diagonal().array() += scale * lame.mu * G.col(a).dot(G.col(b));
-  return B;
 }
 
 /// Warped element stiffness R K R^T, 12 x 12, N/m (rows 3a..3a+2: corner a).
@@ -118,8 +118,11 @@ inline Eigen::Matrix<double, 12, 12> warped_tet_stiffness(const TetRest& rest, c
   RG.noalias() = R * rest.grad;
   Eigen::Matrix<double, 12, 12> K;
   for (int a = 0; a < 4; ++a)
-    for (int b = 0; b < 4; ++b)
-      K.block<3, 3>(3 * a, 3 * b) = warped_tet_block(rest.grad, RG, lame, rest.volume, a, b);
+    for (int b = 0; b < 4; ++b) {
+      Eigen::Matrix3d B = Eigen::Matrix3d::Zero();
+      add_warped_tet_block(rest.grad, RG, lame, rest.volume, a, b, B);
+      K.block<3, 3>(3 * a, 3 * b) = B;
+    }
   return K;
 }
 
