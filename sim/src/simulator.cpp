@@ -409,7 +409,8 @@ double Simulator::Impl::assemble_elastic(const Eigen::VectorXd& xe, double cK,
     if (vd) {
       Eigen::Matrix<double, 3, 4> vc;
       for (int a = 0; a < 4; ++a) vc.col(a) = vd->segment<3>(3 * el.node[a]);
-      const Eigen::Matrix<double, 3, 4> Kvc = warped_tet_product(el.grad, el.volume, el.lame, R, vc);
+      const Eigen::Matrix<double, 3, 4> Kvc =
+          warped_tet_product(el.grad, el.volume, el.lame, R, vc);
       for (int a = 0; a < 4; ++a) Kvd.segment<3>(3 * el.node[a]) += Kvc.col(a);
     }
     Eigen::Matrix<double, 3, 4> RG;
@@ -887,7 +888,8 @@ Eigen::MatrixXd Simulator::elastic_forces() const {
   std::vector<Eigen::Matrix3d> blocks(s.blk_val.size(), Eigen::Matrix3d::Zero());
   Eigen::VectorXd f, unused;
   s.assemble_elastic(s.x, 0.0, nullptr, s.have_rot, rots, blocks, f, unused);
-  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(f.data(), s.n, 3);
+  using RowMajorN3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+  return Eigen::Map<const RowMajorN3>(f.data(), s.n, 3);
 }
 
 const Eigen::MatrixXd& Simulator::positions() const { return impl_->Xout; }

@@ -128,8 +128,9 @@ inline Eigen::Matrix<double, 12, 12> warped_tet_stiffness(const TetRest& rest, c
 
 /// R K R^T applied to corner vectors v (3 x 4, column a = corner a), without forming the matrix:
 /// V R sigma(R^T v G^T) G with sigma(A) = mu (A + A^T) + lambda tr(A) I. Units: N/m times v's.
-inline Eigen::Matrix<double, 3, 4> warped_tet_product(const Eigen::Matrix<double, 3, 4>& G, double V,
-                                                      const Lame& lame, const Eigen::Matrix3d& R,
+inline Eigen::Matrix<double, 3, 4> warped_tet_product(const Eigen::Matrix<double, 3, 4>& G,
+                                                      double V, const Lame& lame,
+                                                      const Eigen::Matrix3d& R,
                                                       const Eigen::Matrix<double, 3, 4>& v) {
   Eigen::Matrix3d A;  // rest-frame gradient of v
   A.noalias() = R.transpose() * v * G.transpose();
