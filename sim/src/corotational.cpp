@@ -59,21 +59,6 @@ Eigen::Matrix<double, 12, 12> element_matrix(const TetRest& r, DP&& dP) {
   return H;
 }
 
-Eigen::Matrix<double, 12, 12> warped_tet_stiffness(const TetRest& r, const Lame& L,
-                                                    const Eigen::Matrix3d& R) {
-  Eigen::Matrix<double, 3, 4> h;
-  h.noalias() = R * r.grad;
-  Eigen::Matrix<double, 12, 12> K;
-  for (int a = 0; a < 4; ++a)
-    for (int b = 0; b < 4; ++b) {
-      Eigen::Matrix3d B = L.lambda * h.col(a) * h.col(b).transpose();
-      B.noalias() += L.mu * h.col(b) * h.col(a).transpose();
-      B.diagonal().array() += L.mu * r.grad.col(a).dot(r.grad.col(b));
-      K.block<3, 3>(3 * a, 3 * b) = r.volume * B;
-    }
-  return K;
-}
-
 Eigen::SparseMatrix<double> assemble(const Eigen::Ref<const Eigen::MatrixXi>& T, int n,
                                      const std::vector<Eigen::Matrix<double, 12, 12>>& Ke) {
   std::vector<Eigen::Triplet<double>> trip;
@@ -153,20 +138,6 @@ Eigen::Matrix3d rotation(const Eigen::Matrix3d& F) {
   return R;
 }
 
-double corotational_psi(const Eigen::Matrix3d& F, const Eigen::Matrix3d& R, const Lame& L) {
-  // ||S - I||^2 = ||F - R||^2 for F = R S.
-  const double tr = (R.transpose() * F).trace() - 3.0;
-  return L.mu * (F - R).squaredNorm() + 0.5 * L.lambda * tr * tr;
-}
-
-Eigen::Matrix3d corotational_stress(const Eigen::Matrix3d& F, const Eigen::Matrix3d& R,
-                                    const Lame& L) {
-  const double tr = (R.transpose() * F).trace() - 3.0;
-  Eigen::Matrix3d P = 2.0 * L.mu * (F - R);
-  P += L.lambda * tr * R;
-  return P;
-}
-
 TetRest tet_rest(const Eigen::Matrix<double, 3, 4>& C, int element) {
   const std::string who =
       element >= 0 ? "element " + std::to_string(element) : std::string("tetrahedron");
@@ -194,10 +165,6 @@ Eigen::Matrix3d deformation_gradient(const TetRest& rest, const Eigen::Matrix<do
   Eigen::Matrix3d F;
   F.noalias() = X * rest.grad.transpose();
   return F;
-}
-
-Eigen::Matrix<double, 12, 12> linear_tet_stiffness(const TetRest& rest, const Lame& L) {
-  return warped_tet_stiffness(rest, L, Eigen::Matrix3d::Identity());
 }
 
 MeshRest mesh_rest(const Eigen::Ref<const Eigen::MatrixXd>& U,
@@ -262,8 +229,7 @@ Eigen::MatrixXd elastic_forces(const MeshRest& rest, const Eigen::Ref<const Eige
     const TetRest& r = rest.tets[e];
     const Eigen::Matrix3d F = deformation_gradient(r, corners(X, T, static_cast<int>(e)));
     const Eigen::Matrix3d P = corotational_stress(F, rotation(F), rest.lame[e]);
-    Eigen::Matrix<double, 3, 4> fe;
-    fe.noalias() = -r.volume * P * r.grad;
+    const Eigen::Matrix<double, 3, 4> fe = tet_forces(r.grad, r.volume, P);
     for (int a = 0; a < 4; ++a) f.row(T(e, a)) += fe.col(a).transpose();
   }
   return f;

@@ -50,8 +50,9 @@ void check_params(const Parameters& p) {
 
 struct Elem {
   std::array<int, 4> node;
-  Eigen::Matrix<double, 3, 4> grad;
-  double volume, mu, lambda;
+  Eigen::Matrix<double, 3, 4> grad;  // TetRest::grad
+  double volume;
+  Lame lame;
   // blk[a][b]: index of the stored 3x3 node block (rows of node a, columns of node b) when
   // node a >= node b; -1 when block (b, a) is stored instead.
   std::array<std::array<int, 4>, 4> blk;
@@ -198,6 +199,15 @@ struct Simulator::Impl {
   // constrained rows/cols zeroed), and, when vd is non-null, Kv = K_el vd. Returns elastic energy.
   double assemble(const Eigen::VectorXd& xe, double cM, double cK, double cP,
                   const Eigen::VectorXd* vd);
+  // The element loop of assemble(), on caller-owned outputs (so that the const accessors can
+  // run it on copies): element rotations at xe into rots (refined from the values in rots when
+  // warm, else from the closed form), elastic forces into f (resized), cK K_el added to the
+  // lower node blocks `blocks`, and, when vd is non-null, K_el vd into Kvd (resized). Returns
+  // the elastic energy. K_el = sum_e R_e K_e R_e^T, the warped stiffness.
+  double assemble_elastic(const Eigen::VectorXd& xe, double cK, const Eigen::VectorXd* vd,
+                          bool warm, std::vector<Eigen::Matrix3d>& rots,
+                          std::vector<Eigen::Matrix3d>& blocks, Eigen::VectorXd& f,
+                          Eigen::VectorXd& Kvd) const;
   void external_forces();                                   // gravity + point forces -> f_ext
   void add_poke_forces(const Eigen::VectorXd& xe, Eigen::VectorXd& f) const;
   bool solve(std::string& why, int& iterations);            // A delta = r
@@ -228,8 +238,7 @@ void Simulator::Impl::build(const Eigen::Ref<const Eigen::MatrixXd>& U_,
     for (int a = 0; a < 4; ++a) el.node[a] = T(e, a);
     el.grad = rest.tets[e].grad;
     el.volume = rest.tets[e].volume;
-    el.mu = rest.lame[e].mu;
-    el.lambda = rest.lame[e].lambda;
+    el.lame = rest.lame[e];
     total_volume += el.volume;
     const Material& m = per_element.empty() ? material : per_element[e];
     max_E = std::max(max_E, m.youngs_modulus);
@@ -378,56 +387,49 @@ void Simulator::Impl::check_nodes(const std::vector<int>& nodes, const char* wha
   }
 }
 
-double Simulator::Impl::assemble(const Eigen::VectorXd& xe, double cM, double cK, double cP,
-                                 const Eigen::VectorXd* vd) {
-  if (constraints_dirty) update_constraints();
-  std::fill(blk_val.begin(), blk_val.end(), Eigen::Matrix3d::Zero());
-  f_el.setZero(3 * n);
-  if (vd) Kv.setZero(3 * n);
+double Simulator::Impl::assemble_elastic(const Eigen::VectorXd& xe, double cK,
+                                         const Eigen::VectorXd* vd, bool warm,
+                                         std::vector<Eigen::Matrix3d>& rots,
+                                         std::vector<Eigen::Matrix3d>& blocks, Eigen::VectorXd& f,
+                                         Eigen::VectorXd& Kvd) const {
+  f.setZero(3 * n);
+  if (vd) Kvd.setZero(3 * n);
   double energy = 0.0;
   for (const Elem& el : elems) {
     Eigen::Matrix<double, 3, 4> xc;
     for (int a = 0; a < 4; ++a) xc.col(a) = xe.segment<3>(3 * el.node[a]);
     Eigen::Matrix3d F;
     F.noalias() = xc * el.grad.transpose();
-    Eigen::Matrix3d& R = rot[&el - elems.data()];
-    if (!have_rot || !refine_rotation(F, R)) R = rotation(F);
-    Eigen::Matrix3d RtF;
-    RtF.noalias() = R.transpose() * F;
-    const double tr = RtF.trace() - 3.0;
-    energy += el.volume * (el.mu * (F - R).squaredNorm() + 0.5 * el.lambda * tr * tr);
-    Eigen::Matrix3d P = 2.0 * el.mu * (F - R);
-    P += el.lambda * tr * R;
-    Eigen::Matrix<double, 3, 4> fe;
-    fe.noalias() = P * el.grad;
-    for (int a = 0; a < 4; ++a) f_el.segment<3>(3 * el.node[a]) -= el.volume * fe.col(a);
-    Eigen::Matrix<double, 3, 4> h;
-    h.noalias() = R * el.grad;
-
-    if (vd) {  // K_e vd = V R sigma(R^T grad vd) G
+    Eigen::Matrix3d& R = rots[&el - elems.data()];
+    if (!warm || !refine_rotation(F, R)) R = rotation(F);
+    energy += el.volume * corotational_psi(F, R, el.lame);
+    const Eigen::Matrix<double, 3, 4> fe =
+        tet_forces(el.grad, el.volume, corotational_stress(F, R, el.lame));
+    for (int a = 0; a < 4; ++a) f.segment<3>(3 * el.node[a]) += fe.col(a);
+    if (vd) {
       Eigen::Matrix<double, 3, 4> vc;
       for (int a = 0; a < 4; ++a) vc.col(a) = vd->segment<3>(3 * el.node[a]);
-      // R K_e R^T vd: rest-frame velocity gradient Ar = R^T vc G^T, stress sigma(Ar), R sigma G.
-      Eigen::Matrix3d Ar;
-      Ar.noalias() = R.transpose() * vc * el.grad.transpose();
-      Eigen::Matrix3d sig = el.mu * (Ar + Ar.transpose());
-      sig.diagonal().array() += el.lambda * Ar.trace();
-      Eigen::Matrix<double, 3, 4> out;
-      out.noalias() = R * sig * el.grad;
-      for (int a = 0; a < 4; ++a) Kv.segment<3>(3 * el.node[a]) += el.volume * out.col(a);
+      const Eigen::Matrix<double, 3, 4> Kvc =
+          warped_tet_product(el.grad, el.volume, el.lame, R, vc);
+      for (int a = 0; a < 4; ++a) Kvd.segment<3>(3 * el.node[a]) += Kvc.col(a);
     }
-    const double s = cK * el.volume;
+    Eigen::Matrix<double, 3, 4> RG;
+    RG.noalias() = R * el.grad;
+    const double scale = cK * el.volume;
     for (int a = 0; a < 4; ++a)
       for (int b = 0; b < 4; ++b) {
         const int q = el.blk[a][b];
-        if (q < 0) continue;
-        // Block (a, b) = V (lambda h_a h_b^T + mu h_b h_a^T + mu (g_a.g_b) I).
-        Eigen::Matrix3d& B = blk_val[q];
-        B.noalias() += (s * el.lambda) * h.col(a) * h.col(b).transpose();
-        B.noalias() += (s * el.mu) * h.col(b) * h.col(a).transpose();
-        B.diagonal().array() += s * el.mu * el.grad.col(a).dot(el.grad.col(b));
+        if (q >= 0) add_warped_tet_block(el.grad, RG, el.lame, scale, a, b, blocks[q]);
       }
   }
+  return energy;
+}
+
+double Simulator::Impl::assemble(const Eigen::VectorXd& xe, double cM, double cK, double cP,
+                                 const Eigen::VectorXd* vd) {
+  if (constraints_dirty) update_constraints();
+  std::fill(blk_val.begin(), blk_val.end(), Eigen::Matrix3d::Zero());
+  const double energy = assemble_elastic(xe, cK, vd, have_rot, rot, blk_val, f_el, Kv);
   // Pokes: k b_a b_b I on the element's blocks.
   for (const auto& [id, pk] : pokes) {
     const Elem& el = elems[pk.element];
@@ -857,6 +859,39 @@ StaticResult Simulator::solve_static(int max_iterations, double tolerance) {
   return res;
 }
 
+Eigen::SparseMatrix<double> Simulator::stiffness() const {
+  const Impl& s = *impl_;
+  std::vector<Eigen::Matrix3d> rots = s.rot;
+  std::vector<Eigen::Matrix3d> blocks(s.blk_val.size(), Eigen::Matrix3d::Zero());
+  Eigen::VectorXd f, unused;
+  s.assemble_elastic(s.x, 1.0, nullptr, s.have_rot, rots, blocks, f, unused);
+  // Lower node blocks (rows i >= column j) to both triangles.
+  std::vector<Eigen::Triplet<double>> trip;
+  trip.reserve(18 * blocks.size());
+  for (int j = 0; j < s.n; ++j)
+    for (int p = s.blk_outer[j]; p < s.blk_outer[j + 1]; ++p) {
+      const int i = s.blk_row[p];
+      for (int k = 0; k < 3; ++k)
+        for (int l = 0; l < 3; ++l) {
+          trip.emplace_back(3 * i + k, 3 * j + l, blocks[p](k, l));
+          if (i != j) trip.emplace_back(3 * j + l, 3 * i + k, blocks[p](k, l));
+        }
+    }
+  Eigen::SparseMatrix<double> K(3 * s.n, 3 * s.n);
+  K.setFromTriplets(trip.begin(), trip.end());
+  return K;
+}
+
+Eigen::MatrixXd Simulator::elastic_forces() const {
+  const Impl& s = *impl_;
+  std::vector<Eigen::Matrix3d> rots = s.rot;
+  std::vector<Eigen::Matrix3d> blocks(s.blk_val.size(), Eigen::Matrix3d::Zero());
+  Eigen::VectorXd f, unused;
+  s.assemble_elastic(s.x, 0.0, nullptr, s.have_rot, rots, blocks, f, unused);
+  using RowMajorN3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+  return Eigen::Map<const RowMajorN3>(f.data(), s.n, 3);
+}
+
 const Eigen::MatrixXd& Simulator::positions() const { return impl_->Xout; }
 const Eigen::MatrixXd& Simulator::velocities() const { return impl_->Vout; }
 
@@ -911,7 +946,7 @@ double Simulator::elastic_energy() const {
     for (int a = 0; a < 4; ++a) xc.col(a) = s.x.segment<3>(3 * el.node[a]);
     Eigen::Matrix3d F;
     F.noalias() = xc * el.grad.transpose();
-    E += el.volume * corotational_psi(F, rotation(F), Lame{el.mu, el.lambda});
+    E += el.volume * corotational_psi(F, rotation(F), el.lame);
   }
   return E;
 }

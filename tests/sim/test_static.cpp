@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <iostream>
 #include <numeric>
 #include <random>
 
@@ -89,16 +88,32 @@ TEST_CASE("cantilever under gravity converges toward Euler-Bernoulli; co-rotatio
           "linear at small load",
           "[sim][static][cantilever]") {
   // L = 1 m, h = 0.1 m, E = 1e9 Pa: tip deflection ~1.5e-3 L (small load).
+  //
+  // Limit: Euler-Bernoulli plus Timoshenko shear, w_s / w_b = E h^2 / (3 k G L^2) ~ 0.01 for
+  // L / h = 10, nu = 0.3 (k = 5/6), so the 3D answer is ~1.01 EB; displacement-based FEM is
+  // too stiff and approaches it from below.
+  // Coarse meshes: linear tetrahedra in bending carry parasitic shear, the classic locking
+  // model gives tip / EB ~ 1 / (1 + c / n^2) with n elements through the depth and c an O(1)
+  // constant of the element shape and nu. The bands below are that model for c in [2.5, 5]
+  // (n = 2: 0.44-0.62, n = 4: 0.76-0.87, n = 6: 0.88-0.94); the measured ratios fit c ~ 4.
+  // Co-rotational vs linear: at a tip rotation theta ~ 2e-3 rad the geometric non-linearity is
+  // O(theta^2) ~ 4e-6 relative, far below 1e-4.
+  const double c_lo = 2.5, c_hi = 5.0;
   double previous = 0.0;
   for (int cells : {2, 4, 6}) {
     const BeamResult r = cantilever(cells, 1.0, 1e9);
-    std::cout << "cantilever " << cells << "x" << cells << "x" << 10 * cells
-              << " cells: tip/Euler-Bernoulli = " << r.ratio
-              << ", |corot - linear| / linear = " << std::abs(r.corot_tip - r.linear_tip) / r.linear_tip
-              << "\n";
+    const double n2 = cells * cells;
+    const double rel = std::abs(r.corot_tip - r.linear_tip) / r.linear_tip;
+    INFO("cantilever " << cells << "x" << cells << "x" << 10 * cells
+                       << " cells: tip/Euler-Bernoulli = " << r.ratio
+                       << " (locking constant c = " << n2 * (1.0 / r.ratio - 1.0)
+                       << "), |corot - linear| / linear = " << rel);
+    CHECK(r.corot_tip < 2e-3);  // m: small load indeed
     CHECK(r.ratio > previous);  // monotone under refinement
     CHECK(r.ratio < 1.02);      // linear tets are too stiff, never softer than the beam
-    CHECK(std::abs(r.corot_tip - r.linear_tip) < 1e-3 * r.linear_tip);
+    CHECK(r.ratio > n2 / (n2 + c_hi));
+    CHECK(r.ratio < n2 / (n2 + c_lo));
+    CHECK(rel < 1e-4);
     previous = r.ratio;
   }
   CHECK(previous >= 0.85);

@@ -50,12 +50,26 @@ Lame lame(const Material& material, const char* what = "material");
 /// or flat F; S may then have one negative eigenvalue).
 Eigen::Matrix3d rotation(const Eigen::Matrix3d& F);
 
+// The inline kernels below (energy density, stress, element forces, warped element stiffness
+// and its product with a vector) are the only implementation of the model: the mesh functions
+// in corotational.cpp and the Simulator's assembly both call them. Fixed size, no allocation.
+
 /// Energy density psi(F) (J/m^3) given R = rotation(F).
-double corotational_psi(const Eigen::Matrix3d& F, const Eigen::Matrix3d& R, const Lame& lame);
+inline double corotational_psi(const Eigen::Matrix3d& F, const Eigen::Matrix3d& R,
+                               const Lame& lame) {
+  // ||S - I||^2 = ||F - R||^2 for F = R S.
+  const double tr = (R.transpose() * F).trace() - 3.0;
+  return lame.mu * (F - R).squaredNorm() + 0.5 * lame.lambda * tr * tr;
+}
 
 /// First Piola-Kirchhoff stress dpsi/dF (Pa) given R = rotation(F).
-Eigen::Matrix3d corotational_stress(const Eigen::Matrix3d& F, const Eigen::Matrix3d& R,
-                                    const Lame& lame);
+inline Eigen::Matrix3d corotational_stress(const Eigen::Matrix3d& F, const Eigen::Matrix3d& R,
+                                           const Lame& lame) {
+  const double tr = (R.transpose() * F).trace() - 3.0;
+  Eigen::Matrix3d P = 2.0 * lame.mu * (F - R);
+  P += lame.lambda * tr * R;
+  return P;
+}
 
 // ---------------------------------------------------------------- one element
 
@@ -73,9 +87,66 @@ TetRest tet_rest(const Eigen::Matrix<double, 3, 4>& Urest, int element = -1);
 /// Deformation gradient F = Ds Dm^-1 of corners x0..x3 (columns of Xdef).
 Eigen::Matrix3d deformation_gradient(const TetRest& rest, const Eigen::Matrix<double, 3, 4>& Xdef);
 
+// Element kernels take the shape-function gradients G = TetRest::grad (3 x 4, 1/m) and the rest
+// volume V (m^3) directly, so that callers may store them in their own layout.
+
+/// Corner forces (N) of stress P (Pa): column a is f_a = -V P g_a (minus dE_e/dx_a).
+inline Eigen::Matrix<double, 3, 4> tet_forces(const Eigen::Matrix<double, 3, 4>& G, double V,
+                                              const Eigen::Matrix3d& P) {
+  Eigen::Matrix<double, 3, 4> f;
+  f.noalias() = P * G;
+  f *= -V;
+  return f;
+}
+
+/// Adds block (a, b) of scale * R K R^T / V (3 x 3) to B, where RG = R G: with scale = V that
+/// is block (a, b) of warped_tet_stiffness (N/m), K_ab below. Accumulates in place because the
+/// simulator sums it into its global blocks (measured: returning it by value cost ~8% of the
+/// assembly time).
+inline void add_warped_tet_block(const Eigen::Matrix<double, 3, 4>& G,
+                                 const Eigen::Matrix<double, 3, 4>& RG, const Lame& lame,
+                                 double scale, int a, int b, Eigen::Matrix3d& B) {
+  B.noalias() += (scale * lame.lambda) * RG.col(a) * RG.col(b).transpose();
+  B.noalias() += (scale * lame.mu) * RG.col(b) * RG.col(a).transpose();
+  B.diagonal().array() += scale * lame.mu * G.col(a).dot(G.col(b));
+}
+
+/// Warped element stiffness R K R^T, 12 x 12, N/m (rows 3a..3a+2: corner a).
+inline Eigen::Matrix<double, 12, 12> warped_tet_stiffness(const TetRest& rest, const Lame& lame,
+                                                          const Eigen::Matrix3d& R) {
+  Eigen::Matrix<double, 3, 4> RG;
+  RG.noalias() = R * rest.grad;
+  Eigen::Matrix<double, 12, 12> K;
+  for (int a = 0; a < 4; ++a)
+    for (int b = 0; b < 4; ++b) {
+      Eigen::Matrix3d B = Eigen::Matrix3d::Zero();
+      add_warped_tet_block(rest.grad, RG, lame, rest.volume, a, b, B);
+      K.block<3, 3>(3 * a, 3 * b) = B;
+    }
+  return K;
+}
+
+/// R K R^T applied to corner vectors v (3 x 4, column a = corner a), without forming the matrix:
+/// V R sigma(R^T v G^T) G with sigma(A) = mu (A + A^T) + lambda tr(A) I. Units: N/m times v's.
+inline Eigen::Matrix<double, 3, 4> warped_tet_product(const Eigen::Matrix<double, 3, 4>& G,
+                                                      double V, const Lame& lame,
+                                                      const Eigen::Matrix3d& R,
+                                                      const Eigen::Matrix<double, 3, 4>& v) {
+  Eigen::Matrix3d A;  // rest-frame gradient of v
+  A.noalias() = R.transpose() * v * G.transpose();
+  Eigen::Matrix3d sigma = lame.mu * (A + A.transpose());
+  sigma.diagonal().array() += lame.lambda * A.trace();
+  Eigen::Matrix<double, 3, 4> out;
+  out.noalias() = R * sigma * G;
+  out *= V;
+  return out;
+}
+
 /// Rest (linear) element stiffness K, 12 x 12, N/m; block (a, b) couples corners a and b:
 ///   K_ab = V (lambda g_a g_b^T + mu g_b g_a^T + mu (g_a . g_b) I).
-Eigen::Matrix<double, 12, 12> linear_tet_stiffness(const TetRest& rest, const Lame& lame);
+inline Eigen::Matrix<double, 12, 12> linear_tet_stiffness(const TetRest& rest, const Lame& lame) {
+  return warped_tet_stiffness(rest, lame, Eigen::Matrix3d::Identity());
+}
 
 // ---------------------------------------------------------------- assembled mesh
 

@@ -168,6 +168,16 @@ class Simulator {
 
   double kinetic_energy() const;  ///< J
   double elastic_energy() const;  ///< J, co-rotational
+  /// Elastic node forces at the current positions (n x 3, N; minus the gradient of
+  /// elastic_energy()), computed by the same code as in step(). For tests and diagnostics.
+  Eigen::MatrixXd elastic_forces() const;
+  /// Warped stiffness K_el = sum_e R_e K_e R_e^T at the current positions (3n x 3n, N/m,
+  /// symmetric, dof 3 i + c = node i, axis c), assembled by the same code as the matrix of
+  /// step() and solve_static(), without their mass, damping and poke terms and without the
+  /// rows of fixed or kinematic nodes zeroed. It ignores dR/dx: equal to the Hessian of
+  /// elastic_energy() at rigid motions of the rest shape only. For tests and diagnostics
+  /// (allocates; changes no state).
+  Eigen::SparseMatrix<double> stiffness() const;
   /// J, -sum_i m_i g . x_i (zero level at the origin).
   double gravity_energy() const;
   Eigen::Vector3d linear_momentum() const;   ///< kg m/s
