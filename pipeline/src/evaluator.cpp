@@ -2,6 +2,7 @@
 #include <mbi/interp/evaluate.hpp>
 #include <mbi/pipeline/evaluator.hpp>
 
+#include <chrono>
 #include <thread>
 
 namespace mbi::pipeline {
@@ -17,14 +18,15 @@ std::string CpuEvaluator::name() const {
          std::to_string(t) + (t == 1 ? " thread" : " threads");
 }
 
-void CpuEvaluator::set_points(std::shared_ptr<const interp::Embedding> embedding,
-                              const Eigen::MatrixXd& rest_normals) {
+void CpuEvaluator::set_points(const PointSet& points) {
+  const auto& embedding = points.embedding;
+  const Eigen::MatrixXd& rest_normals = points.rest_normals;
   if (!embedding) throw Error("CpuEvaluator: no embedding");
   if (rest_normals.size() != 0 &&
       (rest_normals.rows() != embedding->size() || rest_normals.cols() != embedding->dim()))
     throw Error("CpuEvaluator: rest normals must be " + std::to_string(embedding->size()) + " x " +
                 std::to_string(embedding->dim()));
-  embedding_ = std::move(embedding);
+  embedding_ = embedding;
   rest_normals_ = rest_normals;
   rest_normals_f_ = rest_normals.cast<float>();
 }
@@ -33,6 +35,7 @@ void CpuEvaluator::evaluate(const interp::BezierPoints& B, bool normals) {
   if (!embedding_) throw Error("CpuEvaluator: evaluate() before set_points()");
   if (normals && rest_normals_.size() == 0)
     throw Error("CpuEvaluator: normals asked for, but no rest normals were given");
+  const auto t0 = std::chrono::steady_clock::now();
   if (precision_ == Precision::Double) {
     if (normals)
       interp::evaluate<double>(B, *embedding_, rest_normals_, positions_, normals_, threads_);
@@ -47,6 +50,9 @@ void CpuEvaluator::evaluate(const interp::BezierPoints& B, bool normals) {
     stale_ = true;
   }
   if (!normals && precision_ == Precision::Double) normals_.resize(0, 0);
+  timings_.upload_ms = 0;  // nothing to upload: the kernel reads B where it is
+  timings_.pass_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
 const Eigen::MatrixXd& CpuEvaluator::positions() {

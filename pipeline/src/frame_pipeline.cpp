@@ -102,7 +102,13 @@ FramePipeline::FramePipeline(const Eigen::Ref<const Eigen::MatrixXd>& U,
   s.driver = std::move(driver);
   s.options = options;
   s.evaluator = evaluator ? std::move(evaluator) : std::make_unique<CpuEvaluator>();
-  s.evaluator->set_points(s.embedding, rest_normals);
+  PointSet points;
+  points.embedding = s.embedding;
+  points.rest_bezier = interp::bezier_bi(s.U, s.T);
+  points.rest_positions = s.embedding->size() > 0 ? interp::embedded_positions(s.U, s.T, *s.embedding)
+                                                  : Eigen::MatrixXd(0, d);
+  points.rest_normals = rest_normals;
+  s.evaluator->set_points(points);
   s.X = s.U;
   if (needs_solve(options.method) && !s.driver->solved_M()) s.get_solver();
 }
@@ -182,6 +188,14 @@ void FramePipeline::evaluate_with(Method method, Eigen::MatrixXd& out) {
                                      ? interp::bezier_bi(s.X, s.T)
                                      : interp::bezier_points(s.U, s.T, s.X, s.mbi_M());
   interp::evaluate<double>(B, *s.embedding, out);
+}
+
+interp::BezierPoints FramePipeline::bezier_with(Method method) {
+  Impl& s = *impl_;
+  if (s.frame < 0) throw Error("FramePipeline: bezier_with() before the first step()");
+  if (method == s.options.method) return s.B;
+  return method == Method::BI ? interp::bezier_bi(s.X, s.T)
+                              : interp::bezier_points(s.U, s.T, s.X, s.mbi_M());
 }
 
 Method FramePipeline::method() const { return impl_->options.method; }

@@ -11,15 +11,31 @@
 
 namespace mbi::pipeline {
 
+/// What an evaluator gets once per embedding (FramePipeline fills it).
+struct PointSet {
+  std::shared_ptr<const interp::Embedding> embedding;  ///< element + barycentric coordinates
+  /// Bezier points of the rest pose (BI of the rest control mesh): an evaluator may evaluate the
+  /// displacement B - rest_bezier and add it to rest_positions, so that float evaluation keeps
+  /// its accuracy wherever the model sits in space and reproduces the rest pose exactly.
+  interp::BezierPoints rest_bezier;
+  Eigen::MatrixXd rest_positions;  ///< p x d, the dense rest points
+  Eigen::MatrixXd rest_normals;    ///< p x d unit normals, or empty (no normals)
+};
+
+/// Time of the last evaluate(), as the evaluator measured it (ms): uploading the frame's data
+/// and the evaluation pass itself (a GPU pass: timer query, or a CPU clock around glFinish).
+struct EvaluatorTimings {
+  double upload_ms = 0;
+  double pass_ms = 0;
+};
+
 class Evaluator {
  public:
   virtual ~Evaluator() = default;
   /// Short description for logs and HUDs, e.g. "cpu double, 2 threads".
   virtual std::string name() const = 0;
-  /// Static per-point data, once per embedding: element ids and barycentric coordinates, and
-  /// unit rest normals (p x d) when normals will be asked for (else empty).
-  virtual void set_points(std::shared_ptr<const interp::Embedding> embedding,
-                          const Eigen::MatrixXd& rest_normals) = 0;
+  /// Static per-point data, once per embedding.
+  virtual void set_points(const PointSet& points) = 0;
   /// Evaluates every point from B ((m K) x d, interp::BezierPoints layout); normals too when
   /// `normals` is true (needs rest normals from set_points).
   virtual void evaluate(const interp::BezierPoints& B, bool normals) = 0;
@@ -27,6 +43,8 @@ class Evaluator {
   /// here, only when asked.
   virtual const Eigen::MatrixXd& positions() = 0;
   virtual const Eigen::MatrixXd& normals() = 0;
+  /// Upload and pass times of the last evaluate().
+  virtual EvaluatorTimings timings() const = 0;
 };
 
 enum class Precision { Float, Double };
@@ -37,11 +55,11 @@ class CpuEvaluator final : public Evaluator {
  public:
   explicit CpuEvaluator(Precision precision = Precision::Double, int threads = 0);
   std::string name() const override;
-  void set_points(std::shared_ptr<const interp::Embedding> embedding,
-                  const Eigen::MatrixXd& rest_normals) override;
+  void set_points(const PointSet& points) override;
   void evaluate(const interp::BezierPoints& B, bool normals) override;
   const Eigen::MatrixXd& positions() override;
   const Eigen::MatrixXd& normals() override;
+  EvaluatorTimings timings() const override { return timings_; }
 
  private:
   Precision precision_;
@@ -50,6 +68,7 @@ class CpuEvaluator final : public Evaluator {
   Eigen::MatrixXd rest_normals_, positions_, normals_;
   Eigen::MatrixXf rest_normals_f_, positions_f_, normals_f_;
   bool stale_ = false;  // float results not yet widened
+  EvaluatorTimings timings_;
 };
 
 }  // namespace mbi::pipeline

@@ -78,6 +78,9 @@ class FramePipeline {
   /// The current frame's dense positions with another method (CPU, double): comparison
   /// pictures and metrics. For the pipeline's own method it returns positions().
   void evaluate_with(Method method, Eigen::MatrixXd& out);
+  /// The current frame's Bezier points with another method (for evaluating it elsewhere, e.g.
+  /// a picture's second panel on the GPU).
+  interp::BezierPoints bezier_with(Method method);
 
   // --------------------------------------------------------------- settings
   Method method() const;

@@ -1,0 +1,40 @@
+#pragma once
+// Offscreen renderer: the dense mesh straight from a GpuEvaluator's buffers (rest + displacement,
+// the evaluator's analytic normals; nothing goes through the CPU), shaded under a headlight, with
+// an optional control-mesh wireframe, into an RGB image. The camera is the CPU rasteriser's
+// orthographic raster::View, so GPU and CPU pictures frame the same region.
+#include <mbi/gpu/evaluator.hpp>
+#include <mbi/io/image.hpp>
+#include <mbi/raster/raster.hpp>
+
+namespace mbi::gpu {
+
+class Renderer {
+ public:
+  /// Needs `context` current whenever a member is called. Throws GlError.
+  explicit Renderer(Context& context);
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  /// The dense mesh's triangles (t x 3 indices into the evaluator's points), once.
+  void set_faces(const Eigen::Ref<const Eigen::MatrixXi>& F);
+
+  /// Renders the evaluator's last pass (3D, evaluated with normals) seen through `view` into a
+  /// width x height picture (white background). `wire_X` (n x 3 control positions) with
+  /// `wire_T` (m x 4) adds the control mesh's edges in dark grey.
+  io::Image render(const GpuEvaluator& evaluator, const raster::View& view, int width, int height,
+                   const Eigen::Vector3d& color = {0.85, 0.62, 0.35},
+                   const Eigen::MatrixXd* wire_X = nullptr, const Eigen::MatrixXi* wire_T = nullptr);
+
+ private:
+  void ensure_target(int width, int height);
+  Context& context_;
+  unsigned mesh_program_ = 0, line_program_ = 0, vao_ = 0, index_ = 0;
+  long long indices_ = 0;
+  unsigned line_vao_ = 0, line_buffer_ = 0;
+  unsigned fbo_ = 0, color_ = 0, depth_ = 0;
+  int width_ = 0, height_ = 0;
+};
+
+}  // namespace mbi::gpu

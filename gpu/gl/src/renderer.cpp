@@ -1,0 +1,185 @@
+#include <mbi/gpu/renderer.hpp>
+
+#include "gl_util.hpp"
+#include "shaders.hpp"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <set>
+#include <utility>
+
+namespace mbi::gpu {
+namespace {
+
+// The rasteriser's orthographic framing (raster.cpp, Projector) as a matrix acting on positions
+// relative to `origin`: clip x, y from the screen mapping, z from the depth range of the bounds.
+Eigen::Matrix4f view_projection(const raster::View& v, int w, int h, const Eigen::Vector3d& origin) {
+  const Eigen::Vector3d fwd = v.direction.normalized();
+  const Eigen::Vector3d right = fwd.cross(v.up).normalized();
+  const Eigen::Vector3d up = right.cross(fwd);
+  double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300, z0 = 1e300, z1 = -1e300;
+  for (int c = 0; c < 8; ++c) {
+    const Eigen::Vector3d p((c & 1) ? v.bounds_max.x() : v.bounds_min.x(),
+                            (c & 2) ? v.bounds_max.y() : v.bounds_min.y(),
+                            (c & 4) ? v.bounds_max.z() : v.bounds_min.z());
+    x0 = std::min(x0, p.dot(right)), x1 = std::max(x1, p.dot(right));
+    y0 = std::min(y0, p.dot(up)), y1 = std::max(y1, p.dot(up));
+    z0 = std::min(z0, p.dot(fwd)), z1 = std::max(z1, p.dot(fwd));
+  }
+  const double sx = (x1 - x0) * (1 + 2 * v.margin), sy = (y1 - y0) * (1 + 2 * v.margin);
+  const double scale = std::min(w / std::max(sx, 1e-300), h / std::max(sy, 1e-300));
+  const double cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1);
+  const double pad = 0.5 * std::max(z1 - z0, 1e-12);  // geometry slightly outside the bounds
+  z0 -= pad, z1 += pad;
+  Eigen::Matrix4d M = Eigen::Matrix4d::Zero();
+  M.block<1, 3>(0, 0) = (2 * scale / w) * right.transpose();
+  M(0, 3) = 2 * scale / w * (origin.dot(right) - cx);
+  M.block<1, 3>(1, 0) = (2 * scale / h) * up.transpose();
+  M(1, 3) = 2 * scale / h * (origin.dot(up) - cy);
+  M.block<1, 3>(2, 0) = (2 / (z1 - z0)) * fwd.transpose();
+  M(2, 3) = 2 * (origin.dot(fwd) - z0) / (z1 - z0) - 1;
+  M(3, 3) = 1;
+  return M.cast<float>();
+}
+
+}  // namespace
+
+Renderer::Renderer(Context& context) : context_(context) {
+  mesh_program_ = detail::program("", shaders::mesh_vs, shaders::mesh_fs);
+  line_program_ = detail::program("", shaders::line_vs, shaders::line_fs);
+  glGenVertexArrays(1, &vao_);
+  glGenVertexArrays(1, &line_vao_);
+  glGenBuffers(1, &index_);
+  glGenBuffers(1, &line_buffer_);
+  detail::check("Renderer");
+}
+
+Renderer::~Renderer() {
+  const GLuint buffers[] = {index_, line_buffer_};
+  for (GLuint b : buffers)
+    if (b) glDeleteBuffers(1, &b);
+  const GLuint vaos[] = {vao_, line_vao_};
+  for (GLuint a : vaos)
+    if (a) glDeleteVertexArrays(1, &a);
+  if (fbo_) glDeleteFramebuffers(1, &fbo_);
+  const GLuint rbs[] = {color_, depth_};
+  for (GLuint r : rbs)
+    if (r) glDeleteRenderbuffers(1, &r);
+  if (mesh_program_) glDeleteProgram(mesh_program_);
+  if (line_program_) glDeleteProgram(line_program_);
+}
+
+void Renderer::set_faces(const Eigen::Ref<const Eigen::MatrixXi>& F) {
+  if (F.cols() != 3 && F.rows() > 0) throw GlError("Renderer: faces must be t x 3");
+  std::vector<GLuint> idx(static_cast<size_t>(F.rows()) * 3);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      if (F(f, k) < 0) throw GlError("Renderer: negative face index");
+      idx[3 * static_cast<size_t>(f) + static_cast<size_t>(k)] = static_cast<GLuint>(F(f, k));
+    }
+  glBindVertexArray(vao_);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, index_);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(idx.size() * sizeof(GLuint)),
+               idx.empty() ? nullptr : idx.data(), GL_STATIC_DRAW);
+  glBindVertexArray(0);
+  indices_ = static_cast<long long>(idx.size());
+  detail::check("Renderer::set_faces");
+}
+
+void Renderer::ensure_target(int width, int height) {
+  if (width == width_ && height == height_ && fbo_) return;
+  if (!fbo_) {
+    glGenFramebuffers(1, &fbo_);
+    glGenRenderbuffers(1, &color_);
+    glGenRenderbuffers(1, &depth_);
+  }
+  glBindRenderbuffer(GL_RENDERBUFFER, color_);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, width, height);
+  glBindRenderbuffer(GL_RENDERBUFFER, depth_);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, width, height);
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color_);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_);
+  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw GlError("Renderer: incomplete framebuffer of " + std::to_string(width) + " x " + std::to_string(height));
+  width_ = width;
+  height_ = height;
+}
+
+io::Image Renderer::render(const GpuEvaluator& ev, const raster::View& view, int width, int height,
+                           const Eigen::Vector3d& color, const Eigen::MatrixXd* wire_X,
+                           const Eigen::MatrixXi* wire_T) {
+  if (width < 1 || height < 1 || width > 16384 || height > 16384)
+    throw GlError("Renderer: picture size " + std::to_string(width) + " x " + std::to_string(height) +
+                  " out of range [1, 16384]");
+  if (ev.dim() != 3 || !ev.has_normals())
+    throw GlError("Renderer: needs a 3D evaluation with normals");
+  ensure_target(width, height);
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
+  glViewport(0, 0, width, height);
+  glClearColor(1, 1, 1, 1);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  const Eigen::Matrix4f vp = view_projection(view, width, height, ev.origin());
+  const Eigen::Vector3f eye = view.direction.normalized().cast<float>();
+
+  glUseProgram(mesh_program_);
+  glUniformMatrix4fv(glGetUniformLocation(mesh_program_, "view_projection"), 1, GL_FALSE, vp.data());
+  glUniform3f(glGetUniformLocation(mesh_program_, "color"), static_cast<float>(color.x()),
+              static_cast<float>(color.y()), static_cast<float>(color.z()));
+  glUniform3f(glGetUniformLocation(mesh_program_, "eye_direction"), eye.x(), eye.y(), eye.z());
+  glBindVertexArray(vao_);
+  const GLuint sources[3] = {ev.rest_buffer(), ev.displacement_buffer(), ev.normal_buffer()};
+  for (GLuint loc = 0; loc < 3; ++loc) {
+    glBindBuffer(GL_ARRAY_BUFFER, sources[loc]);
+    glEnableVertexAttribArray(loc);
+    glVertexAttribPointer(loc, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+  }
+  glEnable(GL_POLYGON_OFFSET_FILL);
+  glPolygonOffset(1.0f, 1.0f);
+  glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(indices_), GL_UNSIGNED_INT, nullptr);
+  glDisable(GL_POLYGON_OFFSET_FILL);
+
+  if (wire_X && wire_T && wire_T->cols() == 4) {
+    std::set<std::pair<int, int>> edges;
+    for (Eigen::Index e = 0; e < wire_T->rows(); ++e)
+      for (int a = 0; a < 4; ++a)
+        for (int b = a + 1; b < 4; ++b)
+          edges.insert(std::minmax((*wire_T)(e, a), (*wire_T)(e, b)));
+    std::vector<float> lines;
+    lines.reserve(edges.size() * 6);
+    for (const auto& [a, b] : edges)
+      for (int v : {a, b})
+        for (int c = 0; c < 3; ++c) lines.push_back(static_cast<float>((*wire_X)(v, c) - ev.origin()(c)));
+    glUseProgram(line_program_);
+    glUniformMatrix4fv(glGetUniformLocation(line_program_, "view_projection"), 1, GL_FALSE, vp.data());
+    glUniform3f(glGetUniformLocation(line_program_, "color"), 0.16f, 0.16f, 0.16f);
+    glBindVertexArray(line_vao_);
+    glBindBuffer(GL_ARRAY_BUFFER, line_buffer_);
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(lines.size() * sizeof(float)), lines.data(), GL_STREAM_DRAW);
+    glEnableVertexAttribArray(0);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+    glDrawArrays(GL_LINES, 0, static_cast<GLsizei>(lines.size() / 3));
+  }
+  glBindVertexArray(0);
+  glUseProgram(0);
+  glDisable(GL_DEPTH_TEST);
+
+  std::vector<std::uint8_t> rgba(static_cast<size_t>(width) * height * 4);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  detail::check("Renderer::render");
+  io::Image img(width, height);
+  for (int y = 0; y < height; ++y)  // GL rows start at the bottom
+    for (int x = 0; x < width; ++x) {
+      const std::uint8_t* s = rgba.data() + (static_cast<size_t>(height - 1 - y) * width + x) * 4;
+      std::uint8_t* d = img.at(x, y);
+      d[0] = s[0], d[1] = s[1], d[2] = s[2];
+    }
+  return img;
+}
+
+}  // namespace mbi::gpu

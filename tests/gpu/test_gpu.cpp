@@ -1,0 +1,230 @@
+// The GPU transform-feedback evaluator and renderer against the CPU evaluator (independent
+// kernel, double), on Mesa llvmpipe in CI: positions and normals, BI and modified-BI, 2D and 3D,
+// small meshes and 1M points, far from the origin, split into several draws; and pictures.
+#include <catch2/catch.hpp>
+
+#include <mbi/generate/procedural.hpp>
+#include <mbi/gpu/renderer.hpp>
+#include <mbi/interp.hpp>
+#include <mbi/pipeline/frame_pipeline.hpp>
+
+#include "common/grid_meshes.hpp"
+
+#include <cstdlib>
+#include <random>
+
+using namespace mbi;
+namespace pl = mbi::pipeline;
+
+namespace {
+
+gpu::Context& context() {
+  static std::unique_ptr<gpu::Context> c = gpu::Context::headless();  // CI has llvmpipe: no skip
+  c->make_current();
+  return *c;
+}
+
+Eigen::MatrixXd points_in(const Eigen::MatrixXd& U, long long p, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uni(0.01, 0.99);
+  const Eigen::RowVectorXd lo = U.colwise().minCoeff(), hi = U.colwise().maxCoeff();
+  Eigen::MatrixXd P(p, U.cols());
+  for (long long i = 0; i < p; ++i)
+    for (Eigen::Index c = 0; c < U.cols(); ++c) P(i, c) = lo(c) + uni(rng) * (hi(c) - lo(c));
+  return P;
+}
+
+Eigen::MatrixXd unit_rows(Eigen::Index p, int d, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g;
+  Eigen::MatrixXd N(p, d);
+  for (Eigen::Index i = 0; i < p; ++i)
+    for (int c = 0; c < d; ++c) N(i, c) = g(rng);
+  N.rowwise().normalize();
+  return N;
+}
+
+Eigen::MatrixXd deform(const Eigen::MatrixXd& U) {
+  if (U.cols() == 3) return test::twist_bend(U, 1.3, 0.4);
+  Eigen::MatrixXd X = U;
+  for (Eigen::Index i = 0; i < U.rows(); ++i) {
+    X(i, 0) += 0.3 * std::sin(1.7 * U(i, 1));
+    X(i, 1) += 0.2 * U(i, 0) * U(i, 0);
+  }
+  return X;
+}
+
+struct Pair {
+  pl::FramePipeline cpu, gpu;
+};
+
+// The same frame on the CPU (double) and the GPU, with normals.
+Pair pipelines(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T, const Eigen::MatrixXd& P,
+               const Eigen::MatrixXd& X, pl::Method method, const gpu::GpuOptions& go = {}) {
+  const Eigen::MatrixXd N = unit_rows(P.rows(), static_cast<int>(U.cols()), 5);
+  pl::PipelineOptions o;
+  o.method = method;
+  o.normals = true;
+  auto drv = [&] {
+    auto d = std::make_unique<pl::GivenDriver>(U);
+    d->set(X);
+    return d;
+  };
+  const interp::Embedding emb = interp::embed(U, T, P);
+  return {pl::FramePipeline(U, T, emb, drv(), o, nullptr, N),
+          pl::FramePipeline(U, T, emb, drv(), o, std::make_unique<gpu::GpuEvaluator>(context(), go), N)};
+}
+
+double max_abs(const Eigen::MatrixXd& A) { return A.size() ? A.cwiseAbs().maxCoeff() : 0.0; }
+
+double extent(const Eigen::MatrixXd& P) { return (P.colwise().maxCoeff() - P.colwise().minCoeff()).norm(); }
+
+}  // namespace
+
+TEST_CASE("gpu: a headless context exists (llvmpipe in CI) and reports its renderer", "[gpu]") {
+  gpu::Context& c = context();
+  INFO("renderer: " << c.renderer() << ", version " << c.version());
+  CHECK_FALSE(c.renderer().empty());
+  CHECK(c.dummy_framebuffer() != 0);
+}
+
+TEST_CASE("gpu: positions and normals equal the CPU evaluator, BI and modified-BI, 2D and 3D", "[gpu]") {
+  for (int d : {2, 3}) {
+    const test::Mesh m = d == 3 ? test::box_tet_mesh(5, 2, 2, Eigen::Vector3d(2.5, 1, 1))
+                                : test::square_tri_mesh(6, 4, Eigen::Vector2d(3, 2));
+    const Eigen::MatrixXd P = points_in(m.U, 5000, 3);
+    const Eigen::MatrixXd X = deform(m.U);
+    for (pl::Method method : {pl::Method::BI, pl::Method::ModifiedBI}) {
+      INFO("d = " << d << ", method " << pl::method_name(method));
+      Pair p = pipelines(m.U, m.T, P, X, method);
+      REQUIRE(p.cpu.step().ok);
+      REQUIRE(p.gpu.step().ok);
+      auto& ev = dynamic_cast<gpu::GpuEvaluator&>(p.gpu.evaluator());
+      CHECK(ev.primitives_written() == P.rows());  // a silent empty capture fails here
+      const double size = extent(p.cpu.positions());
+      CHECK(max_abs(p.gpu.positions() - p.cpu.positions()) <= 1e-5 * size);
+      CHECK(max_abs(p.gpu.normals() - p.cpu.normals()) <= 1e-5);
+      CHECK(p.gpu.normals().rows() == P.rows());
+    }
+  }
+}
+
+TEST_CASE("gpu: at rest the positions are the input (BI exactly, modified-BI to round-off)", "[gpu]") {
+  const test::Mesh m = test::box_tet_mesh(3, 2, 2);
+  const Eigen::MatrixXd P = points_in(m.U, 1000, 7);
+  for (pl::Method method : {pl::Method::BI, pl::Method::ModifiedBI}) {
+    Pair p = pipelines(m.U, m.T, P, m.U, method);
+    REQUIRE(p.gpu.step().ok);
+    const Eigen::MatrixXd rest = interp::embedded_positions(m.U, m.T, interp::embed(m.U, m.T, P));
+    if (method == pl::Method::BI)
+      CHECK(max_abs(p.gpu.positions() - rest) == 0);
+    else
+      CHECK(max_abs(p.gpu.positions() - rest) <= 1e-12);
+  }
+}
+
+TEST_CASE("gpu: a model 1e4 units from the origin keeps its accuracy", "[gpu]") {
+  test::Mesh m = test::box_tet_mesh(4, 2, 2, Eigen::Vector3d(2, 1, 1));
+  const Eigen::MatrixXd P0 = points_in(m.U, 3000, 9);
+  const Eigen::MatrixXd X0 = deform(m.U);
+  const Eigen::RowVector3d offset(1e4, -1e4, 1e4);
+  const Eigen::MatrixXd U = m.U.rowwise() + offset, P = P0.rowwise() + offset, X = X0.rowwise() + offset;
+  Pair p = pipelines(U, m.T, P, X, pl::Method::ModifiedBI);
+  REQUIRE(p.cpu.step().ok);
+  REQUIRE(p.gpu.step().ok);
+  const double size = extent(P0);
+  INFO("error / size = " << max_abs(p.gpu.positions() - p.cpu.positions()) / size);
+  CHECK(max_abs(p.gpu.positions() - p.cpu.positions()) <= 1e-5 * size);
+  CHECK(max_abs(p.gpu.normals() - p.cpu.normals()) <= 1e-5);
+}
+
+TEST_CASE("gpu: a pass split into several draws equals the unsplit pass", "[gpu]") {
+  const test::Mesh m = test::box_tet_mesh(4, 3, 2);
+  const Eigen::MatrixXd P = points_in(m.U, 10007, 11);
+  const Eigen::MatrixXd X = deform(m.U);
+  gpu::GpuOptions split;
+  split.chunk_points = 1000;
+  Pair a = pipelines(m.U, m.T, P, X, pl::Method::ModifiedBI);
+  Pair b = pipelines(m.U, m.T, P, X, pl::Method::ModifiedBI, split);
+  REQUIRE(a.gpu.step().ok);
+  REQUIRE(b.gpu.step().ok);
+  CHECK(dynamic_cast<gpu::GpuEvaluator&>(a.gpu.evaluator()).draws() == 1);
+  CHECK(dynamic_cast<gpu::GpuEvaluator&>(b.gpu.evaluator()).draws() == 11);
+  CHECK(dynamic_cast<gpu::GpuEvaluator&>(b.gpu.evaluator()).primitives_written() == P.rows());
+  CHECK(max_abs(a.gpu.positions() - b.gpu.positions()) == 0);
+  CHECK(max_abs(a.gpu.normals() - b.gpu.normals()) == 0);
+}
+
+TEST_CASE("gpu: one million points equal the CPU evaluator", "[gpu][large]") {
+  const test::Mesh m = test::box_tet_mesh(8, 7, 7);  // 448 control vertices
+  const Eigen::MatrixXd P = points_in(m.U, 1000000, 13);
+  const Eigen::MatrixXd X = deform(m.U);
+  Pair p = pipelines(m.U, m.T, P, X, pl::Method::ModifiedBI);
+  REQUIRE(p.cpu.step().ok);
+  REQUIRE(p.gpu.step().ok);
+  auto& ev = dynamic_cast<gpu::GpuEvaluator&>(p.gpu.evaluator());
+  CHECK(ev.primitives_written() == 1000000);
+  const double size = extent(p.cpu.positions());
+  CHECK(max_abs(p.gpu.positions() - p.cpu.positions()) <= 1e-5 * size);
+  CHECK(max_abs(p.gpu.normals() - p.cpu.normals()) <= 1e-5);
+  CHECK(p.gpu.timings().evaluate_ms > 0);
+}
+
+TEST_CASE("gpu: no context when disabled; the reason is said", "[gpu]") {
+  ::setenv("MBI_GL", "none", 1);
+  CHECK_THROWS_WITH(gpu::Context::headless(), Catch::Contains("MBI_GL=none"));
+  ::unsetenv("MBI_GL");
+}
+
+TEST_CASE("gpu: the offscreen render of the twisted bar is framed and BI differs from modified-BI", "[gpu][render]") {
+  Eigen::MatrixXd U, V;
+  Eigen::MatrixXi T, F;
+  generate::paper_bar_control(U, T);
+  generate::paper_bar_surface(V, F);
+  const Eigen::MatrixXd X = generate::twist_bend(U, 0, 0, 0, 6, std::acos(-1.0) / 2, 0.05);
+  // rest vertex normals (area weighted)
+  Eigen::MatrixXd N = Eigen::MatrixXd::Zero(V.rows(), 3);
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const Eigen::Vector3d a = V.row(F(f, 0)), b = V.row(F(f, 1)), c = V.row(F(f, 2));
+    const Eigen::RowVector3d n = (b - a).cross(c - a).transpose();
+    for (int k = 0; k < 3; ++k) N.row(F(f, k)) += n;
+  }
+  N.rowwise().normalize();
+  pl::PipelineOptions o;
+  o.normals = true;
+  auto driver = std::make_unique<pl::GivenDriver>(U);
+  driver->set(X);
+  auto evaluator = std::make_unique<gpu::GpuEvaluator>(context());
+  gpu::GpuEvaluator& ev = *evaluator;
+  pl::FramePipeline pipe(U, T, interp::embed(U, T, V), std::move(driver), o, std::move(evaluator), N);
+  REQUIRE(pipe.step().ok);
+  gpu::Renderer r(context());
+  r.set_faces(F);
+  raster::View view = raster::frame_points(X, Eigen::Vector3d(-1, -0.6, -0.8), Eigen::Vector3d(0, 1, 0));
+  const int w = 320, h = 240;
+  const io::Image mbi_img = r.render(ev, view, w, h);
+  pipe.set_method(pl::Method::BI);
+  pipe.evaluate();
+  const io::Image bi_img = r.render(ev, view, w, h, {0.85, 0.62, 0.35}, &X, &T);
+  pipe.set_method(pl::Method::ModifiedBI);
+  for (const io::Image* img : {&mbi_img, &bi_img}) {
+    long long covered = 0, border = 0;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const auto* px = img->at(x, y);
+        const bool bg = px[0] == 255 && px[1] == 255 && px[2] == 255;
+        if (!bg) {
+          ++covered;
+          if (x == 0 || y == 0 || x == w - 1 || y == h - 1) ++border;
+        }
+      }
+    const double frac = double(covered) / (w * h);
+    INFO("covered fraction " << frac);
+    CHECK(frac > 0.1);   // the object is there
+    CHECK(frac < 0.9);   // and framed with a margin
+    CHECK(border == 0);  // touching no border
+  }
+  long long differ = 0;
+  for (size_t i = 0; i < mbi_img.rgb.size(); ++i) differ += mbi_img.rgb[i] != bi_img.rgb[i];
+  CHECK(differ > 1000);  // BI's creases (and the wireframe) show
+}
