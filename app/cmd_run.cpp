@@ -1,4 +1,5 @@
-// mbi run SCENE [--out DIR] [--frames N] [--mesh FILE] [--method bi|modified-bi] [--force]
+// mbi run SCENE [--out DIR] [--frames N] [--mesh FILE] [--method bi|modified-bi] [--gpu auto|on|off]
+//         [--force] [--quiet]
 #include "commands.hpp"
 
 #include <mbi/scenes/report.hpp>
@@ -14,7 +15,7 @@ namespace mbi::cli {
 namespace {
 
 struct RunArgs {
-  std::string scene, out, mesh, method;
+  std::string scene, out, mesh, method, gpu;
   int frames = 0;
   bool force = false, quiet = false;
 };
@@ -26,6 +27,10 @@ int run_run(const RunArgs& a) {
   o.frames = a.frames;
   o.mesh = a.mesh;
   if (!a.method.empty()) o.method = pipeline::parse_method(a.method);
+  if (a.gpu == "auto") o.gpu = scenes::GpuUse::Auto;
+  if (a.gpu == "on") o.gpu = scenes::GpuUse::On;
+  if (a.gpu == "off") o.gpu = scenes::GpuUse::Off;
+  o.warn = [](const std::string& s) { std::fprintf(stderr, "mbi run: %s\n", s.c_str()); };
   o.force = a.force;
   const bool tty = isatty(fileno(stderr));
   const auto t0 = std::chrono::steady_clock::now();
@@ -49,8 +54,8 @@ int run_run(const RunArgs& a) {
   }
   const scenes::RunResult r = scenes::run_scene(sc, o);
   if (tty && r.failed && !a.quiet) std::fprintf(stderr, "\n");
-  std::printf("scene %s: %d frames, outputs in %s\n", sc.name.c_str(), r.frames,
-              r.out_dir.string().c_str());
+  std::printf("scene %s: %d frames, outputs in %s (evaluated on %s)\n", sc.name.c_str(), r.frames,
+              r.out_dir.string().c_str(), r.evaluator.c_str());
   std::printf("face discontinuity at the last frame (%d interior faces):\n%s", r.last_table.faces,
               scenes::format_table(r.last_table).c_str());
   if (r.failed) {
@@ -72,6 +77,11 @@ const Registrar reg{
       sub.add_option("--mesh", a->mesh, "dense model replacing the scene's (.obj/.ply/.off/.stl)");
       sub.add_option("--method", a->method, "interpolation replacing the scene's")
           ->check(CLI::IsMember({"bi", "modified-bi"}));
+      sub.add_option("--gpu", a->gpu,
+                     "evaluate and draw on the GPU: auto (when OpenGL is available, else the CPU, "
+                     "saying so), on (error without OpenGL), off (CPU, double); default: the "
+                     "scene's interpolation.gpu, auto")
+          ->check(CLI::IsMember({"auto", "on", "off"}));
       sub.add_flag("--force", a->force, "overwrite a non-empty output folder");
       sub.add_flag("--quiet", a->quiet, "no progress output");
       return [a] { return run_run(*a); };

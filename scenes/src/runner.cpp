@@ -1,6 +1,7 @@
 #include <mbi/generate/cage.hpp>
 #include <mbi/generate/procedural.hpp>
 #include <mbi/generate/subdivide.hpp>
+#include <mbi/gpu/renderer.hpp>
 #include <mbi/interp.hpp>
 #include <mbi/io/atomic_file.hpp>
 #include <mbi/raster/raster.hpp>
@@ -242,6 +243,22 @@ std::unique_ptr<pipeline::Driver> drag_driver(const Scene& sc, const SceneModels
   return std::make_unique<pipeline::HandleDriver>(m.U, m.T, vertices, co, targets);
 }
 
+// Area-weighted vertex normals of a triangle surface (rest normals for the GPU's shading).
+Eigen::MatrixXd vertex_normals(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F) {
+  Eigen::MatrixXd N = Eigen::MatrixXd::Zero(V.rows(), 3);
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const Eigen::Vector3d a = V.row(F(f, 0)), b = V.row(F(f, 1)), c = V.row(F(f, 2));
+    const Eigen::RowVector3d n = (b - a).cross(c - a).transpose();
+    for (int k = 0; k < 3; ++k) N.row(F(f, k)) += n;
+  }
+  for (Eigen::Index i = 0; i < N.rows(); ++i) {
+    const double len = N.row(i).norm();
+    if (len > 0) N.row(i) /= len;
+    else N.row(i) << 0, 0, 1;  // a vertex no face uses
+  }
+  return N;
+}
+
 }  // namespace
 
 pipeline::FramePipeline make_pipeline(const Scene& sc, const SceneModels& m,
@@ -254,31 +271,83 @@ pipeline::FramePipeline make_pipeline(const Scene& sc, const SceneModels& m,
   po.interp.alpha = sc.interpolation.alpha;
   po.interp.pin_boundary = sc.interpolation.pin_boundary;
   auto driver = sc.mode == Mode::Simulate ? simulation_driver(sc, m) : drag_driver(sc, m);
+  // rest normals of a 3D surface: evaluated normals for the GPU's pictures and the viewer
+  const Eigen::MatrixXd normals = m.dim() == 3 && m.dense.F.rows() > 0 ? vertex_normals(m.dense.V, m.dense.F)
+                                                                      : Eigen::MatrixXd();
   return pipeline::FramePipeline(m.U, m.T, std::move(embedding), std::move(driver), po,
-                                 std::move(evaluator));
+                                 std::move(evaluator), normals);
 }
 
 namespace {
+
+// The 3D pictures of a run: the Bezier points of each written frame's panels are kept (a few
+// hundred kB), and the pictures are drawn at the end, all the same size, with one camera that
+// frames the control mesh over the whole run (GPU renderer from the evaluator's buffers, or the
+// CPU rasteriser).
+class Pictures3D {
+ public:
+  Pictures3D(const Scene& sc, const SceneModels& m, const fs::path& dir) : sc_(sc), m_(m), dir_(dir) {
+    lo_ = m.U.colwise().minCoeff().transpose();
+    hi_ = m.U.colwise().maxCoeff().transpose();
+  }
+  void add(int f, const Eigen::MatrixXd& X, std::vector<interp::BezierPoints> panels) {
+    lo_ = lo_.cwiseMin(X.colwise().minCoeff().transpose());
+    hi_ = hi_.cwiseMax(X.colwise().maxCoeff().transpose());
+    frames_.push_back({f, std::move(panels)});
+  }
+  /// Draws and writes every stored picture; gpu/renderer null: the CPU rasteriser.
+  void write(pipeline::FramePipeline& pipe, gpu::GpuEvaluator* gpu, gpu::Renderer* renderer) {
+    if (frames_.empty()) return;
+    const Eigen::Vector3d up = sc_.output.up.normalized();
+    Eigen::Vector3d side = up.cross(Eigen::Vector3d::UnitX());
+    if (side.norm() < 0.5) side = up.cross(Eigen::Vector3d::UnitY());
+    side.normalize();
+    const Eigen::Vector3d front = side.cross(up);
+    Eigen::MatrixXd corners(2, 3);
+    corners.row(0) = lo_.transpose();
+    corners.row(1) = hi_.transpose();
+    raster::View view = raster::frame_points(corners, -(0.75 * front + 0.6 * side + 0.45 * up), up);
+    view.bounds_min = lo_;
+    view.bounds_max = hi_;
+    const int h = 480;
+    const int w = std::clamp(static_cast<int>(h * raster::view_aspect(view)), 160, 960);
+    Eigen::MatrixXd V;
+    for (const Frame& fr : frames_) {
+      std::vector<Image> panels;
+      for (const interp::BezierPoints& B : fr.panels) {
+        if (gpu && renderer) {
+          gpu->evaluate(B, true);
+          panels.push_back(renderer->render(*gpu, view, w, h));
+        } else {
+          interp::evaluate<double>(B, pipe.embedding(), V);
+          panels.push_back(raster::render_mesh(V, m_.dense.F, view, w, h));
+        }
+      }
+      io::write_png(io::frame_path(dir_ / "frame", fr.f, ".png"), raster::side_by_side(panels));
+    }
+  }
+
+ private:
+  struct Frame {
+    int f;
+    std::vector<interp::BezierPoints> panels;
+  };
+  const Scene& sc_;
+  const SceneModels& m_;
+  fs::path dir_;
+  Eigen::Vector3d lo_, hi_;
+  std::vector<Frame> frames_;
+};
 
 class Outputs {
  public:
   Outputs(const Scene& sc, const SceneModels& m, const fs::path& dir) : sc_(sc), m_(m), dir_(dir) {
     if (sc.output.pc2) pc2_ = std::make_unique<io::Pc2Writer>(dir / "dense.pc2", static_cast<int>(m.dense.V.rows()), 0.0f, 1.0f);
-    if (m.dim() == 3) {
-      // look from the front-right and slightly above, relative to the scene's up axis
-      const Eigen::Vector3d up = sc.output.up.normalized();
-      Eigen::Vector3d side = up.cross(Eigen::Vector3d::UnitX());
-      if (side.norm() < 0.5) side = up.cross(Eigen::Vector3d::UnitY());
-      side.normalize();
-      const Eigen::Vector3d front = side.cross(up);
-      view_ = raster::frame_points(m.U, -(0.75 * front + 0.6 * side + 0.45 * up), up);
-    }
   }
   bool due(int frame, int last) const { return frame % sc_.output.every == 0 || frame == last; }
 
   /// Every frame: the point cache of `dense` (the run's method). Written frames: mesh, control
-  /// VTK and picture; `shown` are the picture's panels (BI | modified-BI in 3D; 2D: BI | the
-  /// run's method | boundary-pinned), all at the same control positions.
+  /// VTK, and in 2D the picture (`shown`: BI | the run's method | boundary-pinned).
   void frame(int f, const Eigen::MatrixXd& Xc, const Eigen::MatrixXd& dense,
              const std::vector<const Eigen::MatrixXd*>& shown, bool write_now) {
     if (pc2_) pc2_->append(dense);
@@ -298,30 +367,16 @@ class Outputs {
       const Eigen::MatrixXd disp = Xc - m_.U;
       io::write_vtk(io::frame_path(dir_ / "control", f, ".vtk"), Xc, m_.T, disp);
     }
-    if (sc_.output.image && !shown.empty()) {
+    if (sc_.output.image && !shown.empty() && m_.image) {
       std::vector<Image> panels;
-      if (m_.dim() == 3) {
-        raster::View v = view_;
-        // frame the deformed shapes (the panels share the view)
-        v.bounds_min = shown[0]->colwise().minCoeff().transpose();
-        v.bounds_max = shown[0]->colwise().maxCoeff().transpose();
-        for (const Eigen::MatrixXd* p : shown) {
-          v.bounds_min = v.bounds_min.cwiseMin(p->colwise().minCoeff().transpose());
-          v.bounds_max = v.bounds_max.cwiseMax(p->colwise().maxCoeff().transpose());
-        }
-        const int h = 480;
-        const int w = std::clamp(static_cast<int>(h * raster::view_aspect(v)), 160, 960);
-        for (const Eigen::MatrixXd* p : shown) panels.push_back(raster::render_mesh(*p, m_.dense.F, v, w, h));
-      } else if (m_.image) {
-        const int W = m_.image->width, H = m_.image->height;
-        const int ow = W * 3 / 2, oh = H * 3 / 2;
-        const Eigen::RowVector2d off(W / 4.0, H / 4.0);
-        for (const Eigen::MatrixXd* p : shown) {
-          const Eigen::MatrixXd Dp = p->rowwise() + off;
-          panels.push_back(raster::warp_image(*m_.image, m_.dense.V, Dp, m_.dense.F, ow, oh));
-        }
+      const int W = m_.image->width, H = m_.image->height;
+      const int ow = W * 3 / 2, oh = H * 3 / 2;
+      const Eigen::RowVector2d off(W / 4.0, H / 4.0);
+      for (const Eigen::MatrixXd* p : shown) {
+        const Eigen::MatrixXd Dp = p->rowwise() + off;
+        panels.push_back(raster::warp_image(*m_.image, m_.dense.V, Dp, m_.dense.F, ow, oh));
       }
-      if (!panels.empty()) io::write_png(io::frame_path(dir_ / "frame", f, ".png"), raster::side_by_side(panels));
+      io::write_png(io::frame_path(dir_ / "frame", f, ".png"), raster::side_by_side(panels));
     }
   }
   void finish() {
@@ -333,7 +388,6 @@ class Outputs {
   const SceneModels& m_;
   fs::path dir_;
   std::unique_ptr<io::Pc2Writer> pc2_;
-  raster::View view_;
 };
 
 }  // namespace
@@ -342,9 +396,14 @@ RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
   Scene sc = sc_in;
   if (opt.method) sc.interpolation.method = *opt.method;
   if (opt.frames > 0) sc.simulation.frames = opt.frames;
+  if (opt.gpu) sc.interpolation.gpu = *opt.gpu;
   const int frames = sc.simulation.frames;
   auto log = [&](const std::string& s) {
     if (opt.log) opt.log(s);
+  };
+  auto warn = [&](const std::string& s) {
+    if (opt.warn) opt.warn(s);
+    else log(s);
   };
 
   RunResult res;
@@ -368,7 +427,7 @@ RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
   const double embed_ms = ms_since(t0);
   res.outside_points = static_cast<int>(emb.outside.size());
   if (!emb.outside.empty())
-    log("warning: " + std::to_string(emb.outside.size()) + " dense vertices lie outside the control mesh (farthest " +
+    warn("warning: " + std::to_string(emb.outside.size()) + " dense vertices lie outside the control mesh (farthest " +
         format_num(emb.max_outside_distance) + "); they follow the nearest element by extrapolation");
   const size_t outside = emb.outside.size();
 
@@ -380,7 +439,31 @@ RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
     sp.interpolation.pin_boundary = true;
     pinned.emplace(make_pipeline(sp, m, emb));
   }
-  pipeline::FramePipeline pipe = make_pipeline(sc, m, std::move(emb));
+  // the evaluator: GPU (transform feedback) when asked for and possible, else CPU (double)
+  std::unique_ptr<gpu::Context> gl;
+  if (sc.interpolation.gpu != GpuUse::Off) {
+    try {
+      gl = gpu::Context::headless();
+    } catch (const gpu::GlError& e) {
+      if (sc.interpolation.gpu == GpuUse::On)
+        throw SceneError(std::string("gpu = on, but ") + e.what());
+      warn(std::string("note: ") + e.what() + "; evaluating and drawing on the CPU");
+    }
+  }
+  gpu::GpuEvaluator* gpu_eval = nullptr;
+  std::unique_ptr<pipeline::Evaluator> evaluator;
+  if (gl) {
+    auto g = std::make_unique<gpu::GpuEvaluator>(*gl);
+    gpu_eval = g.get();
+    evaluator = std::move(g);
+  }
+  pipeline::FramePipeline pipe = make_pipeline(sc, m, std::move(emb), std::move(evaluator));
+  res.evaluator = pipe.evaluator().name();
+  std::unique_ptr<gpu::Renderer> renderer;
+  if (gl && d == 3 && sc.output.image) {
+    renderer = std::make_unique<gpu::Renderer>(*gl);
+    renderer->set_faces(m.dense.F);
+  }
   const interp::ModifiedBI& solver = pipe.solver();  // metrics: alpha, beta, the energies
 
   log("dense: " + m.dense_name + " (" + std::to_string(m.dense.V.rows()) + " vertices)");
@@ -399,6 +482,8 @@ RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
   metrics["control_vertices"] = m.U.rows();
   metrics["elements"] = m.T.rows();
   metrics["outside_points"] = outside;
+  metrics["evaluator"] = res.evaluator;
+  metrics["renderer"] = d == 3 && sc.output.image ? (renderer ? "gpu" : "cpu") : "cpu";
   metrics["timings_ms"] = {{"load", load_ms}, {"generate", m.generate_seconds * 1e3},
                            {"embed", embed_ms}, {"precompute", pipe.precompute_ms()}};
   metrics["frames"] = nlohmann::json::array();
@@ -406,6 +491,7 @@ RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
   // ---------------------------------------------------------------- frames
   fs::create_directories(res.out_dir);
   Outputs out(sc, m, res.out_dir);
+  Pictures3D pictures(sc, m, res.out_dir);
   auto* sim_driver = dynamic_cast<pipeline::SimulatorDriver*>(&pipe.driver());
   Eigen::MatrixXd other;  // the picture's other method
   for (int f = 0; f <= frames; ++f) {
@@ -427,15 +513,19 @@ RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
     const bool write_now = out.due(f, frames);
     std::vector<const Eigen::MatrixXd*> shown;
     if (write_now && sc.output.image) {
-      // BI | modified-BI: the run's method is evaluated already, the other one only here
-      if (pipe.method() == pipeline::Method::BI) {
-        pipe.evaluate_with(pipeline::Method::ModifiedBI, other);
-        shown = {&pipe.positions(), &other};
-      } else {
-        pipe.evaluate_with(pipeline::Method::BI, other);
-        shown = {&other, &pipe.positions()};
+      if (d == 3) {  // BI | modified-BI, drawn after the run
+        pictures.add(f, pipe.control_positions(),
+                     {pipe.bezier_with(pipeline::Method::BI), pipe.bezier_with(pipeline::Method::ModifiedBI)});
+      } else {  // BI | the run's method (| pinned): the other method evaluated only here
+        if (pipe.method() == pipeline::Method::BI) {
+          pipe.evaluate_with(pipeline::Method::ModifiedBI, other);
+          shown = {&pipe.positions(), &other};
+        } else {
+          pipe.evaluate_with(pipeline::Method::BI, other);
+          shown = {&other, &pipe.positions()};
+        }
+        if (pinned) shown.push_back(&pinned->positions());
       }
-      if (pinned) shown.push_back(&pinned->positions());
     }
     // metrics: BI against modified-BI at the same control positions
     const bool last = f == frames;
@@ -444,6 +534,8 @@ RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
     fr["solve_ms"] = tm.solve_ms + (sim_driver ? 0.0 : tm.drive_ms);  // handles: the joint solve
     fr["bezier_ms"] = tm.bezier_ms;
     fr["interp_ms"] = tm.bezier_ms + tm.evaluate_ms;
+    fr["upload_ms"] = pipe.evaluator().timings().upload_ms;
+    fr["pass_ms"] = pipe.evaluator().timings().pass_ms;
     if (sc.output.metrics || last) {
       t0 = Clock::now();
       const interp::DiscontinuityTable table = interp::discontinuity_table(solver, pipe.control_positions(), pipe.modified_bi_M());
@@ -459,6 +551,9 @@ RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
     if (opt.progress) opt.progress(f, frames);
   }
   out.finish();
+  t0 = Clock::now();
+  pictures.write(pipe, gpu_eval, renderer.get());  // also after a failed step: what was reached
+  metrics["timings_ms"]["pictures"] = ms_since(t0);
   if (res.failed && !sc.output.metrics && pipe.frame() >= 0)  // the table of the last good frame
     res.last_table = interp::discontinuity_table(solver, pipe.control_positions(), pipe.modified_bi_M());
   metrics["frames_completed"] = res.frames;

@@ -255,6 +255,15 @@ const char* format_name(MeshFormat f) {
   return "";
 }
 
+const char* gpu_name(GpuUse g) {
+  switch (g) {
+    case GpuUse::Auto: return "auto";
+    case GpuUse::On: return "on";
+    case GpuUse::Off: return "off";
+  }
+  return "";
+}
+
 Scene load_scene(const std::filesystem::path& file) {
   const std::string fname = file.string();
   if (!std::filesystem::is_regular_file(file)) throw SceneError(fname + ": no such scene file");
@@ -422,6 +431,7 @@ Scene load_scene(const std::filesystem::path& file) {
     i.alpha = t.number("alpha", 0.0, 0, 1e6, true);
     i.pin_boundary = t.boolean("pin_boundary", false);
     i.compare_pinned = t.boolean("compare_pinned", false);
+    i.gpu = t.choice("gpu", i.gpu, {{"auto", GpuUse::Auto}, {"on", GpuUse::On}, {"off", GpuUse::Off}});
     i.handles = t.choice("handles", i.handles,
                          {{"hard", interp::HandleMode::Hard}, {"soft", interp::HandleMode::Soft}});
     t.finish();

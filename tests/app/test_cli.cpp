@@ -25,21 +25,27 @@ namespace {
 
 struct Result {
   int code = -1;
-  std::string err;
+  std::string err, out;
 };
 
-// Runs mbi with arguments (already quoted where needed); captures stderr.
-Result run_mbi(const std::string& args, const TempDir& dir) {
-  const fs::path err = dir / "stderr.txt";
-  const std::string cmd = std::string("\"") + MBI_EXE + "\" " + args + " > \"" +
-                          (dir / "stdout.txt").string() + "\" 2> \"" + err.string() + "\"";
+std::string slurp_text(const fs::path& file) {
+  std::ifstream in(file);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// Runs mbi with arguments (already quoted where needed), with optional environment assignments
+// ("NAME=value ..."); captures stdout and stderr.
+Result run_mbi(const std::string& args, const TempDir& dir, const std::string& env = "") {
+  const fs::path err = dir / "stderr.txt", out = dir / "stdout.txt";
+  const std::string cmd = (env.empty() ? "" : "env " + env + " ") + "\"" + MBI_EXE + "\" " + args +
+                          " > \"" + out.string() + "\" 2> \"" + err.string() + "\"";
   const int status = std::system(cmd.c_str());
   Result r;
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream in(err);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  r.err = ss.str();
+  r.err = slurp_text(err);
+  r.out = slurp_text(out);
   return r;
 }
 
@@ -261,6 +267,27 @@ TEST_CASE("mbi run writes the outputs of a scene", "[cli]") {
   CHECK(fs::exists(dir / "o" / "dense.pc2"));
   CHECK(fs::exists(dir / "o" / "mesh_0002.obj"));
   CHECK(fs::exists(dir / "o" / "frame_0002.png"));
+}
+
+TEST_CASE("mbi run --gpu: on without OpenGL exits 2 naming why; auto notes the fallback once", "[cli][gpu]") {
+  TempDir dir("cli");
+  const char* src = std::getenv("MBI_SOURCE_DIR");
+  REQUIRE(src != nullptr);
+  const std::string scene = q(fs::path(src) / "scenes" / "twist-bar.toml");
+  const Result on = run_mbi("run " + scene + " --frames 2 --gpu on --out " + q(dir / "on"), dir, "MBI_GL=none");
+  CHECK(on.code == 2);
+  CHECK_THAT(on.err, Catch::StartsWith("mbi run: error: gpu = on, but no OpenGL context") &&
+                         Catch::Contains("MBI_GL=none"));
+  CHECK(std::count(on.err.begin(), on.err.end(), '\n') == 1);
+  CHECK_FALSE(fs::exists(dir / "on"));
+  const Result aut = run_mbi("run " + scene + " --frames 2 --quiet --out " + q(dir / "auto"), dir, "MBI_GL=none");
+  CHECK(aut.code == 0);
+  CHECK_THAT(aut.err, Catch::Contains("note: no OpenGL context") && Catch::Contains("on the CPU"));
+  CHECK(std::count(aut.err.begin(), aut.err.end(), '\n') == 1);  // once, even with --quiet
+  CHECK(fs::exists(dir / "auto" / "frame_0002.png"));
+  const Result gpu = run_mbi("run " + scene + " --frames 2 --gpu on --out " + q(dir / "gpu"), dir);
+  CHECK(gpu.code == 0);
+  CHECK_THAT(gpu.out, Catch::Contains("evaluated on gpu"));
 }
 
 TEST_CASE("mbi run: a failing simulation step exits 3, keeps the outputs so far, one error line",

@@ -190,6 +190,7 @@ TEST_CASE("a mesh override replaces the dense model and method bi gives BI outpu
     o.frames = last;
     o.mesh = dir / "user.obj";
     o.method = method;
+    o.gpu = GpuUse::Off;  // double on the CPU: files agree with the reference to round-off
     const RunResult r = run_scene(sc, o);
     REQUIRE_FALSE(r.failed);
     REQUIRE(r.frames == last);
@@ -499,4 +500,75 @@ TEST_CASE("twist-bar: the last frame's discontinuity ratios that the README quot
     CHECK((end.X.row(i).transpose() - turned).norm() <= 1e-6 * top);
   }
   CHECK(at_top >= 3);
+}
+
+namespace {
+
+// Width x height of a PNG (its IHDR chunk).
+std::pair<int, int> png_size(const fs::path& file) {
+  const Image img = read_png(file);
+  return {img.width, img.height};
+}
+
+}  // namespace
+
+TEST_CASE("gpu: a run on the GPU writes what the CPU writes, within float accuracy", "[runner][gpu]") {
+  mbi::test::TempDir dir("gpu");
+  const Scene sc = load_scene(source_dir() / "scenes" / "twist-bar.toml");
+  auto run = [&](GpuUse g, const std::string& name) {
+    RunOptions o;
+    o.out_dir = dir / name;
+    o.frames = 60;  // written frames 0, 30, 60 (output.every = 30)
+    o.gpu = g;
+    const RunResult r = run_scene(sc, o);
+    REQUIRE_FALSE(r.failed);
+    return r;
+  };
+  const RunResult cpu = run(GpuUse::Off, "cpu");
+  const RunResult gpu = run(GpuUse::On, "gpu");  // CI has Mesa llvmpipe
+  CHECK_THAT(cpu.evaluator, Catch::StartsWith("cpu"));
+  CHECK_THAT(gpu.evaluator, Catch::StartsWith("gpu"));
+  const SurfaceMesh a = read_surface(frame_path(dir / "cpu" / "mesh", 60, ".obj"));
+  const SurfaceMesh b = read_surface(frame_path(dir / "gpu" / "mesh", 60, ".obj"));
+  const double size = (a.V.colwise().maxCoeff() - a.V.colwise().minCoeff()).norm();
+  CHECK((a.V - b.V).cwiseAbs().maxCoeff() <= 1e-5 * size);
+  CHECK(a.F == b.F);
+  const PointCache pa = read_pc2(dir / "cpu" / "dense.pc2"), pb = read_pc2(dir / "gpu" / "dense.pc2");
+  REQUIRE(pa.frames.size() == 61);
+  REQUIRE(pb.frames.size() == 61);
+  for (size_t k = 0; k < pa.frames.size(); ++k)
+    CHECK((pa.frames[k] - pb.frames[k]).cwiseAbs().maxCoeff() <= 1e-5 * size);
+  // the same discontinuity table (it depends on the control mesh, not on the evaluator)
+  CHECK(cpu.last_table.ratio.mean == Approx(gpu.last_table.ratio.mean).epsilon(1e-12));
+  // the metrics say who evaluated and drew
+  const nlohmann::json mg = read_json(dir / "gpu" / "metrics.json");
+  CHECK(mg["renderer"] == "gpu");
+  CHECK_THAT(mg["evaluator"].get<std::string>(), Catch::StartsWith("gpu"));
+  // every picture of a run has the same size (straight into a video encoder)
+  for (const char* name : {"cpu", "gpu"}) {
+    const auto first = png_size(frame_path(dir / name / "frame", 0, ".png"));
+    for (int f : {30, 60}) CHECK(png_size(frame_path(dir / name / "frame", f, ".png")) == first);
+  }
+}
+
+TEST_CASE("gpu: without OpenGL, auto falls back and says so once; on is an error", "[runner][gpu]") {
+  mbi::test::TempDir dir("nogl");
+  const Scene sc = load_scene(source_dir() / "scenes" / "twist-bar.toml");
+  ::setenv("MBI_GL", "none", 1);
+  std::vector<std::string> notes;
+  RunOptions o;
+  o.out_dir = dir / "auto";
+  o.frames = 3;
+  o.warn = [&](const std::string& s) { notes.push_back(s); };
+  const RunResult r = run_scene(sc, o);
+  CHECK_FALSE(r.failed);
+  CHECK_THAT(r.evaluator, Catch::StartsWith("cpu"));
+  REQUIRE(notes.size() == 1);
+  CHECK_THAT(notes[0], Catch::Contains("MBI_GL=none") && Catch::Contains("CPU"));
+  CHECK(fs::exists(frame_path(dir / "auto" / "frame", 3, ".png")));  // the CPU rasteriser drew it
+  o.out_dir = dir / "on";
+  o.gpu = GpuUse::On;
+  CHECK_THROWS_WITH(run_scene(sc, o), Catch::Contains("gpu = on") && Catch::Contains("MBI_GL=none"));
+  CHECK_FALSE(fs::exists(dir / "on"));
+  ::unsetenv("MBI_GL");
 }

@@ -4,7 +4,9 @@
 //   <out>/mesh_NNNN.obj|ply    dense mesh at the written frames (every output.every, and last)
 //   <out>/dense.pc2            point cache of every frame (Blender Mesh Cache, 3ds Max)
 //   <out>/control_NNNN.vtk     control mesh at the written frames (ParaView)
-//   <out>/frame_NNNN.png       pictures: 3D BI | modified-BI side by side; 2D the warped image
+//   <out>/frame_NNNN.png       pictures: 3D BI | modified-BI side by side (GPU or CPU
+//                              renderer, one size and one camera for the whole run); 2D the
+//                              warped image
 //   <out>/metrics.json         per-frame timings and the discontinuity table (BI vs modified-BI)
 #include <mbi/interp/embed.hpp>
 #include <mbi/interp/metrics.hpp>
@@ -50,10 +52,14 @@ struct RunOptions {
   std::filesystem::path mesh;            ///< replaces the scene's dense model
   std::optional<pipeline::Method> method;  ///< replaces the scene's
   bool force = false;                    ///< overwrite a non-empty output folder
+  std::optional<GpuUse> gpu;             ///< replaces the scene's interpolation.gpu
   /// Progress callback (frame done, frames total); may be empty.
   std::function<void(int, int)> progress;
-  /// Log lines (warnings, summary); may be empty.
+  /// Log lines (summary); may be empty.
   std::function<void(const std::string&)> log;
+  /// Notes the user must see even when quiet (outside points, no OpenGL under gpu = auto); may be
+  /// empty (then they go to `log`).
+  std::function<void(const std::string&)> warn;
 };
 
 struct RunResult {
@@ -63,6 +69,7 @@ struct RunResult {
   std::string message;    ///< the failure
   mbi::interp::DiscontinuityTable last_table;  ///< of the last completed frame
   int outside_points = 0;
+  std::string evaluator;  ///< what evaluated the dense points, e.g. "gpu (llvmpipe ...)"
 };
 
 /// Runs a scene headless. Throws on bad input before anything is written (mbi::Error: SceneError,

@@ -31,12 +31,16 @@ enum class Mode {
 enum class DenseBuiltin { None, PaperBar, Cylinder, BumpySphere, ImageGrid };
 enum class ControlBuiltin { None, PaperBar, Box, Grid2D };
 enum class MeshFormat { Obj, Ply, None };
+/// Where the dense points are evaluated and pictures drawn: the GPU (OpenGL transform feedback)
+/// or the CPU. Auto uses the GPU when an OpenGL context can be made and says so when it cannot.
+enum class GpuUse { Auto, On, Off };
 
 /// Scene-file names of the enums ("simulate", "paper-bar", "grid-2d", "ply", ...).
 const char* mode_name(Mode m);
 const char* builtin_name(DenseBuiltin b);
 const char* builtin_name(ControlBuiltin b);
 const char* format_name(MeshFormat f);
+const char* gpu_name(GpuUse g);
 
 /// Dense model: a file (path relative to the scene file) or a built-in procedural mesh.
 struct DenseSpec {
@@ -127,6 +131,7 @@ struct InterpolationSpec {
   bool pin_boundary = false;
   bool compare_pinned = false;         ///< 2D drag scenes: also write the pinned variant
   interp::HandleMode handles = interp::HandleMode::Hard;  ///< drag scenes: Eq. 10 or Eq. 11
+  GpuUse gpu = GpuUse::Auto;
 };
 
 struct OutputSpec {
