@@ -1,4 +1,4 @@
-// mbi run SCENE [--out DIR] [--frames N] [--mesh FILE] [--method bi|modified-bi] [--force]
+// mbi run SCENE [--out DIR] [--frames N] [--mesh FILE] [--method bi|modified-bi|phong] [--force]
 #include "commands.hpp"
 
 #include <mbi/scenes/report.hpp>
@@ -71,7 +71,7 @@ const Registrar reg{
           ->check(CLI::Range(1, 1000000));
       sub.add_option("--mesh", a->mesh, "dense model replacing the scene's (.obj/.ply/.off/.stl)");
       sub.add_option("--method", a->method, "interpolation replacing the scene's")
-          ->check(CLI::IsMember({"bi", "modified-bi"}));
+          ->check(CLI::IsMember({"bi", "modified-bi", "phong"}));
       sub.add_flag("--force", a->force, "overwrite a non-empty output folder");
       sub.add_flag("--quiet", a->quiet, "no progress output");
       return [a] { return run_run(*a); };
