@@ -1,8 +1,11 @@
 // mbi deform: the interpolation as a command-line tool, for users with their own simulator.
 //
 //   mbi deform --control REST --deformed X --mesh DENSE --out OUT
-//              [--method bi|modified-bi] [--alpha A] [--pin-boundary] [--stats STATS.json]
+//              [--method bi|modified-bi|phong] [--alpha A] [--pin-boundary] [--stats STATS.json]
 //   mbi deform --example twist-bar [--out OUT] [--stats STATS.json]
+//
+// Prints the face discontinuity of BI, Phong and modified-BI side by side, and for --example the
+// error of each against the closed-form deformation.
 #include "commands.hpp"
 
 #include <mbi/generate/procedural.hpp>
@@ -20,6 +23,8 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -58,6 +63,8 @@ struct Problem {
   Eigen::MatrixXd P_extra;    // columns beyond d kept as they are (2D control, 3D surface)
   std::optional<io::SurfaceMesh> surface;  // when the dense model is a surface
   std::string control_name, deformed_name, mesh_name;
+  // The deformation in closed form at the dense points (examples only): p x d and (p d) x d.
+  Eigen::MatrixXd exact, exact_gradients;
 };
 
 Problem load_files(const DeformArgs& a) {
@@ -110,6 +117,8 @@ Problem load_example(const std::string& name) {
   pb.surface = s;
   const double pi = std::acos(-1.0);
   pb.X = generate::twist_bend(pb.U, 0.0, 0.0, 0.0, 6.0, pi / 2, 0.05);
+  pb.exact = generate::twist_bend(pb.P, 0.0, 0.0, 0.0, 6.0, pi / 2, 0.05);
+  pb.exact_gradients = generate::twist_bend_jacobian(pb.P, 0.0, 0.0, 0.0, 6.0, pi / 2, 0.05);
   return pb;
 }
 
@@ -166,9 +175,21 @@ int run_deform(const DeformArgs& a) {
   const double evaluate_ms = pipe->timings().bezier_ms + pipe->timings().evaluate_ms;
   if (!out.allFinite()) throw std::runtime_error("evaluation produced non-finite positions");
 
+  // BI, Phong and modified-BI side by side, whatever the method
   const interp::DiscontinuityTable table =
-      interp::discontinuity_table(*solver, pb.X, pipe->modified_bi_M());
+      interp::discontinuity_table(*solver, pb.X, pipe->modified_bi_M(), pipe->phong_M());
   const interp::Embedding& embedding = pipe->embedding();
+  // accuracy against the closed-form deformation, when it is known (--example)
+  std::vector<std::pair<std::string, interp::Accuracy>> accuracy;
+  if (pb.exact.size() > 0) {
+    const interp::VertexMatrices Z = interp::VertexMatrices::Zero(pb.U.rows() * d, d);
+    for (const auto& [name, M] : {std::pair<std::string, const interp::VertexMatrices*>{"BI", &Z},
+                                  {"Phong", &pipe->phong_M()},
+                                  {"modified-BI", &pipe->modified_bi_M()}})
+      accuracy.emplace_back(name, interp::accuracy(interp::bezier_points(pb.U, pb.T, pb.X, *M),
+                                                   embedding, pb.P, pb.exact,
+                                                   pb.exact_gradients));
+  }
 
   // Outputs: nothing is written unless everything above succeeded.
   if (!a.out.empty()) {
@@ -197,11 +218,17 @@ int run_deform(const DeformArgs& a) {
     j["max_outside_distance"] = embedding.max_outside_distance;
     j["null_space_dim"] = solver->null_space_dim();
     j["disc"] = scenes::disc_json(table);
+    if (!accuracy.empty()) {
+      const char* keys[] = {"bi", "phong", "modified_bi"};
+      for (size_t k = 0; k < accuracy.size(); ++k)
+        j["accuracy"][keys[k]] = scenes::accuracy_json(accuracy[k].second);
+    }
     j["e_vibr"] = table.e_vibr;
     j["e_disc"] = table.e_disc;
     j["e_total"] = table.e_total;
     j["timings_ms"] = {{"embed", embed_ms},
                        {"precompute", precompute_ms},
+                       {"phong_precompute", pipe->phong_precompute_ms()},
                        {"solve", solve_ms},
                        {"evaluate", evaluate_ms}};
     io::write_text_atomic(a.stats, j.dump(2) + "\n");
@@ -217,16 +244,21 @@ int run_deform(const DeformArgs& a) {
               solver->null_space_dim());
   std::printf("\nface discontinuity over %d interior faces (paper Table 2):\n%s", table.faces,
               scenes::format_table(table).c_str());
+  if (!accuracy.empty())
+    std::printf("\nerror against the closed-form deformation at the %d points (positions relative "
+                "to the model size %.4g, gradients relative to |F|):\n%s",
+                static_cast<int>(pb.P.rows()), accuracy.front().second.size,
+                scenes::format_accuracy(accuracy).c_str());
   std::printf("E_vibr %.6g  E_disc %.6g  E_total %.6g\n", table.e_vibr, table.e_disc,
               table.e_total);
-  std::printf("\ntimes (ms): embed %.2f  precompute %.2f  solve %.3f  evaluate %.2f\n", embed_ms,
-              precompute_ms, solve_ms, evaluate_ms);
+  std::printf("\ntimes (ms): embed %.2f  precompute %.2f  Phong weights %.2f  solve %.3f  evaluate %.2f\n",
+              embed_ms, precompute_ms, pipe->phong_precompute_ms(), solve_ms, evaluate_ms);
   if (!a.out.empty()) std::printf("wrote %s\n", a.out.c_str());
   return 0;
 }
 
 const Registrar reg{
-    "deform", "Deform a dense mesh by a deformed control mesh (modified-BI or BI)",
+    "deform", "Deform a dense mesh by a deformed control mesh (modified-BI, Phong or BI)",
     [](CLI::App& sub) -> Action {
       auto a = std::make_shared<DeformArgs>();
       sub.add_option("--control", a->control,
@@ -236,7 +268,7 @@ const Registrar reg{
       sub.add_option("--mesh", a->mesh, "dense model: .obj/.ply/.off/.stl, or points .txt/.xyz");
       sub.add_option("--out", a->out, "output: same kind as --mesh (written atomically)");
       sub.add_option("--method", a->method, "interpolation")
-          ->check(CLI::IsMember({"bi", "modified-bi"}));
+          ->check(CLI::IsMember({"bi", "modified-bi", "phong"}));
       sub.add_option_function<double>(
           "--alpha",
           [a](double v) {

@@ -1,5 +1,5 @@
-// mbi run SCENE [--out DIR] [--frames N] [--mesh FILE] [--method bi|modified-bi] [--gpu auto|on|off]
-//         [--force] [--quiet]
+// mbi run SCENE [--out DIR] [--frames N] [--mesh FILE] [--method bi|modified-bi|phong]
+//         [--gpu auto|on|off] [--force] [--quiet]
 #include "commands.hpp"
 
 #include <mbi/scenes/report.hpp>
@@ -76,7 +76,7 @@ const Registrar reg{
           ->check(CLI::Range(1, 1000000));
       sub.add_option("--mesh", a->mesh, "dense model replacing the scene's (.obj/.ply/.off/.stl)");
       sub.add_option("--method", a->method, "interpolation replacing the scene's")
-          ->check(CLI::IsMember({"bi", "modified-bi"}));
+          ->check(CLI::IsMember({"bi", "modified-bi", "phong"}));
       sub.add_option("--gpu", a->gpu,
                      "evaluate and draw on the GPU: auto (when OpenGL is available, else the CPU, "
                      "saying so), on (error without OpenGL), off (CPU, double); default: the "

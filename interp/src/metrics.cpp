@@ -1,13 +1,20 @@
 // Quality metrics: per-face discontinuity energy, E_vibr, Table 2 (fact 12).
 #include <mbi/interp/metrics.hpp>
 
+#include <mbi/interp/evaluate.hpp>
+
 #include "detail.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
 namespace mbi::interp {
 namespace {
+double ratio_of(double a, double b) {
+  return b > 0 ? a / b : (a > 0 ? std::numeric_limits<double>::infinity() : 1.0);
+}
+
 void check_xm(const char* who, const Eigen::Ref<const Eigen::MatrixXd>& U,
               const Eigen::Ref<const Eigen::MatrixXd>* X, const VertexMatrices& M) {
   const auto n = U.rows(), d = U.cols();
@@ -86,16 +93,77 @@ DiscontinuityTable discontinuity_table(const ModifiedBI& solver,
   t.faces = static_cast<int>(bi.size());
   t.bi = summarize(bi);
   t.modified_bi = summarize(mb);
-  auto ratio = [](double a, double b) {
-    return b > 0 ? a / b : (a > 0 ? std::numeric_limits<double>::infinity() : 1.0);
-  };
-  t.ratio.mean = ratio(t.bi.mean, t.modified_bi.mean);
-  t.ratio.std = ratio(t.bi.std, t.modified_bi.std);
-  t.ratio.max = ratio(t.bi.max, t.modified_bi.max);
+  t.ratio.mean = ratio_of(t.bi.mean, t.modified_bi.mean);
+  t.ratio.std = ratio_of(t.bi.std, t.modified_bi.std);
+  t.ratio.max = ratio_of(t.bi.max, t.modified_bi.max);
   t.e_vibr = vibration_energy(U, T, M);
   t.e_disc = mb.sum();
   t.e_total = solver.alpha() * t.e_vibr + solver.beta() * t.e_disc;
   return t;
+}
+
+DiscontinuityTable discontinuity_table(const ModifiedBI& solver,
+                                       const Eigen::Ref<const Eigen::MatrixXd>& X,
+                                       const VertexMatrices& M, const VertexMatrices& M_phong) {
+  DiscontinuityTable t = discontinuity_table(solver, X, M);
+  const Summary ph =
+      summarize(face_discontinuity(solver.rest_positions(), solver.elements_matrix(), X, M_phong));
+  t.phong = ph;
+  t.phong_ratio.mean = ratio_of(t.bi.mean, ph.mean);
+  t.phong_ratio.std = ratio_of(t.bi.std, ph.std);
+  t.phong_ratio.max = ratio_of(t.bi.max, ph.max);
+  return t;
+}
+
+Accuracy accuracy(const BezierPoints& B, const Embedding& emb,
+                  const Eigen::Ref<const Eigen::MatrixXd>& rest,
+                  const Eigen::Ref<const Eigen::MatrixXd>& exact,
+                  const Eigen::Ref<const Eigen::MatrixXd>& exact_gradients) {
+  const int d = emb.dim(), p = emb.size();
+  const int K = (d + 1) * (d + 2) / 2;
+  const Eigen::Index m = emb.gradients.rows() / (d + 1);
+  if (emb.gradients.rows() != m * (d + 1) || emb.gradients.cols() != d || m == 0)
+    throw Error("accuracy: the embedding has no basis gradients (use embed())");
+  if (B.rows() != m * K || B.cols() != d)
+    throw Error("accuracy: Bezier points must be " + std::to_string(m * K) + " x " + std::to_string(d));
+  if (rest.rows() != p || rest.cols() != d || exact.rows() != p || exact.cols() != d)
+    throw Error("accuracy: rest and exact must be " + std::to_string(p) + " x " + std::to_string(d));
+  if (exact_gradients.rows() != static_cast<Eigen::Index>(p) * d || exact_gradients.cols() != d)
+    throw Error("accuracy: exact_gradients must be " + std::to_string(p * d) + " x " + std::to_string(d));
+  Accuracy a;
+  if (p == 0) return a;
+  a.size = (rest.colwise().maxCoeff() - rest.colwise().minCoeff()).norm();
+  Eigen::MatrixXd x;
+  evaluate<double>(B, emb, x);
+  const auto& edges = bezier_edges(d);
+  double pos2 = 0, pos_max = 0, jac2 = 0, ref2 = 0, jac_max = 0;
+  Eigen::MatrixXd g(d, d + 1);
+  for (int q = 0; q < p; ++q) {
+    const double dx = (x.row(q) - exact.row(q)).norm();
+    pos2 += dx * dx;
+    pos_max = std::max(pos_max, dx);
+    // J = sum_k g_k a_k^T with g_k = 2 phi_k x_k + sum_{edges (k, j)} 2 phi_j P_kj (fact 6)
+    const Eigen::Index e = emb.element(q);
+    for (int k = 0; k <= d; ++k) g.col(k) = 2 * emb.bary(q, k) * B.row(e * K + k).transpose();
+    for (size_t s = 0; s < edges.size(); ++s) {
+      const auto [i, j] = edges[s];
+      const Eigen::Index row = e * K + d + 1 + static_cast<Eigen::Index>(s);
+      g.col(i) += 2 * emb.bary(q, j) * B.row(row).transpose();
+      g.col(j) += 2 * emb.bary(q, i) * B.row(row).transpose();
+    }
+    const Eigen::MatrixXd J = g * emb.gradients.middleRows(e * (d + 1), d + 1);
+    const Eigen::MatrixXd Dg = exact_gradients.middleRows(static_cast<Eigen::Index>(q) * d, d);
+    const double dj = (J - Dg).squaredNorm(), r = Dg.squaredNorm();
+    jac2 += dj;
+    ref2 += r;
+    jac_max = std::max(jac_max, r > 0 ? std::sqrt(dj / r) : (dj > 0 ? std::numeric_limits<double>::infinity() : 0.0));
+  }
+  const double size = a.size > 0 ? a.size : 1.0;
+  a.position_rms = std::sqrt(pos2 / p) / size;
+  a.position_max = pos_max / size;
+  a.gradient_rms = ref2 > 0 ? std::sqrt(jac2 / ref2) : std::sqrt(jac2);
+  a.gradient_max = jac_max;
+  return a;
 }
 
 double vibration_energy(const Eigen::Ref<const Eigen::MatrixXd>& U,

@@ -23,12 +23,16 @@ struct FramePipeline::Impl {
   std::unique_ptr<Evaluator> evaluator;
   std::optional<interp::ModifiedBI> solver;
   double precompute_ms = 0;
+  std::optional<interp::Phong> phong;
+  double phong_ms = 0;
 
   int frame = -1;
   Eigen::MatrixXd X;
   interp::VertexMatrices M;        // the method's M
   interp::VertexMatrices M_mbi;    // modified-BI's M at X (cached per frame)
   bool have_mbi = false;
+  interp::VertexMatrices M_phong;  // Phong's M at X (cached per frame)
+  bool have_phong = false;
   interp::BezierPoints B;
   bool evaluated = false;
   FrameTimings timings;
@@ -40,6 +44,24 @@ struct FramePipeline::Impl {
       precompute_ms = ms_since(t0);
     }
     return *solver;
+  }
+
+  const interp::Phong& get_phong() {
+    if (!phong) {
+      const auto t0 = Clock::now();
+      phong.emplace(U, T);
+      phong_ms = ms_since(t0);
+    }
+    return *phong;
+  }
+
+  // Phong's M at X: closed form from the element deformation gradients.
+  const interp::VertexMatrices& phong_M() {
+    if (!have_phong) {
+      M_phong = get_phong().M(X);
+      have_phong = true;
+    }
+    return M_phong;
   }
 
   // Modified-BI's M at X: the driver's (joint solve) or the cached factorisation's.
@@ -63,6 +85,11 @@ struct FramePipeline::Impl {
       timings.solve_ms = 0;
       t0 = Clock::now();
       B = interp::bezier_bi(X, T);
+    } else if (options.method == Method::Phong) {
+      M = phong_M();
+      timings.solve_ms = ms_since(t0);
+      t0 = Clock::now();
+      B = interp::bezier_points(U, T, X, M);
     } else {
       M = mbi_M();
       timings.solve_ms = driver->solved_M() ? 0.0 : ms_since(t0);
@@ -111,6 +138,7 @@ FramePipeline::FramePipeline(const Eigen::Ref<const Eigen::MatrixXd>& U,
   s.evaluator->set_points(points);
   s.X = s.U;
   if (needs_solve(options.method) && !s.driver->solved_M()) s.get_solver();
+  if (needs_phong(options.method)) s.get_phong();
 }
 
 FramePipeline::~FramePipeline() = default;
@@ -133,6 +161,7 @@ FrameResult FramePipeline::step(bool evaluate_now) {
   s.X = std::move(X);
   s.frame = next;
   s.have_mbi = false;
+  s.have_phong = false;
   s.evaluated = false;
   s.solve_and_bezier();
   if (evaluate_now) s.run_evaluator();
@@ -151,6 +180,7 @@ void FramePipeline::reset() {
   s.frame = -1;
   s.X = s.U;
   s.have_mbi = false;
+  s.have_phong = false;
   s.evaluated = false;
   s.timings = {};
 }
@@ -177,6 +207,11 @@ const interp::VertexMatrices& FramePipeline::modified_bi_M() {
   return impl_->mbi_M();
 }
 
+const interp::VertexMatrices& FramePipeline::phong_M() {
+  if (impl_->frame < 0) throw Error("FramePipeline: phong_M() before the first step()");
+  return impl_->phong_M();
+}
+
 void FramePipeline::evaluate_with(Method method, Eigen::MatrixXd& out) {
   Impl& s = *impl_;
   if (s.frame < 0) throw Error("FramePipeline: evaluate_with() before the first step()");
@@ -184,18 +219,19 @@ void FramePipeline::evaluate_with(Method method, Eigen::MatrixXd& out) {
     out = positions();
     return;
   }
-  const interp::BezierPoints B = method == Method::BI
-                                     ? interp::bezier_bi(s.X, s.T)
-                                     : interp::bezier_points(s.U, s.T, s.X, s.mbi_M());
-  interp::evaluate<double>(B, *s.embedding, out);
+  interp::evaluate<double>(bezier_with(method), *s.embedding, out);
 }
 
 interp::BezierPoints FramePipeline::bezier_with(Method method) {
   Impl& s = *impl_;
   if (s.frame < 0) throw Error("FramePipeline: bezier_with() before the first step()");
   if (method == s.options.method) return s.B;
-  return method == Method::BI ? interp::bezier_bi(s.X, s.T)
-                              : interp::bezier_points(s.U, s.T, s.X, s.mbi_M());
+  switch (method) {
+    case Method::BI: return interp::bezier_bi(s.X, s.T);
+    case Method::ModifiedBI: return interp::bezier_points(s.U, s.T, s.X, s.mbi_M());
+    case Method::Phong: return interp::bezier_points(s.U, s.T, s.X, s.phong_M());
+  }
+  return s.B;
 }
 
 Method FramePipeline::method() const { return impl_->options.method; }
@@ -229,6 +265,8 @@ void FramePipeline::set_alpha(double alpha) {
 const PipelineOptions& FramePipeline::options() const { return impl_->options; }
 const interp::ModifiedBI& FramePipeline::solver() { return impl_->get_solver(); }
 double FramePipeline::precompute_ms() const { return impl_->precompute_ms; }
+const interp::Phong& FramePipeline::phong() { return impl_->get_phong(); }
+double FramePipeline::phong_precompute_ms() const { return impl_->phong_ms; }
 Driver& FramePipeline::driver() { return *impl_->driver; }
 Evaluator& FramePipeline::evaluator() { return *impl_->evaluator; }
 const interp::Embedding& FramePipeline::embedding() const { return *impl_->embedding; }

@@ -486,6 +486,8 @@ RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
   metrics["renderer"] = d == 3 && sc.output.image ? (renderer ? "gpu" : "cpu") : "cpu";
   metrics["timings_ms"] = {{"load", load_ms}, {"generate", m.generate_seconds * 1e3},
                            {"embed", embed_ms}, {"precompute", pipe.precompute_ms()}};
+  if (pipe.method() == pipeline::Method::Phong)
+    metrics["timings_ms"]["phong_precompute"] = pipe.phong_precompute_ms();
   metrics["frames"] = nlohmann::json::array();
 
   // ---------------------------------------------------------------- frames
@@ -493,7 +495,12 @@ RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
   Outputs out(sc, m, res.out_dir);
   Pictures3D pictures(sc, m, res.out_dir);
   auto* sim_driver = dynamic_cast<pipeline::SimulatorDriver*>(&pipe.driver());
-  Eigen::MatrixXd other;  // the picture's other method
+  std::vector<Eigen::MatrixXd> others;  // the picture's other methods
+  const bool with_phong = pipe.method() == pipeline::Method::Phong;
+  auto table_now = [&] {
+    return with_phong ? interp::discontinuity_table(solver, pipe.control_positions(), pipe.modified_bi_M(), pipe.phong_M())
+                      : interp::discontinuity_table(solver, pipe.control_positions(), pipe.modified_bi_M());
+  };
   for (int f = 0; f <= frames; ++f) {
     nlohmann::json fr;
     fr["frame"] = f;
@@ -513,21 +520,27 @@ RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
     const bool write_now = out.due(f, frames);
     std::vector<const Eigen::MatrixXd*> shown;
     if (write_now && sc.output.image) {
-      if (d == 3) {  // BI | modified-BI, drawn after the run
-        pictures.add(f, pipe.control_positions(),
-                     {pipe.bezier_with(pipeline::Method::BI), pipe.bezier_with(pipeline::Method::ModifiedBI)});
-      } else {  // BI | the run's method (| pinned): the other method evaluated only here
-        if (pipe.method() == pipeline::Method::BI) {
-          pipe.evaluate_with(pipeline::Method::ModifiedBI, other);
-          shown = {&pipe.positions(), &other};
-        } else {
-          pipe.evaluate_with(pipeline::Method::BI, other);
-          shown = {&other, &pipe.positions()};
+      // BI | modified-BI (BI | Phong | modified-BI for a Phong run)
+      std::vector<pipeline::Method> panels{pipeline::Method::BI, pipeline::Method::ModifiedBI};
+      if (pipe.method() == pipeline::Method::Phong) panels.insert(panels.begin() + 1, pipeline::Method::Phong);
+      if (d == 3) {  // drawn after the run, from the Bezier points
+        std::vector<interp::BezierPoints> B;
+        for (pipeline::Method k : panels) B.push_back(pipe.bezier_with(k));
+        pictures.add(f, pipe.control_positions(), std::move(B));
+      } else {  // the run's method is evaluated already, the others only here (| pinned)
+        others.resize(panels.size());
+        for (size_t k = 0; k < panels.size(); ++k) {
+          if (panels[k] == pipe.method()) {
+            shown.push_back(&pipe.positions());
+          } else {
+            pipe.evaluate_with(panels[k], others[k]);
+            shown.push_back(&others[k]);
+          }
         }
         if (pinned) shown.push_back(&pinned->positions());
       }
     }
-    // metrics: BI against modified-BI at the same control positions
+    // metrics: BI against modified-BI (and Phong) at the same control positions
     const bool last = f == frames;
     fr["sim_ms"] = sim_driver && f > 0 ? sim_driver->last_step().total_ms : 0.0;
     fr["drive_ms"] = tm.drive_ms;
@@ -538,7 +551,7 @@ RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
     fr["pass_ms"] = pipe.evaluator().timings().pass_ms;
     if (sc.output.metrics || last) {
       t0 = Clock::now();
-      const interp::DiscontinuityTable table = interp::discontinuity_table(solver, pipe.control_positions(), pipe.modified_bi_M());
+      const interp::DiscontinuityTable table = table_now();
       res.last_table = table;
       fr["disc"] = disc_json(table);
       fr["e_vibr"] = table.e_vibr;
@@ -555,7 +568,7 @@ RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
   pictures.write(pipe, gpu_eval, renderer.get());  // also after a failed step: what was reached
   metrics["timings_ms"]["pictures"] = ms_since(t0);
   if (res.failed && !sc.output.metrics && pipe.frame() >= 0)  // the table of the last good frame
-    res.last_table = interp::discontinuity_table(solver, pipe.control_positions(), pipe.modified_bi_M());
+    res.last_table = table_now();
   metrics["frames_completed"] = res.frames;
   metrics["failure"] = res.failed ? nlohmann::json(res.message) : nlohmann::json(nullptr);
   metrics["last_disc"] = disc_json(res.last_table);

@@ -427,7 +427,8 @@ Scene load_scene(const std::filesystem::path& file) {
     Table t = top.sub("interpolation");
     auto& i = sc.interpolation;
     i.method = t.choice("method", i.method,
-                        {{"bi", pipeline::Method::BI}, {"modified-bi", pipeline::Method::ModifiedBI}});
+                        {{"bi", pipeline::Method::BI}, {"modified-bi", pipeline::Method::ModifiedBI},
+                         {"phong", pipeline::Method::Phong}});
     i.alpha = t.number("alpha", 0.0, 0, 1e6, true);
     i.pin_boundary = t.boolean("pin_boundary", false);
     i.compare_pinned = t.boolean("compare_pinned", false);

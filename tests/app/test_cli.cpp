@@ -187,6 +187,48 @@ TEST_CASE("mbi deform --example twist-bar prints the table", "[cli]") {
   CHECK_THAT(ss.str(), Catch::Contains("Mean") && Catch::Contains("StdDev") && Catch::Contains("Max"));
 }
 
+TEST_CASE("mbi deform --example twist-bar: BI, Phong and modified-BI side by side", "[cli][phong]") {
+  TempDir dir("cli");
+  for (const char* method : {"phong", "modified-bi"}) {
+    INFO("--method " << method);
+    const Result r = run_mbi(std::string("deform --example twist-bar --method ") + method +
+                                 " --alpha 0.1 --stats " + q(dir / "s.json"),
+                             dir);
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    std::ifstream in(dir / "s.json");
+    const nlohmann::json j = nlohmann::json::parse(in);
+    CHECK(j["method"] == method);
+    // the existing keys, plus Phong's column and its ratio to BI
+    for (const char* k : {"bi", "modified_bi", "ratio", "phong", "phong_ratio"})
+      for (const char* s : {"mean", "std", "max"}) CHECK(j["disc"][k][s].is_number());
+    const double bi = j["disc"]["bi"]["mean"], ph = j["disc"]["phong"]["mean"],
+                 mb = j["disc"]["modified_bi"]["mean"];
+    CHECK(j["disc"]["phong_ratio"]["mean"].get<double>() == Approx(bi / ph));
+    CHECK(bi > ph);
+    CHECK(ph > mb);
+    // accuracy against the closed-form twist, for all three
+    for (const char* k : {"bi", "phong", "modified_bi"})
+      for (const char* s : {"position_rms", "position_max", "gradient_rms", "gradient_max", "size"})
+        CHECK(j["accuracy"][k][s].is_number());
+    CHECK(j["accuracy"]["bi"]["size"].get<double>() == Approx(std::sqrt(38.0)));
+    const double e_bi = j["accuracy"]["bi"]["position_rms"], e_ph = j["accuracy"]["phong"]["position_rms"],
+                 e_mb = j["accuracy"]["modified_bi"]["position_rms"];
+    INFO("position RMS / size: BI " << e_bi << ", Phong " << e_ph << ", modified-BI " << e_mb);
+    CHECK(e_bi > e_ph);
+    CHECK(e_ph > e_mb);
+    std::ifstream out(dir / "stdout.txt");
+    std::stringstream ss;
+    ss << out.rdbuf();
+    const std::string text = ss.str();
+    INFO(text);
+    CHECK_THAT(text, Catch::Contains("BI") && Catch::Contains("Phong") &&
+                         Catch::Contains("modified-BI") && Catch::Contains("BI/Phong") &&
+                         Catch::Contains("closed-form deformation") && Catch::Contains("pos RMS") &&
+                         Catch::Contains("grad RMS"));
+  }
+}
+
 TEST_CASE("mbi deform errors: exit 2, one line naming the culprit, nothing written", "[cli]") {
   TempDir dir("cli");
   Files f(dir);

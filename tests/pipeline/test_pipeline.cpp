@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <random>
+#include <string>
 
 using namespace mbi;
 using pipeline::FramePipeline;
@@ -88,6 +89,59 @@ TEST_CASE("pipeline: BI skips the precompute and the solve", "[pipeline]") {
   CHECK(max_abs(mbi - expect) > 1e-4);
   const interp::ModifiedBI solver(m.U, m.T);
   CHECK(max_abs(pipe.modified_bi_M() - solver.solve(X)) < 1e-10);
+}
+
+TEST_CASE("pipeline: Phong is the kernel with the closed-form M, no factorisation", "[pipeline][phong]") {
+  const test::Mesh m = bar();
+  const Eigen::MatrixXd P = points_in(m.U, 400, 9);
+  const Eigen::MatrixXd X = test::twist_bend(m.U, 1.1, 0.2);
+  auto driver = std::make_unique<pipeline::GivenDriver>(m.U);
+  driver->set(X);
+  pipeline::PipelineOptions o;
+  o.method = Method::Phong;
+  FramePipeline pipe(m.U, m.T, interp::embed(m.U, m.T, P), std::move(driver), o);
+  CHECK(pipe.phong_precompute_ms() > 0);  // the weights, once, at construction
+  REQUIRE(pipe.step().ok);
+  CHECK(pipe.precompute_ms() == 0);  // no ModifiedBI was built
+  // by hand: interp::Phong's M, Bezier points, evaluation
+  const interp::Phong ph(m.U, m.T);
+  const interp::VertexMatrices M = ph.M(X);
+  CHECK(max_abs(pipe.M() - M) < 1e-14);
+  CHECK(max_abs(pipe.phong_M() - M) < 1e-14);
+  Eigen::MatrixXd expect;
+  interp::evaluate<double>(interp::bezier_points(m.U, m.T, X, M), interp::embed(m.U, m.T, P), expect);
+  CHECK(max_abs(pipe.positions() - expect) < 1e-12);
+  // it differs from both BI and modified-BI; evaluate_with(Phong) from another method agrees
+  Eigen::MatrixXd bi, mbi;
+  pipe.evaluate_with(Method::BI, bi);
+  pipe.evaluate_with(Method::ModifiedBI, mbi);
+  CHECK(pipe.precompute_ms() > 0);
+  CHECK(max_abs(bi - expect) > 1e-4);
+  CHECK(max_abs(mbi - expect) > 1e-4);
+  pipe.set_method(Method::BI);
+  CHECK(max_abs(pipe.positions() - bi) < 1e-14);
+  Eigen::MatrixXd phong;
+  pipe.evaluate_with(Method::Phong, phong);
+  CHECK(max_abs(phong - expect) < 1e-12);
+  pipe.set_method(Method::Phong);
+  CHECK(max_abs(pipe.positions() - expect) < 1e-12);
+  // alpha does not change Phong
+  pipe.set_alpha(1.0);
+  CHECK(max_abs(pipe.positions() - expect) < 1e-12);
+}
+
+TEST_CASE("pipeline: BI builds Phong's weights only when asked", "[pipeline][phong]") {
+  const test::Mesh m = bar();
+  const Eigen::MatrixXd P = points_in(m.U, 100, 2);
+  auto driver = std::make_unique<pipeline::GivenDriver>(m.U);
+  driver->set(test::twist_bend(m.U, 0.5, 0.1));
+  pipeline::PipelineOptions o;
+  o.method = Method::BI;
+  FramePipeline pipe(m.U, m.T, interp::embed(m.U, m.T, P), std::move(driver), o);
+  REQUIRE(pipe.step().ok);
+  CHECK(pipe.phong_precompute_ms() == 0);
+  CHECK(pipe.phong_M().rows() == m.U.rows() * 3);
+  CHECK(pipe.phong_precompute_ms() > 0);
 }
 
 TEST_CASE("pipeline: switching the method takes effect on the current frame", "[pipeline]") {
@@ -227,5 +281,8 @@ TEST_CASE("pipeline: inconsistent inputs are refused", "[pipeline]") {
   CHECK_THROWS_AS(pipeline::CpuEvaluator(pipeline::Precision::Double, -1), mbi::Error);
   CHECK(pipeline::parse_method("modified-bi") == Method::ModifiedBI);
   CHECK(pipeline::parse_method("bi") == Method::BI);
-  CHECK_FALSE(pipeline::parse_method("phong").has_value());
+  CHECK(pipeline::parse_method("phong") == Method::Phong);
+  CHECK_FALSE(pipeline::parse_method("Phong").has_value());
+  CHECK(pipeline::all_methods().size() == 3);
+  CHECK(std::string(pipeline::method_names()) == "bi, modified-bi, phong");
 }

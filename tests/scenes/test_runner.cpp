@@ -239,6 +239,26 @@ TEST_CASE("a mesh override replaces the dense model and method bi gives BI outpu
   const double gap = (mod.V - expected).cwiseAbs().maxCoeff();
   INFO("BI error " << bi_err << ", modified-BI minus BI " << gap);
   CHECK(gap > 1e-3 * size);  // measured: about 1.6e-2 * size
+
+  // Phong at the same frame: interp::Phong applied here to the written X; the metrics add a
+  // Phong column (the other keys unchanged) and the pictures a third panel.
+  const fs::path ph_dir = run(mbi::pipeline::Method::Phong, "phong");
+  const SurfaceMesh ph = read_surface(frame_path(ph_dir / "mesh", last, ".obj"));
+  const mbi::interp::Phong phong(c0.X, c0.T);
+  Eigen::MatrixXd ph_expected;
+  mbi::interp::evaluate<double>(mbi::interp::bezier_points(c0.X, c0.T, cx.X, phong.M(cx.X)), emb,
+                                ph_expected);
+  CHECK((ph.V - ph_expected).cwiseAbs().maxCoeff() <= 1e-9 * size);
+  CHECK((ph.V - expected).cwiseAbs().maxCoeff() > 1e-3 * size);
+  const nlohmann::json pm = read_json(ph_dir / "metrics.json");
+  CHECK(pm["method"] == "phong");
+  const nlohmann::json& disc = pm["frames"][last]["disc"];
+  for (const char* k : {"bi", "modified_bi", "ratio", "phong", "phong_ratio"}) CHECK(disc.contains(k));
+  CHECK(disc["bi"]["mean"].get<double>() > disc["phong"]["mean"].get<double>());
+  CHECK_FALSE(read_json(mbi_dir / "metrics.json")["frames"][last]["disc"].contains("phong"));
+  const mbi::io::Image pic3 = mbi::io::read_png(frame_path(ph_dir / "frame", last, ".png"));
+  const mbi::io::Image pic2 = mbi::io::read_png(frame_path(mbi_dir / "frame", last, ".png"));
+  CHECK(pic3.width > pic2.width * 13 / 10);  // three panels instead of two
 }
 
 TEST_CASE("a failing simulation step stops the run and keeps what was written", "[runner]") {

@@ -93,6 +93,7 @@ TEST_CASE("wrong types and out-of-range values are errors naming the key", "[sce
   CHECK_THAT(err("[interpolation]\nalpha = 0\n"), Catch::Contains("interpolation.alpha"));
   CHECK_THAT(err("[interpolation]\nalpha = -0.1\n"), Catch::Contains("interpolation.alpha"));
   CHECK_THAT(err("[interpolation]\nmethod = \"cubic\"\n"), Catch::Contains("interpolation.method: unknown value"));
+  CHECK_THAT(err("[interpolation]\nmethod = \"cubic\"\n"), Catch::Contains("phong"));
   CHECK_THAT(err("[[pokes]]\nfirst = 3\nlast = 1\nat = [0.5, 0.5, 0.5]\nforce = [1, 0, 0]\n"),
              Catch::Contains("pokes[0].last"));
   CHECK_THAT(err("[[pokes]]\nat = [0.5, 0.5, 0.5]\n"), Catch::Contains("exactly one of force or target"));

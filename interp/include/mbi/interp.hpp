@@ -6,3 +6,4 @@
 #include <mbi/interp/mesh.hpp>
 #include <mbi/interp/metrics.hpp>
 #include <mbi/interp/modified_bi.hpp>
+#include <mbi/interp/phong.hpp>

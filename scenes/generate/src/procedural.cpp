@@ -272,6 +272,23 @@ Eigen::MatrixXd twist_bend(const Eigen::Ref<const Eigen::MatrixXd>& P, double cx
   return X;
 }
 
+Eigen::MatrixXd twist_bend_jacobian(const Eigen::Ref<const Eigen::MatrixXd>& P, double cx,
+                                    double cy, double z0, double z1, double angle, double bend) {
+  require(P.cols() == 3, "twist_bend_jacobian: points must be n x 3");
+  require(z1 > z0, "twist_bend_jacobian: need z1 > z0");
+  Eigen::MatrixXd J(3 * P.rows(), 3);
+  for (Eigen::Index i = 0; i < P.rows(); ++i) {
+    const double L = z1 - z0, t = (P(i, 2) - z0) / L;
+    const double s = std::clamp(t, 0.0, 1.0), ds = t >= 0.0 && t <= 1.0 ? 1.0 / L : 0.0;
+    const double th = angle * s, c = std::cos(th), sn = std::sin(th);
+    const double x = P(i, 0) - cx, y = P(i, 1) - cy;
+    J.middleRows(3 * i, 3) << c, -sn, (-sn * x - c * y) * angle * ds + 2 * bend * s * ds * L,
+        sn, c, (c * x - sn * y) * angle * ds,
+        0, 0, 1;
+  }
+  return J;
+}
+
 using io::Image;
 
 Image test_pattern(int width, int height) {

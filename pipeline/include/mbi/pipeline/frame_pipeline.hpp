@@ -8,8 +8,9 @@
 //   while (pipe.step().ok) use(pipe.positions());
 //
 // step() advances one frame (the first call gives frame 0, the initial pose) and records the
-// time of each phase. The modified-BI precompute (assembly + factorisation) happens once, when a
-// method first needs it. Shapes as in mbi::interp: U, X n x d, T m x (d+1), positions p x d.
+// time of each phase. The modified-BI precompute (assembly + factorisation) and Phong's vertex
+// weights are computed once, when a method first needs them. Shapes as in mbi::interp: U, X n x d, T m x (d+1), positions p x d.
+#include <mbi/interp/phong.hpp>
 #include <mbi/pipeline/driver.hpp>
 #include <mbi/pipeline/evaluator.hpp>
 #include <mbi/pipeline/method.hpp>
@@ -28,7 +29,7 @@ struct PipelineOptions {
 /// Wall-clock milliseconds of the last frame's phases.
 struct FrameTimings {
   double drive_ms = 0;     ///< simulator step, handle solve, or copying given positions
-  double solve_ms = 0;     ///< M from X (0 for BI, and when the driver solved M)
+  double solve_ms = 0;     ///< M from X (0 for BI, and when the driver solved M; Phong: closed form)
   double bezier_ms = 0;    ///< element control points
   double evaluate_ms = 0;  ///< dense points (the evaluator's pass)
   double total_ms() const { return drive_ms + solve_ms + bezier_ms + evaluate_ms; }
@@ -75,6 +76,8 @@ class FramePipeline {
   /// Modified-BI's M at the current X, whatever the method (solved on demand for BI): for the
   /// discontinuity table and side-by-side comparisons.
   const interp::VertexMatrices& modified_bi_M();
+  /// Phong's M at the current X, whatever the method (computed on demand, cached per frame).
+  const interp::VertexMatrices& phong_M();
   /// The current frame's dense positions with another method (CPU, double): comparison
   /// pictures and metrics. For the pipeline's own method it returns positions().
   void evaluate_with(Method method, Eigen::MatrixXd& out);
@@ -93,8 +96,12 @@ class FramePipeline {
   // --------------------------------------------------------------- parts
   /// Modified-BI precompute (built on first use). Throws as interp::ModifiedBI does.
   const interp::ModifiedBI& solver();
-  /// Milliseconds the precompute took (0 until it ran).
+  /// Phong's vertex weights (built on first use). Throws as interp::Phong does.
+  const interp::Phong& phong();
+  /// Milliseconds the modified-BI precompute took (0 until it ran).
   double precompute_ms() const;
+  /// Milliseconds Phong's weights took (0 until computed).
+  double phong_precompute_ms() const;
   Driver& driver();
   Evaluator& evaluator();
   const interp::Embedding& embedding() const;

@@ -1,7 +1,8 @@
 #pragma once
 // Interpolation methods the frame pipeline offers. All of them are evaluated by the same kernel
 // from element Bezier control points (docs/method.md fact 5); they differ only in the per-vertex
-// matrices M: BI is M = 0 (no solve), modified-BI solves M from the control positions.
+// matrices M: BI is M = 0 (no solve), modified-BI solves M from the control positions, Phong
+// deformation takes M_i = F_i / 2 in closed form (interp/phong.hpp, no factorisation).
 #include <optional>
 #include <string_view>
 #include <vector>
@@ -11,9 +12,10 @@ namespace mbi::pipeline {
 enum class Method {
   BI,          ///< plain barycentric interpolation (M = 0): no precompute, no solve
   ModifiedBI,  ///< modified-BI (Huang et al. 2008): M minimises alpha E_vibr + beta E_disc
+  Phong,       ///< Phong deformation (James 2020): M_i = F_i / 2, vertex deformation gradients
 };
 
-/// "bi", "modified-bi": the names used in scene files and on the command line.
+/// "bi", "modified-bi", "phong": the names used in scene files and on the command line.
 const char* method_name(Method m);
 /// Parses a name of method_name(); nullopt for anything else.
 std::optional<Method> parse_method(std::string_view name);
@@ -23,5 +25,7 @@ const std::vector<Method>& all_methods();
 const char* method_names();
 /// True when the method's M comes from the modified-BI solve (and needs its precompute).
 bool needs_solve(Method m);
+/// True when the method's M comes from Phong's closed form (and needs its vertex weights).
+bool needs_phong(Method m);
 
 }  // namespace mbi::pipeline

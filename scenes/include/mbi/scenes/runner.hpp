@@ -4,10 +4,11 @@
 //   <out>/mesh_NNNN.obj|ply    dense mesh at the written frames (every output.every, and last)
 //   <out>/dense.pc2            point cache of every frame (Blender Mesh Cache, 3ds Max)
 //   <out>/control_NNNN.vtk     control mesh at the written frames (ParaView)
-//   <out>/frame_NNNN.png       pictures: 3D BI | modified-BI side by side (GPU or CPU
-//                              renderer, one size and one camera for the whole run); 2D the
-//                              warped image
-//   <out>/metrics.json         per-frame timings and the discontinuity table (BI vs modified-BI)
+//   <out>/frame_NNNN.png       pictures: 3D BI | modified-BI side by side (BI | Phong | modified-BI
+//                              for method phong; GPU or CPU renderer, one size and one camera
+//                              for the whole run); 2D the warped image
+//   <out>/metrics.json         per-frame timings and the discontinuity table (BI vs modified-BI,
+//                              and Phong for method phong)
 #include <mbi/interp/embed.hpp>
 #include <mbi/interp/metrics.hpp>
 #include <mbi/io/image.hpp>

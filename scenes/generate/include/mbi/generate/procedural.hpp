@@ -47,6 +47,12 @@ void grid_2d(double width, double height, int nx, int ny, Eigen::MatrixXd& V,
 Eigen::MatrixXd twist_bend(const Eigen::Ref<const Eigen::MatrixXd>& P, double cx, double cy,
                            double z0, double z1, double angle, double bend);
 
+/// Jacobian of twist_bend at each point: (p 3) x 3, rows [i 3, i 3 + 3) hold dX_i / dP_i. At
+/// heights in [z0, z1] (ends included) the twisting branch is differentiated; outside it, the
+/// clamped rigid one. For accuracy checks against the closed form.
+Eigen::MatrixXd twist_bend_jacobian(const Eigen::Ref<const Eigen::MatrixXd>& P, double cx,
+                                    double cy, double z0, double z1, double angle, double bend);
+
 /// A procedural checkerboard-with-rings test picture (when a scene names no image).
 io::Image test_pattern(int width, int height);
 

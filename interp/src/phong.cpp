@@ -1,0 +1,100 @@
+// Phong deformation's closed-form M (phong.hpp).
+#include <mbi/interp/phong.hpp>
+
+#include "detail.hpp"
+
+#include <cmath>
+#include <string>
+
+namespace mbi::interp {
+
+Phong::Phong(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T)
+    : U_(U), T_(T) {
+  validate_mesh(U, T);
+  const int n = static_cast<int>(U.rows()), d = static_cast<int>(U.cols());
+  const int m = static_cast<int>(T.rows());
+  Dm_inv_.resize(static_cast<Eigen::Index>(m) * d, d);
+  Eigen::MatrixXd centroids(m, d);
+  elements_of_.assign(static_cast<size_t>(n), {});
+  for (int e = 0; e < m; ++e) {
+    Eigen::MatrixXd Dm(d, d);
+    for (int k = 0; k < d; ++k) Dm.col(k) = (U.row(T(e, k + 1)) - U.row(T(e, 0))).transpose();
+    Dm_inv_.middleRows(static_cast<Eigen::Index>(e) * d, d) = Dm.inverse();
+    centroids.row(e) = Eigen::RowVectorXd::Zero(d);
+    for (int k = 0; k <= d; ++k) {
+      centroids.row(e) += U.row(T(e, k)) / (d + 1);
+      elements_of_[static_cast<size_t>(T(e, k))].push_back(e);
+    }
+  }
+  weights_.assign(static_cast<size_t>(n), {});
+  lambda_ = Eigen::MatrixXd::Zero(n, d);
+  for (int i = 0; i < n; ++i) {
+    const std::vector<int>& es = elements_of_[static_cast<size_t>(i)];
+    if (es.empty()) continue;
+    const size_t k = es.size();
+    std::vector<Eigen::VectorXd> rh(k);
+    std::vector<double> len(k);
+    Eigen::MatrixXd S = Eigen::MatrixXd::Identity(d, d);
+    Eigen::VectorXd s = Eigen::VectorXd::Zero(d);
+    for (size_t a = 0; a < k; ++a) {
+      const Eigen::VectorXd r = (centroids.row(es[a]) - U.row(i)).transpose();
+      len[a] = r.norm();  // > 0: the centroid of a valid element is not one of its vertices
+      rh[a] = r / len[a];
+      S += rh[a] * rh[a].transpose();
+      s += rh[a];
+    }
+    const Eigen::VectorXd lambda = -S.ldlt().solve(s);  // I + sum rh rh^T is SPD
+    lambda_.row(i) = lambda.transpose();
+    std::vector<double>& w = weights_[static_cast<size_t>(i)];
+    w.resize(k);
+    double sum = 0, abs_sum = 0;
+    for (size_t a = 0; a < k; ++a) {
+      w[a] = (1 + lambda.dot(rh[a])) / len[a];
+      sum += w[a];
+      abs_sum += std::abs(w[a]);
+    }
+    if (!(sum > 1e-3 * abs_sum)) {
+      // the correction (nearly) cancelled the weights: plain Shepard weights for this vertex
+      ++fallback_;
+      sum = 0;
+      for (size_t a = 0; a < k; ++a) sum += (w[a] = 1 / len[a]);
+    }
+    for (double& x : w) x /= sum;
+  }
+}
+
+Eigen::MatrixXd Phong::element_gradients(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
+  const int d = dim(), m = elements();
+  if (X.rows() != U_.rows() || X.cols() != d)
+    throw Error("Phong: X must be " + std::to_string(U_.rows()) + " x " + std::to_string(d) +
+                ", got " + std::to_string(X.rows()) + " x " + std::to_string(X.cols()));
+  detail::check_finite("Phong", "deformed vertex", X);
+  Eigen::MatrixXd F(static_cast<Eigen::Index>(m) * d, d);
+  Eigen::MatrixXd Ds(d, d);
+  for (int e = 0; e < m; ++e) {
+    for (int k = 0; k < d; ++k) Ds.col(k) = (X.row(T_(e, k + 1)) - X.row(T_(e, 0))).transpose();
+    F.middleRows(static_cast<Eigen::Index>(e) * d, d).noalias() =
+        Ds * Dm_inv_.middleRows(static_cast<Eigen::Index>(e) * d, d);
+  }
+  return F;
+}
+
+Eigen::MatrixXd Phong::vertex_gradients(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
+  const int d = dim(), n = vertices();
+  const Eigen::MatrixXd Fe = element_gradients(X);
+  Eigen::MatrixXd F = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n) * d, d);
+  for (int i = 0; i < n; ++i) {
+    const std::vector<int>& es = elements_of_[static_cast<size_t>(i)];
+    const std::vector<double>& w = weights_[static_cast<size_t>(i)];
+    for (size_t a = 0; a < es.size(); ++a)
+      F.middleRows(static_cast<Eigen::Index>(i) * d, d) +=
+          w[a] * Fe.middleRows(static_cast<Eigen::Index>(es[a]) * d, d);
+  }
+  return F;
+}
+
+VertexMatrices Phong::M(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
+  return 0.5 * vertex_gradients(X);
+}
+
+}  // namespace mbi::interp
