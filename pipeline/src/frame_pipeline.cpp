@@ -268,6 +268,14 @@ double FramePipeline::precompute_ms() const { return impl_->precompute_ms; }
 const interp::Phong& FramePipeline::phong() { return impl_->get_phong(); }
 double FramePipeline::phong_precompute_ms() const { return impl_->phong_ms; }
 Driver& FramePipeline::driver() { return *impl_->driver; }
+
+std::unique_ptr<Driver> FramePipeline::set_driver(std::unique_ptr<Driver> driver) {
+  if (!driver) throw Error("FramePipeline: no driver");
+  std::swap(impl_->driver, driver);
+  impl_->have_mbi = false;
+  if (needs_solve(impl_->options.method) && !impl_->driver->solved_M()) impl_->get_solver();
+  return driver;
+}
 Evaluator& FramePipeline::evaluator() { return *impl_->evaluator; }
 const interp::Embedding& FramePipeline::embedding() const { return *impl_->embedding; }
 const Eigen::MatrixXd& FramePipeline::rest_positions() const { return impl_->U; }

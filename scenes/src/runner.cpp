@@ -261,6 +261,12 @@ Eigen::MatrixXd vertex_normals(const Eigen::MatrixXd& V, const Eigen::MatrixXi& 
 
 }  // namespace
 
+std::unique_ptr<pipeline::Driver> make_driver(const Scene& sc, const SceneModels& m) {
+  if (sc.mode == Mode::Simulate && m.dim() != 3)
+    throw SceneError(sc.file.string() + ": mode = \"simulate\" needs a 3D control mesh (use mode = \"drag\" in 2D)");
+  return sc.mode == Mode::Simulate ? simulation_driver(sc, m) : drag_driver(sc, m);
+}
+
 pipeline::FramePipeline make_pipeline(const Scene& sc, const SceneModels& m,
                                       interp::Embedding embedding,
                                       std::unique_ptr<pipeline::Evaluator> evaluator) {

@@ -12,9 +12,9 @@
 namespace mbi::gpu {
 namespace {
 
-// The rasteriser's orthographic framing (raster.cpp, Projector) as a matrix acting on positions
-// relative to `origin`: clip x, y from the screen mapping, z from the depth range of the bounds.
-Eigen::Matrix4f view_projection(const raster::View& v, int w, int h, const Eigen::Vector3d& origin) {
+// The rasteriser's orthographic framing (raster.cpp, Projector) as a matrix acting on world
+// positions: clip x, y from the screen mapping, z from the depth range of the bounds.
+Eigen::Matrix4d ortho_view(const raster::View& v, int w, int h) {
   const Eigen::Vector3d fwd = v.direction.normalized();
   const Eigen::Vector3d right = fwd.cross(v.up).normalized();
   const Eigen::Vector3d up = right.cross(fwd);
@@ -34,13 +34,21 @@ Eigen::Matrix4f view_projection(const raster::View& v, int w, int h, const Eigen
   z0 -= pad, z1 += pad;
   Eigen::Matrix4d M = Eigen::Matrix4d::Zero();
   M.block<1, 3>(0, 0) = (2 * scale / w) * right.transpose();
-  M(0, 3) = 2 * scale / w * (origin.dot(right) - cx);
+  M(0, 3) = -2 * scale / w * cx;
   M.block<1, 3>(1, 0) = (2 * scale / h) * up.transpose();
-  M(1, 3) = 2 * scale / h * (origin.dot(up) - cy);
+  M(1, 3) = -2 * scale / h * cy;
   M.block<1, 3>(2, 0) = (2 / (z1 - z0)) * fwd.transpose();
-  M(2, 3) = 2 * (origin.dot(fwd) - z0) / (z1 - z0) - 1;
+  M(2, 3) = -2 * z0 / (z1 - z0) - 1;
   M(3, 3) = 1;
-  return M.cast<float>();
+  return M;
+}
+
+// World -> clip composed with the translation by `origin` (GPU positions are relative to it),
+// in float: the large parts cancel in double first.
+Eigen::Matrix4f relative_to(const Eigen::Matrix4d& vp, const Eigen::Vector3d& origin) {
+  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  T.block<3, 1>(0, 3) = origin;
+  return (vp * T).cast<float>();
 }
 
 }  // namespace
@@ -48,6 +56,7 @@ Eigen::Matrix4f view_projection(const raster::View& v, int w, int h, const Eigen
 Renderer::Renderer(Context& context) : context_(context) {
   mesh_program_ = detail::program("", shaders::mesh_vs, shaders::mesh_fs);
   line_program_ = detail::program("", shaders::line_vs, shaders::line_fs);
+  texture_program_ = detail::program("", shaders::texture_vs, shaders::texture_fs);
   glGenVertexArrays(1, &vao_);
   glGenVertexArrays(1, &line_vao_);
   glGenBuffers(1, &index_);
@@ -68,6 +77,8 @@ Renderer::~Renderer() {
     if (r) glDeleteRenderbuffers(1, &r);
   if (mesh_program_) glDeleteProgram(mesh_program_);
   if (line_program_) glDeleteProgram(line_program_);
+  if (texture_program_) glDeleteProgram(texture_program_);
+  if (texture_) glDeleteTextures(1, &texture_);
 }
 
 void Renderer::set_faces(const Eigen::Ref<const Eigen::MatrixXi>& F) {
@@ -107,24 +118,19 @@ void Renderer::ensure_target(int width, int height) {
   height_ = height;
 }
 
-io::Image Renderer::render(const GpuEvaluator& ev, const raster::View& view, int width, int height,
-                           const Eigen::Vector3d& color, const Eigen::MatrixXd* wire_X,
-                           const Eigen::MatrixXi* wire_T) {
-  if (width < 1 || height < 1 || width > 16384 || height > 16384)
-    throw GlError("Renderer: picture size " + std::to_string(width) + " x " + std::to_string(height) +
-                  " out of range [1, 16384]");
+Eigen::Matrix4d Renderer::view_matrix(const raster::View& view, int width, int height) {
+  return ortho_view(view, width, height);
+}
+
+void Renderer::draw(const GpuEvaluator& ev, const Eigen::Matrix4d& view_projection,
+                    const Eigen::Vector3d& eye_direction, const Eigen::Vector3d& color,
+                    const Eigen::MatrixXd* wire_X, const Eigen::MatrixXi* wire_T) {
   if (ev.dim() != 3 || !ev.has_normals())
     throw GlError("Renderer: needs a 3D evaluation with normals");
-  ensure_target(width, height);
-  glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
-  glViewport(0, 0, width, height);
-  glClearColor(1, 1, 1, 1);
-  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
-  const Eigen::Matrix4f vp = view_projection(view, width, height, ev.origin());
-  const Eigen::Vector3f eye = view.direction.normalized().cast<float>();
-
+  const Eigen::Matrix4f vp = relative_to(view_projection, ev.origin());
+  const Eigen::Vector3f eye = eye_direction.normalized().cast<float>();
   glUseProgram(mesh_program_);
   glUniformMatrix4fv(glGetUniformLocation(mesh_program_, "view_projection"), 1, GL_FALSE, vp.data());
   glUniform3f(glGetUniformLocation(mesh_program_, "color"), static_cast<float>(color.x()),
@@ -141,13 +147,11 @@ io::Image Renderer::render(const GpuEvaluator& ev, const raster::View& view, int
   glPolygonOffset(1.0f, 1.0f);
   glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(indices_), GL_UNSIGNED_INT, nullptr);
   glDisable(GL_POLYGON_OFFSET_FILL);
-
   if (wire_X && wire_T && wire_T->cols() == 4) {
     std::set<std::pair<int, int>> edges;
     for (Eigen::Index e = 0; e < wire_T->rows(); ++e)
       for (int a = 0; a < 4; ++a)
-        for (int b = a + 1; b < 4; ++b)
-          edges.insert(std::minmax((*wire_T)(e, a), (*wire_T)(e, b)));
+        for (int b = a + 1; b < 4; ++b) edges.insert(std::minmax((*wire_T)(e, a), (*wire_T)(e, b)));
     std::vector<float> lines;
     lines.reserve(edges.size() * 6);
     for (const auto& [a, b] : edges)
@@ -166,6 +170,84 @@ io::Image Renderer::render(const GpuEvaluator& ev, const raster::View& view, int
   glBindVertexArray(0);
   glUseProgram(0);
   glDisable(GL_DEPTH_TEST);
+  detail::check("Renderer::draw");
+}
+
+void Renderer::draw_textured(const GpuEvaluator& ev, const Eigen::Matrix4d& view_projection,
+                             const io::Image& image) {
+  if (ev.dim() != 2) throw GlError("Renderer: textured drawing is for 2D evaluations");
+  if (!texture_ || texture_image_ != &image) {
+    if (!texture_) glGenTextures(1, &texture_);
+    glBindTexture(GL_TEXTURE_2D, texture_);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, image.width, image.height, 0, GL_RGB, GL_UNSIGNED_BYTE,
+                 image.rgb.data());
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    texture_image_ = &image;
+  }
+  const Eigen::Matrix4f vp = relative_to(view_projection, ev.origin());
+  glUseProgram(texture_program_);
+  glUniformMatrix4fv(glGetUniformLocation(texture_program_, "view_projection"), 1, GL_FALSE, vp.data());
+  glUniform3f(glGetUniformLocation(texture_program_, "origin"), static_cast<float>(ev.origin().x()),
+              static_cast<float>(ev.origin().y()), static_cast<float>(ev.origin().z()));
+  glUniform2f(glGetUniformLocation(texture_program_, "image_size"), static_cast<float>(image.width),
+              static_cast<float>(image.height));
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, texture_);
+  glUniform1i(glGetUniformLocation(texture_program_, "image"), 0);
+  glBindVertexArray(vao_);
+  const GLuint sources[2] = {ev.rest_buffer(), ev.displacement_buffer()};
+  for (GLuint loc = 0; loc < 2; ++loc) {
+    glBindBuffer(GL_ARRAY_BUFFER, sources[loc]);
+    glEnableVertexAttribArray(loc);
+    glVertexAttribPointer(loc, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+  }
+  glDisableVertexAttribArray(2);
+  glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(indices_), GL_UNSIGNED_INT, nullptr);
+  glBindVertexArray(0);
+  glUseProgram(0);
+  detail::check("Renderer::draw_textured");
+}
+
+void Renderer::draw_points(const Eigen::MatrixXd& points, const Eigen::Matrix4d& view_projection,
+                           const Eigen::Vector3d& color, float size) {
+  if (points.rows() == 0) return;
+  const Eigen::Vector3d origin = points.colwise().mean().transpose();
+  std::vector<float> data;
+  for (Eigen::Index i = 0; i < points.rows(); ++i)
+    for (int c = 0; c < 3; ++c) data.push_back(static_cast<float>(points(i, c) - origin(c)));
+  const Eigen::Matrix4f vp = relative_to(view_projection, origin);
+  glUseProgram(line_program_);
+  glUniformMatrix4fv(glGetUniformLocation(line_program_, "view_projection"), 1, GL_FALSE, vp.data());
+  glUniform3f(glGetUniformLocation(line_program_, "color"), static_cast<float>(color.x()),
+              static_cast<float>(color.y()), static_cast<float>(color.z()));
+  glBindVertexArray(line_vao_);
+  glBindBuffer(GL_ARRAY_BUFFER, line_buffer_);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.size() * sizeof(float)), data.data(), GL_STREAM_DRAW);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+  glPointSize(size);
+  glDrawArrays(GL_POINTS, 0, static_cast<GLsizei>(points.rows()));
+  glBindVertexArray(0);
+  glUseProgram(0);
+  detail::check("Renderer::draw_points");
+}
+
+io::Image Renderer::render(const GpuEvaluator& ev, const raster::View& view, int width, int height,
+                           const Eigen::Vector3d& color, const Eigen::MatrixXd* wire_X,
+                           const Eigen::MatrixXi* wire_T) {
+  if (width < 1 || height < 1 || width > 16384 || height > 16384)
+    throw GlError("Renderer: picture size " + std::to_string(width) + " x " + std::to_string(height) +
+                  " out of range [1, 16384]");
+  ensure_target(width, height);
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
+  glViewport(0, 0, width, height);
+  glClearColor(1, 1, 1, 1);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  draw(ev, ortho_view(view, width, height), view.direction, color, wire_X, wire_T);
 
   std::vector<std::uint8_t> rgba(static_cast<size_t>(width) * height * 4);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);

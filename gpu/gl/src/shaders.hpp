@@ -88,6 +88,28 @@ void main() {
 }
 )";
 
+// 2D: the warped picture; texture coordinates from the rest pixel positions.
+inline const char* texture_vs = R"(
+layout(location = 0) in vec3 rest;
+layout(location = 1) in vec3 displacement;
+uniform mat4 view_projection;
+uniform vec3 origin;     // the evaluator's origin (rest = rest pixel position - origin)
+uniform vec2 image_size;
+out vec2 uv;
+void main() {
+  vec3 r = rest + origin;
+  uv = vec2(r.x / image_size.x, r.y / image_size.y);
+  gl_Position = view_projection * vec4(rest + displacement, 1.0);
+}
+)";
+
+inline const char* texture_fs = R"(
+in vec2 uv;
+uniform sampler2D image;
+out vec4 frag;
+void main() { frag = vec4(texture(image, uv).rgb, 1.0); }
+)";
+
 // Lines (control-mesh wireframe) in a flat colour.
 inline const char* line_vs = R"(
 layout(location = 0) in vec3 position;

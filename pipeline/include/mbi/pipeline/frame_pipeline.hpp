@@ -103,6 +103,10 @@ class FramePipeline {
   /// Milliseconds Phong's weights took (0 until computed).
   double phong_precompute_ms() const;
   Driver& driver();
+  /// Replaces the driver (e.g. the viewer switching between simulation and direct handles) and
+  /// returns the old one; frames go on from the current frame number, the next step() asks the
+  /// new driver.
+  std::unique_ptr<Driver> set_driver(std::unique_ptr<Driver> driver);
   Evaluator& evaluator();
   const interp::Embedding& embedding() const;
   const Eigen::MatrixXd& rest_positions() const;

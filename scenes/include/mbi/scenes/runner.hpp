@@ -47,6 +47,9 @@ pipeline::FramePipeline make_pipeline(const Scene& scene, const SceneModels& mod
                                       interp::Embedding embedding,
                                       std::unique_ptr<pipeline::Evaluator> evaluator = nullptr);
 
+/// The driver alone of make_pipeline (to rebuild a simulation with another material).
+std::unique_ptr<pipeline::Driver> make_driver(const Scene& scene, const SceneModels& models);
+
 struct RunOptions {
   std::filesystem::path out_dir;         ///< empty: "out/<scene name>"
   int frames = 0;                        ///< 0: the scene's

@@ -27,6 +27,25 @@ class Renderer {
                    const Eigen::Vector3d& color = {0.85, 0.62, 0.35},
                    const Eigen::MatrixXd* wire_X = nullptr, const Eigen::MatrixXi* wire_T = nullptr);
 
+  /// Draws into the bound framebuffer and viewport (a window): world -> clip matrix
+  /// `view_projection`, `eye_direction` from the eye into the scene (headlight). Depth test on;
+  /// the caller clears.
+  void draw(const GpuEvaluator& evaluator, const Eigen::Matrix4d& view_projection,
+            const Eigen::Vector3d& eye_direction, const Eigen::Vector3d& color,
+            const Eigen::MatrixXd* wire_X = nullptr, const Eigen::MatrixXi* wire_T = nullptr);
+  /// 2D: draws the evaluator's triangles textured with `image`, texture coordinates from the rest
+  /// positions (pixels: x right, y down, as the scene's image grid). Uploads the image once per
+  /// new image pointer.
+  void draw_textured(const GpuEvaluator& evaluator, const Eigen::Matrix4d& view_projection,
+                     const io::Image& image);
+  /// Draws points (k x 3, world) as squares of `size` pixels in a flat colour, over everything.
+  void draw_points(const Eigen::MatrixXd& points, const Eigen::Matrix4d& view_projection,
+                   const Eigen::Vector3d& color, float size);
+
+  /// The orthographic world -> clip matrix of a raster::View at width x height (the CPU
+  /// rasteriser's framing).
+  static Eigen::Matrix4d view_matrix(const raster::View& view, int width, int height);
+
  private:
   void ensure_target(int width, int height);
   Context& context_;
@@ -34,6 +53,8 @@ class Renderer {
   long long indices_ = 0;
   unsigned line_vao_ = 0, line_buffer_ = 0;
   unsigned fbo_ = 0, color_ = 0, depth_ = 0;
+  unsigned texture_program_ = 0, texture_ = 0;
+  const io::Image* texture_image_ = nullptr;
   int width_ = 0, height_ = 0;
 };
 

@@ -1,0 +1,59 @@
+// mbi view SCENE [--mesh FILE] [--method M] [--script FILE] [--record FILE] [--frames N]
+//               [--screenshot PATH] [--report FILE] [--size WxH] [--paused] [--no-split]
+#include "commands.hpp"
+
+#include <mbi/pipeline/method.hpp>
+#include <mbi/viewer/scene_view.hpp>
+
+#include <cstdio>
+
+namespace mbi::cli {
+namespace {
+
+struct ViewArgs {
+  std::string scene, mesh, method, script, record, screenshot, report;
+  int frames = 0, width = 1280, height = 720;
+  bool paused = false, no_split = false, wireframe = false;
+};
+
+int run_view(const ViewArgs& a) {
+  scenes::Scene sc = scenes::load_scene(a.scene);
+  if (!a.method.empty()) sc.interpolation.method = *pipeline::parse_method(a.method);
+  viewer::ViewerOptions o;
+  o.width = a.width;
+  o.height = a.height;
+  o.frames = a.frames;
+  o.screenshot = a.screenshot;
+  o.script = a.script;
+  o.record = a.record;
+  o.report = a.report;
+  o.playing = !a.paused;
+  o.split = !a.no_split;
+  o.wireframe = a.wireframe;
+  return viewer::view_scene(sc, a.mesh, o);
+}
+
+const Registrar reg{
+    "view", "Open a scene in the interactive viewer (pokes, direct dragging, split view)",
+    [](CLI::App& sub) -> Action {
+      auto a = std::make_shared<ViewArgs>();
+      sub.add_option("scene", a->scene, "scene file (.toml)")->required();
+      sub.add_option("--mesh", a->mesh, "dense model replacing the scene's (.obj/.ply/.off/.stl)");
+      sub.add_option("--method", a->method, "interpolation replacing the scene's")
+          ->check(CLI::IsMember({"bi", "modified-bi", "phong"}));
+      sub.add_option("--script", a->script, "replay recorded input events (FRAME EVENT ARGS per line)");
+      sub.add_option("--record", a->record, "record the input events to this file");
+      sub.add_option("--frames", a->frames, "close after N frames (0 = when the window closes)")
+          ->check(CLI::Range(0, 100000000));
+      sub.add_option("--screenshot", a->screenshot, "write the last frame as PNG when closing");
+      sub.add_option("--report", a->report, "write per-frame state (pokes, handles, energies) as JSON");
+      sub.add_option("--width", a->width, "window width")->check(CLI::Range(160, 8192));
+      sub.add_option("--height", a->height, "window height")->check(CLI::Range(120, 8192));
+      sub.add_flag("--paused", a->paused, "start paused");
+      sub.add_flag("--no-split", a->no_split, "only the scene's method (no BI panel)");
+      sub.add_flag("--wireframe", a->wireframe, "show the control mesh's edges");
+      return [a] { return run_view(*a); };
+    }};
+
+}  // namespace
+}  // namespace mbi::cli

@@ -1,0 +1,14 @@
+#pragma once
+// `mbi view SCENE`: a scene's models and frame pipeline in the viewer (the scene's simulation or
+// drags; Young's modulus and Poisson ratio editable: the simulation is rebuilt).
+#include <mbi/scenes/runner.hpp>
+#include <mbi/viewer/viewer.hpp>
+
+namespace mbi::viewer {
+
+/// Opens the viewer on a scene (mesh_override replaces its dense model). Returns the exit code.
+/// Throws ViewerError (no display), mbi::Error (bad scene or models).
+int view_scene(const scenes::Scene& scene, const std::filesystem::path& mesh_override,
+               ViewerOptions options);
+
+}  // namespace mbi::viewer

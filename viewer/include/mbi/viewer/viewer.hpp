@@ -1,0 +1,84 @@
+#pragma once
+// mbi::viewer -- the interactive viewer (`mbi view SCENE`): a GLFW window with OpenGL core, a
+// Dear ImGui panel, the dense mesh drawn from the GPU evaluator's buffers, driven by one frame
+// pipeline. Pokes (grab the surface, a bounded spring pulls it), direct mode (click control
+// vertices to make them handles and drag them: paper Eq. 10/11), BI | modified-BI split view.
+//
+// A few lines open a viewer on any pipeline (in the spirit of polyscope):
+//
+//   mbi::viewer::Viewer viewer;                        // window + OpenGL context
+//   mbi::pipeline::FramePipeline pipe(U, T, mbi::interp::embed(U, T, P), std::move(driver),
+//                                     {.normals = true}, viewer.evaluator(), rest_normals);
+//   viewer.show(pipe, F, [&](mbi::viewer::Viewer&) { given.set(next_positions()); });
+//
+// Input replay: `script` lines "FRAME EVENT ARGS" (window coordinates, y down):
+//   FRAME press X Y BUTTON | FRAME move X Y | FRAME release X Y BUTTON | FRAME scroll DY |
+//   FRAME key NAME
+// `record` writes the same lines for what the user did, so a session can be replayed.
+#include <mbi/error.hpp>
+#include <mbi/gpu/evaluator.hpp>
+#include <mbi/io/image.hpp>
+#include <mbi/pipeline/frame_pipeline.hpp>
+
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace mbi::viewer {
+
+/// No display, no OpenGL 3.3 window, or a bad script: the message says which.
+class ViewerError : public mbi::Error {
+ public:
+  using mbi::Error::Error;
+};
+
+struct ViewerOptions {
+  int width = 1280, height = 720;        ///< window size (logical pixels)
+  std::string title = "mbi";
+  bool split = true;                     ///< BI | the pipeline's method side by side
+  bool wireframe = false;                ///< control-mesh edges
+  bool handles = true;                   ///< handle markers (direct mode)
+  bool playing = true;
+  bool panel = true;                     ///< the ImGui panel
+  int frames = 0;                        ///< > 0: close after this many frames
+  std::filesystem::path screenshot;      ///< written when the viewer closes (PNG)
+  std::filesystem::path script;          ///< input events to replay
+  std::filesystem::path record;          ///< input events to record
+  std::filesystem::path report;          ///< JSON per frame: pokes, handles, energies (tests)
+  Eigen::Vector3d up = Eigen::Vector3d::UnitY();
+  double poke_response = 0.15;           ///< s, natural period of a poke spring
+};
+
+class Viewer {
+ public:
+  /// Opens the window and its OpenGL context. Throws ViewerError (no display: one line).
+  explicit Viewer(const ViewerOptions& options = {});
+  ~Viewer();
+  Viewer(const Viewer&) = delete;
+  Viewer& operator=(const Viewer&) = delete;
+
+  /// A GPU evaluator in the viewer's context, for the pipeline to show.
+  std::unique_ptr<gpu::GpuEvaluator> evaluator();
+
+  /// Shows `pipe` (3D: faces F of the dense surface; 2D: triangles, drawn textured with
+  /// `image`) until the window closes or options.frames pass. `per_frame` runs before each
+  /// step. `rebuild` (optional) makes a new simulation driver when the material changes
+  /// (Young's modulus Pa, Poisson ratio). Returns 0.
+  using Callback = std::function<void(Viewer&)>;
+  using Rebuild = std::function<std::unique_ptr<pipeline::Driver>(double young, double poisson)>;
+  int show(pipeline::FramePipeline& pipe, const Eigen::MatrixXi& F, Callback per_frame = {},
+           const io::Image* image = nullptr, Rebuild rebuild = {}, double young = 0, double poisson = 0);
+
+  /// The last frame's picture of the window (RGB).
+  io::Image screenshot();
+  int frame() const;
+  ViewerOptions& options();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace mbi::viewer
