@@ -13,7 +13,7 @@ namespace {
 struct ViewArgs {
   std::string scene, mesh, method, script, record, screenshot, report;
   int frames = 0, width = 1280, height = 720;
-  bool paused = false, no_split = false, wireframe = false;
+  bool paused = false, no_split = false, wireframe = false, no_panel = false;
 };
 
 int run_view(const ViewArgs& a) {
@@ -30,6 +30,7 @@ int run_view(const ViewArgs& a) {
   o.playing = !a.paused;
   o.split = !a.no_split;
   o.wireframe = a.wireframe;
+  o.panel = !a.no_panel;
   return viewer::view_scene(sc, a.mesh, o);
 }
 
@@ -52,6 +53,7 @@ const Registrar reg{
       sub.add_flag("--paused", a->paused, "start paused");
       sub.add_flag("--no-split", a->no_split, "only the scene's method (no BI panel)");
       sub.add_flag("--wireframe", a->wireframe, "show the control mesh's edges");
+      sub.add_flag("--no-panel", a->no_panel, "hide the control panel (clean screenshots)");
       return [a] { return run_view(*a); };
     }};
 

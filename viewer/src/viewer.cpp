@@ -526,7 +526,9 @@ int Viewer::show(pipeline::FramePipeline& pipe, const Eigen::MatrixXi& F, Callba
   while (!glfwWindowShouldClose(s.window) && !s.close) {
     glfwPollEvents();
     while (!s.script.empty() && s.script.front().frame <= s.frame) {
-      s.queue.push_back(s.script.front());
+      Event e = s.script.front();
+      e.frame = s.frame;
+      s.push(e);  // replayed events are recorded too
       s.script.pop_front();
     }
     while (!s.queue.empty()) {
@@ -534,7 +536,7 @@ int Viewer::show(pipeline::FramePipeline& pipe, const Eigen::MatrixXi& F, Callba
       s.queue.pop_front();
     }
     if (per_frame) per_frame(*this);
-    if (s.opt.playing || s.step_once) {
+    if (s.opt.playing || s.step_once || s.direct) {  // direct mode has no time: it follows the handles
       const pipeline::FrameResult r = pipe.step(false);
       if (!r.ok) {
         s.message = "step failed: " + r.message + " (paused; r resets)";
@@ -707,6 +709,16 @@ int Viewer::show(pipeline::FramePipeline& pipe, const Eigen::MatrixXi& F, Callba
         hs.push_back({{"vertex", s.handles[h]}, {"position", {pos.x(), pos.y(), pos.z()}}, {"target", {tgt.x(), tgt.y(), tgt.z()}}});
       }
       fr["handles"] = hs;
+      if (s.report.empty()) {  // where the control vertices are on screen (last panel), for scripts
+        const int np = static_cast<int>(panels.size());
+        const double pw = static_cast<double>(s.window_w()) / np;
+        nlohmann::json cs = nlohmann::json::array();
+        for (Eigen::Index i = 0; i < X3.rows(); ++i) {
+          const Eigen::Vector2d q = s.camera.project(X3.row(i).transpose(), static_cast<int>(std::lround(pw)), s.window_h());
+          cs.push_back({q.x() + (np - 1) * pw, q.y()});
+        }
+        fr["control_window"] = cs;
+      }
       s.report.push_back(fr);
     }
     glfwSwapBuffers(s.window);
