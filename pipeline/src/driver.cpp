@@ -7,37 +7,23 @@ namespace mbi::pipeline {
 
 SimulatorDriver::SimulatorDriver(sim::Simulator simulator) : sim_(std::move(simulator)) {}
 
+void SimulatorDriver::add_scripted(const Scripted& s) {
+  if (s.first < 0 || s.last < s.first)
+    throw Error(std::string(s.is_force ? "scripted force" : "scripted poke") + ": frames [" +
+                std::to_string(s.first) + ", " + std::to_string(s.last) + "] are not a range of frames >= 0");
+  scripted_.push_back(s);
+}
+
 void SimulatorDriver::add_scripted_force(int first, int last, int element,
                                          const Eigen::Vector4d& bary,
                                          const Eigen::Vector3d& force) {
-  if (first < 0 || last < first)
-    throw Error("scripted force: frames [" + std::to_string(first) + ", " + std::to_string(last) +
-                "] are not a range of frames >= 0");
-  Scripted s;
-  s.first = first;
-  s.last = last;
-  s.element = element;
-  s.bary = bary;
-  s.is_force = true;
-  s.value = force;
-  scripted_.push_back(s);
+  add_scripted({first, last, element, bary, true, force, 0.0, -1});
 }
 
 void SimulatorDriver::add_scripted_spring(int first, int last, int element,
                                           const Eigen::Vector4d& bary,
                                           const Eigen::Vector3d& target, double stiffness) {
-  if (first < 0 || last < first)
-    throw Error("scripted poke: frames [" + std::to_string(first) + ", " + std::to_string(last) +
-                "] are not a range of frames >= 0");
-  Scripted s;
-  s.first = first;
-  s.last = last;
-  s.element = element;
-  s.bary = bary;
-  s.is_force = false;
-  s.value = target;
-  s.stiffness = stiffness;
-  scripted_.push_back(s);
+  add_scripted({first, last, element, bary, false, target, stiffness, -1});
 }
 
 DriveResult SimulatorDriver::drive(int frame, Eigen::MatrixXd& X) {

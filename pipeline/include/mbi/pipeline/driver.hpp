@@ -68,6 +68,7 @@ class SimulatorDriver final : public Driver {
     double stiffness = 0.0;
     int handle = -1;  // simulator handle while active
   };
+  void add_scripted(const Scripted& s);
   sim::Simulator sim_;
   std::vector<Scripted> scripted_;
   sim::StepResult last_;
