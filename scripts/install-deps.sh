@@ -8,13 +8,15 @@ set -euo pipefail
 # subdivision), stb (PNG), toml11 (scenes), CLI11 (command line), nlohmann-json (reports),
 # Catch2 (tests), Google Benchmark (mbi-bench); OpenGL for the GPU evaluator and renderer: libepoxy
 # (the one GL loader), EGL/GL headers, and Mesa's EGL and llvmpipe driver so that the GPU path runs
-# headless on machines without a GPU (CI).
+# headless on machines without a GPU (CI); matplotlib for the plots of the benchmark report
+# (scripts/bench.sh).
 packages=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libtet1.5-dev libopenmesh-dev
   libtoml11-dev libcli11-dev nlohmann-json3-dev libstb-dev
   catch2 libbenchmark-dev
   libepoxy-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
+  python3-matplotlib
 )
 
 missing=()
