@@ -5,6 +5,8 @@
 // last, so every frame measured is one that `mbi run` computes.
 //
 //   build/release/mbi-bench --benchmark_filter=Frame
+#include "bench_common.hpp"
+
 #include <mbi/scenes/runner.hpp>
 
 #include <benchmark/benchmark.h>
@@ -61,11 +63,15 @@ void BM_SceneFrame(benchmark::State& st, const std::string& name) {
   st.counters["control"] = static_cast<double>(s.models.U.rows());
 }
 
-}  // namespace
+// Quick mode (CI): every scene but `large`.
+[[maybe_unused]] const bool registered = [] {
+  for (const char* name : {"twist-bar", "cantilever", "poke", "drag", "image-warp", "large"}) {
+    if (mbi::bench::quick() && std::string(name) == "large") continue;
+    benchmark::RegisterBenchmark((std::string("BM_SceneFrame/") + name).c_str(), BM_SceneFrame,
+                                 std::string(name))
+        ->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(mbi::bench::min_time(0.5));
+  }
+  return true;
+}();
 
-BENCHMARK_CAPTURE(BM_SceneFrame, twist_bar, std::string("twist-bar"))->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(BM_SceneFrame, cantilever, std::string("cantilever"))->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(BM_SceneFrame, poke, std::string("poke"))->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(BM_SceneFrame, drag, std::string("drag"))->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(BM_SceneFrame, image_warp, std::string("image-warp"))->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(BM_SceneFrame, large, std::string("large"))->Unit(benchmark::kMillisecond)->UseRealTime();
+}  // namespace

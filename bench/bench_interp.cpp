@@ -1,19 +1,19 @@
-// Modified-BI cost per stage (mbi::interp): precompute, per-frame solve (sparse triangular
-// solves vs dense operator, fact 11), Bezier control points, evaluation of embedded points
-// (float / double, 1 thread / all threads) and embedding.
+// Modified-BI cost per stage (mbi::interp): per-frame solve (sparse triangular solves vs dense
+// operator, fact 11), Bezier control points and embedding. Precompute against the control-vertex
+// count is in bench_scaling.cpp, evaluation of the embedded points in bench_throughput.cpp.
 //
 //   mbi-bench --benchmark_filter='BM_Interp'
 //
 // Meshes (argument `mesh`): 0 = twisted bar 8x2x2 unit cells (81 vertices, 192 tets),
 // 1 = box cage 7x7x6 cells (448 vertices, 1764 tets), 2 = box cage 10x10x10 cells
-// (1331 vertices, 6000 tets). The point cloud is 1M random points in the box cage 1.
+// (1331 vertices, 6000 tets).
 #include <benchmark/benchmark.h>
 #include <mbi/interp.hpp>
 
 #include "../tests/common/grid_meshes.hpp"
+#include "bench_common.hpp"
 
 #include <random>
-#include <thread>
 
 namespace {
 
@@ -41,35 +41,6 @@ const Scene& scene(int id) {
   return scenes[id];
 }
 
-// 1M points in the box cage (mesh 1), embedded once.
-const mbi::interp::Embedding& cloud_embedding() {
-  static mbi::interp::Embedding emb;
-  static bool built = false;
-  if (!built) {
-    const Scene& s = scene(1);
-    std::mt19937 rng(1);
-    std::uniform_real_distribution<double> ux(0, 7), uz(0, 6);
-    Eigen::MatrixXd P(1000000, 3);
-    for (Eigen::Index i = 0; i < P.rows(); ++i) P.row(i) << ux(rng), ux(rng), uz(rng);
-    emb = mbi::interp::embed(s.mesh.U, s.mesh.T, P);
-    built = true;
-  }
-  return emb;
-}
-
-void BM_InterpPrecompute(benchmark::State& state) {
-  const Scene& s = scene(static_cast<int>(state.range(0)));
-  Options o;
-  o.solve_path = SolvePath::Sparse;
-  for (auto _ : state) {
-    ModifiedBI mbi(s.mesh.U, s.mesh.T, o);
-    benchmark::DoNotOptimize(mbi.beta());
-  }
-  state.counters["vertices"] = static_cast<double>(s.mesh.U.rows());
-  state.counters["tets"] = static_cast<double>(s.mesh.T.rows());
-}
-BENCHMARK(BM_InterpPrecompute)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
-
 // Arguments: (mesh, path) with path 1 = sparse triangular solves, 2 = dense operator.
 void BM_InterpSolve(benchmark::State& state) {
   const Scene& s = scene(static_cast<int>(state.range(0)));
@@ -84,7 +55,7 @@ void BM_InterpSolve(benchmark::State& state) {
 }
 BENCHMARK(BM_InterpSolve)
     ->Args({0, 1})->Args({0, 2})->Args({1, 1})->Args({1, 2})->Args({2, 1})->Args({2, 2})
-    ->Unit(benchmark::kMicrosecond);
+    ->Unit(benchmark::kMicrosecond)->MinTime(mbi::bench::min_time());
 
 void BM_InterpBezier(benchmark::State& state) {
   const Scene& s = scene(static_cast<int>(state.range(0)));
@@ -95,42 +66,7 @@ void BM_InterpBezier(benchmark::State& state) {
     benchmark::DoNotOptimize(B.data());
   }
 }
-BENCHMARK(BM_InterpBezier)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
-
-// Arguments: (scalar, threads, normals) with scalar 0 = float, 1 = double; threads 0 = all.
-void BM_InterpEvaluate(benchmark::State& state) {
-  const Scene& s = scene(1);
-  const auto& emb = cloud_embedding();
-  const ModifiedBI mbi(s.mesh.U, s.mesh.T);
-  const BezierPoints B = mbi.bezier(s.X, mbi.solve(s.X));
-  const int threads = static_cast<int>(state.range(1));
-  const bool normals = state.range(2) != 0;
-  Eigen::MatrixXd nr = Eigen::MatrixXd::Zero(emb.size(), 3);
-  nr.col(2).setOnes();
-  if (state.range(0) == 0) {
-    Eigen::MatrixXf pos, nout;
-    const Eigen::MatrixXf nrf = nr.cast<float>();
-    for (auto _ : state) {
-      if (normals) mbi::interp::evaluate<float>(B, emb, nrf, pos, nout, threads);
-      else mbi::interp::evaluate<float>(B, emb, pos, threads);
-      benchmark::DoNotOptimize(pos.data());
-    }
-  } else {
-    Eigen::MatrixXd pos, nout;
-    for (auto _ : state) {
-      if (normals) mbi::interp::evaluate<double>(B, emb, nr, pos, nout, threads);
-      else mbi::interp::evaluate<double>(B, emb, pos, threads);
-      benchmark::DoNotOptimize(pos.data());
-    }
-  }
-  state.counters["points"] = static_cast<double>(emb.size());
-  state.counters["threads"] = threads > 0 ? threads : std::thread::hardware_concurrency();
-  state.SetItemsProcessed(state.iterations() * emb.size());
-}
-BENCHMARK(BM_InterpEvaluate)
-    ->Args({0, 1, 0})->Args({0, 0, 0})->Args({1, 1, 0})->Args({1, 0, 0})
-    ->Args({0, 1, 1})->Args({0, 0, 1})->Args({1, 1, 1})->Args({1, 0, 1})
-    ->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_InterpBezier)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond)->MinTime(mbi::bench::min_time());
 
 void BM_InterpEmbed(benchmark::State& state) {
   const Scene& s = scene(1);
@@ -145,6 +81,7 @@ void BM_InterpEmbed(benchmark::State& state) {
   }
   state.SetItemsProcessed(state.iterations() * P.rows());
 }
-BENCHMARK(BM_InterpEmbed)->Arg(100000)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_InterpEmbed)->Arg(100000)->Unit(benchmark::kMillisecond)->UseRealTime()
+    ->MinTime(mbi::bench::min_time());
 
 }  // namespace

@@ -9,10 +9,13 @@
 // 1 = LDLT (cached symbolic analysis), 2 = PCG (3x3 block-Jacobi, warm-started), and PCG
 // relative residual tolerance 10^-tol (Vega's PCG uses 1e-6). Counters: tets, Newton and PCG
 // iterations per step, assembly and solve time per step (ms).
+#include "bench_common.hpp"
+
 #include <benchmark/benchmark.h>
 #include <mbi/generate/procedural.hpp>
 #include <mbi/sim/simulator.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <vector>
@@ -76,12 +79,15 @@ void BM_SimStep(benchmark::State& state) {
   state.counters["solve_ms"] = solve * k;
 }
 
-}  // namespace
+// Quick mode (CI): the two smaller meshes only.
+void sim_args(benchmark::internal::Benchmark* b) {
+  const int meshes = mbi::bench::quick() ? 2 : 4;
+  for (int m = 0; m < std::min(meshes, 3); ++m) b->Args({m, 1, 8});
+  for (int m = 0; m < meshes; ++m)
+    for (int tol : {6, 8}) b->Args({m, 2, tol});
+}
 
-BENCHMARK(BM_SimStep)
-    ->Args({0, 1, 8})
-    ->Args({1, 1, 8})
-    ->Args({2, 1, 8})
-    ->ArgsProduct({{0, 1, 2, 3}, {2}, {6, 8}})
-    ->Unit(benchmark::kMillisecond)
-    ->MinTime(0.5);
+BENCHMARK(BM_SimStep)->ArgNames({"mesh", "solver", "tol"})->Apply(sim_args)
+    ->Unit(benchmark::kMillisecond)->MinTime(mbi::bench::min_time(0.5));
+
+}  // namespace

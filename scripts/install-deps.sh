@@ -9,7 +9,8 @@ set -euo pipefail
 # Catch2 (tests), Google Benchmark (mbi-bench); OpenGL for the GPU evaluator and renderer: libepoxy
 # (the one GL loader), EGL/GL headers, and Mesa's EGL and llvmpipe driver so that the GPU path runs
 # headless on machines without a GPU (CI); GLFW, Dear ImGui and Xvfb (with xauth, which
-# xvfb-run needs) for the viewer and its tests.
+# xvfb-run needs) for the viewer and its tests; matplotlib for the plots of the benchmark report
+# (scripts/bench.sh).
 packages=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libtet1.5-dev libopenmesh-dev
@@ -17,6 +18,7 @@ packages=(
   catch2 libbenchmark-dev
   libepoxy-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
   libglfw3-dev libimgui-dev libglx-mesa0 xvfb xauth
+  python3-matplotlib
 )
 
 missing=()

@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# Runs the benchmarks (mbi-bench) and writes the report:
+#   bench/results/<date>-<host>.json   Google Benchmark JSON, with this machine and commit
+#   bench/results/<date>-<host>.md     the report (scripts/bench_report.py), with PNG plots beside it
+#
+#   bash scripts/bench.sh            full run (about 6 minutes on a 2-core machine, plus the build)
+#   bash scripts/bench.sh --quick    small sizes, short runs, no 10K precompute (under a minute);
+#                                    writes to build/bench-quick/ unless --out is given (CI)
+#   bash scripts/bench.sh --out DIR  write into DIR instead
+#
+# Installs missing Debian packages and builds mbi-bench with the release preset first (set
+# MBI_BENCH_NO_BUILD=1 to skip both). Uses the scanned models beside the clone (../shared/models)
+# or $MBI_MODELS_DIR for the bunny row of Table 1. Fails when mbi-bench or the report fails.
+# Run nothing else meanwhile: the numbers are only as quiet as the machine.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+quick=0
+out=""
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --quick) quick=1 ;;
+    --out) out="$2"; shift ;;
+    -h|--help) sed -n '2,15p' "$0"; exit 0 ;;
+    *) echo "bench.sh: error: unknown option $1" >&2; exit 2 ;;
+  esac
+  shift
+done
+if [ -z "$out" ]; then
+  if [ "$quick" = 1 ]; then out=build/bench-quick; else out=bench/results; fi
+fi
+
+if [ "${MBI_BENCH_NO_BUILD:-0}" != 1 ]; then
+  bash scripts/install-deps.sh
+  cmake --preset release >/dev/null
+  cmake --build --preset release -j "${MBI_JOBS:-$(nproc)}" --target mbi-bench
+fi
+if [ -z "${MBI_MODELS_DIR:-}" ] && [ -d ../shared/models ]; then
+  export MBI_MODELS_DIR="$(cd ../shared/models && pwd)"
+fi
+# Debian's python3-matplotlib belongs to Debian's interpreter (another python3 may come first).
+python=/usr/bin/python3
+[ -x "$python" ] || python=python3
+
+mkdir -p "$out"
+stamp="$(date +%Y-%m-%d)-$(hostname -s 2>/dev/null || hostname)"
+json="$out/$stamp.json"
+start=$(date +%s)
+MBI_BENCH_QUICK=$quick build/release/mbi-bench \
+  --benchmark_out="$json" --benchmark_out_format=json --benchmark_counters_tabular=false
+wall=$(( $(date +%s) - start ))
+echo "bench.sh: mbi-bench took ${wall} s"
+"$python" scripts/bench_report.py "$json" --machine --wall-s "$wall"
