@@ -293,10 +293,14 @@ namespace {
 class Pictures3D {
  public:
   Pictures3D(const Scene& sc, const SceneModels& m, const fs::path& dir) : sc_(sc), m_(m), dir_(dir) {
+    lo_.setZero();
+    hi_.setZero();
+    if (m.dim() != 3) return;  // 2D pictures are written as the frames come
     lo_ = m.U.colwise().minCoeff().transpose();
     hi_ = m.U.colwise().maxCoeff().transpose();
   }
   void add(int f, const Eigen::MatrixXd& X, std::vector<interp::BezierPoints> panels) {
+    if (X.cols() != 3) throw SceneError("3D pictures need 3D control positions");
     lo_ = lo_.cwiseMin(X.colwise().minCoeff().transpose());
     hi_ = hi_.cwiseMax(X.colwise().maxCoeff().transpose());
     frames_.push_back({f, std::move(panels)});
