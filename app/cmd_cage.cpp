@@ -24,8 +24,9 @@ const mbi::cli::Registrar reg(
       };
       auto a = std::make_shared<Args>();
       sub.add_option("dense", a->dense, "dense surface (.obj, .off, .ply, .stl)")->required();
-      sub.add_option("--vertices,-n", a->vertices, "target number of control vertices")
-          ->required();
+      sub.add_option("--vertices,-n", a->vertices, "target number of control vertices (8 or more)")
+          ->required()
+          ->check(CLI::Range(8, 1000000));
       sub.add_option("--out,-o", a->out, "output base name: writes BASE.node and BASE.ele")
           ->required();
       sub.add_option("--stats", a->stats, "write statistics as JSON to this file");

@@ -39,6 +39,10 @@ class AtomicFile;
 // Dense surfaces
 // ----------------------------------------------------------------------------------------------
 
+/// Everything a surface file holds besides positions, faces and normals, kept so that a writer
+/// of the same format can write it back (defined in the implementation; see read_surface).
+struct SurfaceAttributes;
+
 /// A surface mesh as stored in a file. Vertex order and count are exactly the file's: vertices
 /// that no face uses, duplicated positions, holes, several components and non-manifold faces
 /// are all kept as they are.
@@ -48,27 +52,53 @@ struct SurfaceMesh {
   /// Faces as written in the file (0-based, any size >= 3). Writers use these when non-empty
   /// (so polygons are written back unchanged), otherwise F.
   std::vector<std::vector<int>> polygons;
+  /// n x 3 unit vertex normals, or empty (0 x 0) when the file has none. OBJ: a vertex takes
+  /// the `vn` of the first face corner that names it (corners of one vertex with different
+  /// normals, i.e. hard edges, are merged that way); vertices that no corner gives a normal get
+  /// the area-weighted normal of their faces. PLY: properties nx, ny, nz. Writers write these
+  /// (OBJ: one `vn` per vertex, referenced by every face corner; PLY: nx, ny, nz); they depend
+  /// on positions, so a deformed mesh should carry deformed normals (or none).
+  Eigen::MatrixXd N;
+  /// What the file held besides that (null for meshes not read from a file): its format and
+  /// encoding, and OBJ: texture coordinates `vt` and the corners' vt indices, `g`, `o`,
+  /// `usemtl`, `mtllib`, `s` and other records in file order, extra numbers of `v` lines
+  /// (vertex colours); PLY: every property and element, header comments, endianness; STL: the
+  /// 80-byte header and the attribute word of each triangle, or the solid's name. Comments of
+  /// OBJ files are not kept. A writer of the same format writes all of it back (positions and
+  /// normals replaced) as long as the vertex count and the faces' sizes still match the file's;
+  /// otherwise, or for another format, only positions, faces and normals are written.
+  std::shared_ptr<const SurfaceAttributes> attributes;
 };
 
 /// Reads .obj, .off, .ply (ASCII or binary, little or big endian) or .stl (ASCII or binary),
 /// chosen by extension (case-insensitive). OBJ: "v" and "f" lines (v, v/t, v//n, v/t/n, negative
-/// relative indices); other records are ignored. OFF: ASCII. PLY: vertex x,y,z of any scalar
-/// type, face "vertex_indices"/"vertex_index" list; other properties and elements are skipped.
-/// STL has no shared vertices: the corners of its triangles are merged when bitwise equal, in
-/// order of first appearance (STL stores float32).
+/// relative indices), "vn" for N; other records are kept in `attributes`. OFF: ASCII, positions
+/// and faces. PLY: vertex x,y,z of any scalar type, face "vertex_indices"/"vertex_index" list,
+/// nx,ny,nz for N; every property and element is kept in `attributes`. STL has no shared
+/// vertices: the corners of its triangles are merged when bitwise equal, in order of first
+/// appearance (STL stores float32).
 SurfaceMesh read_surface(const std::filesystem::path& file);
 
-enum class Encoding { ascii, binary };
+/// ascii / binary: as named (binary: PLY keeps the endianness of a binary file it was read
+/// from, little endian otherwise). as_read: the encoding of the file the mesh was read from
+/// when it has the output's format, ASCII otherwise.
+enum class Encoding { ascii, binary, as_read };
 
-/// Writes `mesh` to .obj, .off, .ply or .stl (by extension). Encoding applies to PLY (binary =
-/// little endian, float64 coordinates, int32 indices) and STL (binary = float32, the format's
-/// only precision); OBJ and OFF are always ASCII. STL writes the triangles F (polygons cannot be
-/// stored). Throws IoError on out-of-range indices or non-finite positions (nothing written).
+/// Writes `mesh` to .obj, .off, .ply or .stl (by extension), with its normals N when present
+/// and its `attributes` when they came from a file of the same format (see SurfaceMesh). PLY
+/// written fresh: float64 coordinates and normals, int32 indices; with attributes every
+/// property keeps its type. Binary STL: float32, the format's only precision. OBJ and OFF are
+/// always ASCII. STL writes the triangles F (polygons cannot be stored). A mesh without faces
+/// writes its vertices only (OBJ: `v` lines). Throws IoError on out-of-range indices or
+/// non-finite positions (nothing written).
 void write_surface(const std::filesystem::path& file, const SurfaceMesh& mesh,
-                   Encoding encoding = Encoding::ascii);
+                   Encoding encoding = Encoding::as_read);
 /// Same, from plain arrays: V n x 3, F t x 3 (0-based).
 void write_surface(const std::filesystem::path& file, const Eigen::Ref<const Eigen::MatrixXd>& V,
                    const Eigen::Ref<const Eigen::MatrixXi>& F, Encoding encoding = Encoding::ascii);
+
+/// True for the extensions read_surface reads (.obj, .off, .ply, .stl, any case).
+bool is_surface_file(const std::filesystem::path& file);
 
 // ----------------------------------------------------------------------------------------------
 // Point lists (.txt, .xyz): one point per line, d numbers separated by blanks or commas; blank
@@ -134,13 +164,14 @@ void write_vtk(const std::filesystem::path& file, const Eigen::Ref<const Eigen::
 /// "out/bunny_0007.obj". Throws IoError on a negative frame.
 std::filesystem::path frame_path(const std::filesystem::path& base, int frame,
                                  const std::string& ext, int digits = 4);
-/// Writes one frame of a sequence: the positions V (n x 3) with the faces of `topology`
-/// (its polygons when present) to frame_path(base, frame, ext); ext is ".obj" or ".ply" (PLY
-/// binary when encoding says so). Returns the path written.
+/// Writes one frame of a sequence: the positions V (n x 3) and normals N (n x 3, or empty: no
+/// normals) with the faces and attributes of `topology` (see write_surface) to
+/// frame_path(base, frame, ext); ext is ".obj" or ".ply". Returns the path written.
 std::filesystem::path write_frame(const std::filesystem::path& base, int frame,
                                   const std::string& ext, const SurfaceMesh& topology,
                                   const Eigen::Ref<const Eigen::MatrixXd>& V,
-                                  Encoding encoding = Encoding::ascii);
+                                  Encoding encoding = Encoding::as_read,
+                                  const Eigen::Ref<const Eigen::MatrixXd>& N = Eigen::MatrixXd());
 
 /// PC2 point cache (Blender "Mesh Cache" modifier): header "POINTCACHE2\0", int32 version 1,
 /// int32 numPoints, float32 startFrame, float32 sampleRate, int32 numSamples, then float32 x,y,z
