@@ -196,3 +196,61 @@ TEST_CASE("mbi run --mesh: written frames keep the model's UVs and carry deforme
   REQUIRE(m.N.rows() == s.V.rows());
   CHECK((m.N - mbi::io::read_surface(s.mesh).N).cwiseAbs().maxCoeff() > 1e-3);
 }
+
+TEST_CASE("CLI messages: unknown subcommand with a suggestion, one-line prefixed parse errors",
+          "[cli][interop]") {
+  TempDir dir("interop");
+  auto one_line = [](const Result& r) { return count_lines(r.err) == 1; };
+  Result r = run_mbi("rn", dir);
+  CHECK(r.code == 2);
+  CHECK(r.err == "mbi: error: unknown subcommand 'rn' (did you mean 'run'?)\n");
+  r = run_mbi("defrom --mesh x", dir);
+  CHECK(r.err == "mbi: error: unknown subcommand 'defrom' (did you mean 'deform'?)\n");
+  r = run_mbi("frobnicate", dir);
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::StartsWith("mbi: error: unknown subcommand 'frobnicate' (known: cage, deform"));
+  CHECK(one_line(r));
+  r = run_mbi("", dir);
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::StartsWith("mbi: error: a subcommand is required: cage, deform"));
+  CHECK(one_line(r));
+  // parse errors of a subcommand carry its prefix, on one line
+  for (const auto& [args, needle] : std::vector<std::pair<std::string, std::string>>{
+           {"deform --alpha abc", "mbi deform: error: "},
+           {"deform --method foo", "mbi deform: error: --method"},
+           {"deform --nope", "mbi deform: error: "},
+           {"run", "mbi run: error: scene is required"},
+           {"cage x.obj --out y", "mbi cage: error: --vertices is required"}}) {
+    r = run_mbi(args, dir);
+    INFO(args << "\n" << r.err);
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Catch::StartsWith(needle));
+    CHECK(one_line(r));
+  }
+  // no internal function names: cage -n 3, a degenerate control element
+  r = run_mbi("cage x.obj -n 3 -o " + q(dir / "c"), dir);
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::StartsWith("mbi cage: error: --vertices") && !Catch::Contains("make_cage"));
+  Setup s(dir);
+  Eigen::MatrixXi T = s.T;
+  T(5, 3) = T(5, 2);
+  mbi::io::write_tetgen(dir / "degen", s.U, T);
+  r = run_mbi("deform --control " + q(dir / "degen") + " --deformed " + q(s.deformed) + " --mesh " +
+                  q(s.mesh) + " --out " + q(dir / "o.obj"),
+              dir);
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("element 5") && !Catch::Contains("validate_mesh"));
+  // --help exits 0 and marks what is required
+  r = run_mbi("cage --help", dir);
+  CHECK(r.code == 0);
+  for (const char* opt : {"dense TEXT REQUIRED", "--vertices INT:INT in [8 - 1000000] REQUIRED", "--out TEXT REQUIRED"})
+    CHECK_THAT(r.out, Catch::Contains(opt));
+  r = run_mbi("deform --help", dir);
+  CHECK(r.code == 0);
+  for (const char* opt : {"--control", "--deformed", "--mesh", "--out"}) {
+    const std::size_t at = r.out.find(std::string("  ") + opt + " TEXT");
+    REQUIRE(at != std::string::npos);
+    CHECK(r.out.substr(at, r.out.find('\n', at) - at).find("REQUIRED (unless --example)") != std::string::npos);
+  }
+  CHECK_THAT(run_mbi("run --help", dir).out, Catch::Contains("scene TEXT REQUIRED"));
+}
