@@ -60,6 +60,7 @@ struct DeformArgs {
   double alpha = 0.0;
   bool alpha_given = false;
   bool pin_boundary = false;
+  bool force = false;
   int threads = 0;
 };
 
@@ -140,6 +141,11 @@ int run_deform(const DeformArgs& a) {
   if (!a.out.empty() && !is_point_list(a.out) && !io::is_surface_file(a.out))
     throw std::runtime_error("--out " + a.out + ": unknown output format '" + lower_ext(a.out) +
                              "' (expected .obj, .ply, .off, .stl, .txt or .xyz)");
+  // the same rule as mbi run: an existing output is not replaced without --force
+  if (!a.force)
+    for (const std::string* o : {&a.out, &a.stats})
+      if (!o->empty() && fs::exists(*o))
+        throw std::runtime_error(*o + ": exists (use --force to overwrite)");
   if (a.alpha_given && !(a.alpha > 0) )
     throw std::runtime_error("--alpha must be > 0 (E_disc alone has extra null modes)");
 
@@ -306,6 +312,7 @@ const Registrar reg{
           "weight of E_vibr (> 0; default 0.1 in 3D, 0.2 in 2D)");
       sub.add_flag("--pin-boundary", a->pin_boundary, "M = 0 on the control mesh boundary");
       sub.add_option("--stats", a->stats, "write statistics and timings as JSON");
+      sub.add_flag("--force", a->force, "overwrite existing --out / --stats files");
       sub.add_option("--example", a->example, "built-in example instead of files: twist-bar");
       sub.add_option("--threads", a->threads, "evaluation threads (0 = all cores)")
           ->check(CLI::Range(0, 1024));

@@ -15,6 +15,7 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <regex>
 
 namespace fs = std::filesystem;
 
@@ -400,6 +401,18 @@ class Outputs {
 
 }  // namespace
 
+namespace {
+// Removes the files of an earlier run (only names that run_scene writes) from `dir`, so that
+// --force does not leave its extra frames beside the new ones.
+void clear_outputs(const fs::path& dir) {
+  static const std::regex ours(R"((mesh_[0-9]+\.(obj|ply)|control_[0-9]+\.vtk|frame_[0-9]+\.png|dense\.pc2|metrics\.json))");
+  std::vector<fs::path> old;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.is_regular_file() && std::regex_match(e.path().filename().string(), ours)) old.push_back(e.path());
+  for (const auto& p : old) fs::remove(p);
+}
+}  // namespace
+
 RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
   Scene sc = sc_in;
   if (opt.method) sc.interpolation.method = *opt.method;
@@ -499,6 +512,7 @@ RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
   metrics["frames"] = nlohmann::json::array();
 
   // ---------------------------------------------------------------- frames
+  if (opt.force && fs::exists(res.out_dir)) clear_outputs(res.out_dir);
   fs::create_directories(res.out_dir);
   Outputs out(sc, m, res.out_dir);
   Pictures3D pictures(sc, m, res.out_dir);

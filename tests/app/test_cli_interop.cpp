@@ -254,3 +254,91 @@ TEST_CASE("CLI messages: unknown subcommand with a suggestion, one-line prefixed
   }
   CHECK_THAT(run_mbi("run --help", dir).out, Catch::Contains("scene TEXT REQUIRED"));
 }
+
+TEST_CASE("a stale .face beside .node/.ele breaks neither deform nor run; cage removes it",
+          "[cli][interop]") {
+  TempDir dir("interop");
+  Setup s(dir);
+  std::ofstream(dir / "bar.face") << "3 1\n0 0 1 999\nstale and broken\n";
+  Result r = run_mbi(s.args(s.mesh, dir / "o.obj"), dir);
+  INFO(r.err);
+  CHECK(r.code == 0);
+  std::ofstream(dir / "scene.toml") << "[dense]\npath = \"bar.obj\"\n[control]\npath = \"bar.node\"\n"
+                                       "[simulation]\nframes = 1\n[[constraints]]\n"
+                                       "select = { box_relative = { min = [0, 0, 0], max = [1, 1, 0] } }\n"
+                                       "[output]\nimage = false\n";
+  r = run_mbi("run " + q(dir / "scene.toml") + " --gpu off --quiet --out " + q(dir / "run"), dir);
+  CHECK(r.code == 0);
+  // cage: a stale companion of BASE goes, and says so
+  mbi::io::write_surface(dir / "ell.obj", mbi::io::read_surface(s.mesh));
+  std::ofstream(dir / "cage.face") << "stale\n";
+  std::ofstream(dir / "cage.edge") << "stale\n";
+  r = run_mbi("cage " + q(dir / "ell.obj") + " -n 40 -o " + q(dir / "cage"), dir);
+  INFO(r.err);
+  CHECK(r.code == 0);
+  CHECK(fs::exists(dir / "cage.node"));
+  CHECK_FALSE(fs::exists(dir / "cage.face"));
+  CHECK_FALSE(fs::exists(dir / "cage.edge"));
+  CHECK_THAT(r.err, Catch::Contains("removed") && Catch::Contains("cage.face"));
+}
+
+TEST_CASE("deform refuses an existing output unless --force, as run does", "[cli][interop]") {
+  TempDir dir("interop");
+  Setup s(dir);
+  const fs::path out = dir / "o.obj";
+  std::ofstream(out) << "keep me\n";
+  Result r = run_mbi(s.args(s.mesh, out), dir);
+  CHECK(r.code == 2);
+  CHECK(r.err == "mbi deform: error: " + out.string() + ": exists (use --force to overwrite)\n");
+  CHECK(slurp(out) == "keep me\n");
+  std::ofstream(dir / "stats.json") << "{}";
+  r = run_mbi(s.args(s.mesh, dir / "new.obj") + " --stats " + q(dir / "stats.json"), dir);
+  CHECK(r.code == 2);
+  CHECK_FALSE(fs::exists(dir / "new.obj"));
+  r = run_mbi(s.args(s.mesh, out) + " --force --stats " + q(dir / "stats.json"), dir);
+  CHECK(r.code == 0);
+  CHECK(mbi::io::read_surface(out).V.rows() == s.V.rows());
+  CHECK(slurp(dir / "stats.json").size() > 10);
+}
+
+TEST_CASE("run --quiet keeps warnings; --force clears an earlier run's extra frames only",
+          "[cli][interop]") {
+  TempDir dir("interop");
+  Setup s(dir);
+  // a dense model partly outside the control mesh
+  mbi::io::SurfaceMesh wide = mbi::io::read_surface(s.mesh);
+  wide.V.col(0) *= 1.5;
+  wide.N.resize(0, 0);
+  mbi::io::write_surface(dir / "wide.obj", wide);
+  auto scene = [&](int every) {
+    std::ofstream(dir / "scene.toml") << "[dense]\npath = \"wide.obj\"\n[control]\npath = \"bar.node\"\n"
+                                         "[simulation]\nframes = 4\n[[constraints]]\n"
+                                         "select = { box_relative = { min = [0, 0, 0], max = [1, 1, 0] } }\n"
+                                         "[output]\nimage = false\nevery = " << every << "\n";
+  };
+  scene(1);
+  const fs::path out = dir / "o";
+  Result r = run_mbi("run " + q(dir / "scene.toml") + " --gpu off --quiet --out " + q(out), dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(count_lines(r.err) == 1);  // the warning, once, short
+  CHECK_THAT(r.err, Catch::StartsWith("mbi run: warning: ") && Catch::Contains("outside the control mesh"));
+  CHECK(fs::exists(out / "mesh_0003.obj"));
+  // the same folder again, every 2nd frame: frames 1 and 3 of the earlier run must not stay;
+  // a user's file in the folder does
+  std::ofstream(out / "notes.txt") << "mine\n";
+  std::ofstream(out / "mesh_final.obj") << "mine too\n";
+  scene(2);
+  r = run_mbi("run " + q(dir / "scene.toml") + " --gpu off --quiet --out " + q(out), dir);
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("--force"));
+  r = run_mbi("run " + q(dir / "scene.toml") + " --gpu off --quiet --force --out " + q(out), dir);
+  REQUIRE(r.code == 0);
+  for (int f : {0, 2, 4}) CHECK(fs::exists(mbi::io::frame_path(out / "mesh", f, ".obj")));
+  for (int f : {1, 3}) {
+    CHECK_FALSE(fs::exists(mbi::io::frame_path(out / "mesh", f, ".obj")));
+    CHECK_FALSE(fs::exists(mbi::io::frame_path(out / "control", f, ".vtk")));
+  }
+  CHECK(slurp(out / "notes.txt") == "mine\n");
+  CHECK(fs::exists(out / "mesh_final.obj"));
+}

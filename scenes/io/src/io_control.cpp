@@ -1,4 +1,4 @@
-// Control meshes: TetGen .node/.ele/.face, Gmsh .msh (2.2 and 4.1 ASCII), legacy VTK output.
+// Control meshes: TetGen .node/.ele (and .face output), Gmsh .msh (2.2 and 4.1 ASCII), legacy VTK output.
 #include "io_common.hpp"
 
 #include <Eigen/Dense>
@@ -113,7 +113,6 @@ Eigen::MatrixXd read_node(const path& file) { return parse_node(file).X; }
 ControlMesh read_tetgen(const path& p) {
   const path node = with_ext(p, ".node");
   const path ele = with_ext(p, ".ele");
-  const path face = with_ext(p, ".face");
   NodeFile nf = parse_node(node);
   ControlMesh m;
   m.U = std::move(nf.X);
@@ -147,33 +146,6 @@ ControlMesh read_tetgen(const path& p) {
   }
   check_elements(ele, line_of, m.U, m.T);
 
-  std::error_code ec;
-  if (d == 3 && std::filesystem::exists(face, ec)) {
-    const std::string ftext = detail::slurp(face);
-    const auto fl = detail::tokenize(ftext);
-    if (fl.empty()) fail(face, 0, "empty .face file");
-    const Line& fh = fl[0];
-    const long long nb = detail::to_int(fh.tok[0], face, fh.number, "header face count", 0, kMax);
-    const long long has_marker =
-        fh.tok.size() > 1 ? detail::to_int(fh.tok[1], face, fh.number, "header marker flag", 0, 1)
-                          : 0;
-    check_remaining(face, fh, nb, fl.size() - 1, "faces");
-    m.faces.resize(static_cast<Eigen::Index>(nb), 3);
-    m.face_markers = Eigen::VectorXi::Zero(static_cast<Eigen::Index>(nb));
-    for (long long i = 0; i < nb; ++i) {
-      const Line& l = fl[static_cast<std::size_t>(i + 1)];
-      const std::string field = "face " + std::to_string(i);
-      if (static_cast<long long>(l.tok.size()) < 4 + has_marker)
-        fail(face, l.number, field + ": expected " + std::to_string(4 + has_marker) + " values");
-      for (int c = 0; c < 3; ++c)
-        m.faces(static_cast<Eigen::Index>(i), c) = static_cast<int>(
-            detail::to_int(l.tok[static_cast<std::size_t>(1 + c)], face, l.number,
-                           field + " node", nf.base, nf.base + n - 1) - nf.base);
-      if (has_marker)
-        m.face_markers(static_cast<Eigen::Index>(i)) = static_cast<int>(
-            detail::to_int(l.tok[4], face, l.number, field + " marker", -kMax, kMax));
-    }
-  }
   return m;
 }
 

@@ -118,17 +118,16 @@ void write_points(const std::filesystem::path& file, const Eigen::Ref<const Eige
 struct ControlMesh {
   Eigen::MatrixXd U;             ///< n x d rest positions, d = 2 or 3
   Eigen::MatrixXi T;             ///< m x (d+1) elements (triangles / tetrahedra), 0-based
-  Eigen::MatrixXi faces;         ///< b x d boundary faces from a .face file (may be empty)
-  Eigen::VectorXi face_markers;  ///< b boundary markers of those faces (0 when absent)
   int dim() const { return static_cast<int>(U.cols()); }
 };
 
 /// Reads a control mesh from TetGen files or a Gmsh file, chosen by extension: ".msh" -> Gmsh,
-/// ".node"/".ele"/".face" or no extension -> TetGen base name.
+/// ".node"/".ele"/".face" or no extension -> TetGen base name (.face itself is not read).
 ControlMesh read_control_mesh(const std::filesystem::path& file);
 
-/// TetGen: `path` is the base name or any of BASE.node / BASE.ele. Reads BASE.node and
-/// BASE.ele, and BASE.face when present (3D). Point numbering may start at 0 or 1 (the first
+/// TetGen: `path` is the base name or any of BASE.node / BASE.ele / BASE.face. Reads BASE.node
+/// and BASE.ele only: the boundary follows from the elements, so a BASE.face (or .edge, .neigh)
+/// beside them, stale or not, is never read. Point numbering may start at 0 or 1 (the first
 /// point's number decides; numbers must then be consecutive); attributes and boundary markers
 /// are read past. 2D: .node with dimension 2 and .ele with 3 (or 6) nodes per triangle.
 /// 10-node tetrahedra keep their 4 corners.
