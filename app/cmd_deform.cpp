@@ -85,8 +85,18 @@ Problem load_files(const DeformArgs& a) {
   pb.U = cm.U;
   pb.T = cm.T;
   const int d = cm.dim();
-  pb.X = lower_ext(a.deformed) == ".node" ? io::read_node(a.deformed)
-                                          : io::read_points(a.deformed);
+  for (const std::string& note : cm.notes) std::fprintf(stderr, "mbi deform: note: %s\n", note.c_str());
+  const std::string dext = lower_ext(a.deformed);
+  pb.X = dext == ".node"  ? io::read_node(a.deformed)
+         : dext == ".msh" ? io::read_gmsh_nodes(a.deformed)
+         : dext == ".vtk" ? io::read_vtk_points(a.deformed)
+                          : io::read_points(a.deformed);
+  if (d == 2 && pb.X.cols() == 3 && (dext == ".msh" || dext == ".vtk")) {
+    // a 2D mesh file stores z: it must be one plane, then it is dropped
+    if (pb.X.rows() > 0 && (pb.X.col(2).array() != pb.X(0, 2)).any())
+      throw std::runtime_error(a.deformed + ": the control mesh is 2D but these positions are not in one plane z = const");
+    pb.X.conservativeResize(Eigen::NoChange, 2);
+  }
   if (pb.X.rows() != pb.U.rows())
     throw std::runtime_error(a.deformed + ": " + std::to_string(pb.X.rows()) +
                              " deformed positions, but the control mesh " + a.control + " has " +
@@ -294,9 +304,11 @@ const Registrar reg{
     [](CLI::App& sub) -> Action {
       auto a = std::make_shared<DeformArgs>();
       sub.add_option("--control", a->control,
-                     "REQUIRED (unless --example) rest control mesh: TetGen .node/.ele (or base name) or Gmsh .msh");
+                     "REQUIRED (unless --example) rest control mesh: TetGen .node/.ele (or base name), Gmsh .msh "
+                     "or legacy VTK .vtk");
       sub.add_option("--deformed", a->deformed,
-                     "REQUIRED (unless --example) deformed control positions: .node or plain text (n lines of d numbers)");
+                     "REQUIRED (unless --example) deformed control positions, one per control node in file order: "
+                     ".node, .msh, .vtk or plain text (n lines of d numbers)");
       sub.add_option("--mesh", a->mesh, "REQUIRED (unless --example) dense model: .obj/.ply/.off/.stl, or points .txt/.xyz");
       sub.add_option("--out", a->out,
                      "REQUIRED (unless --example) output, format by extension: .obj/.ply/.off/.stl (keeping the input's "

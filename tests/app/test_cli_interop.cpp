@@ -342,3 +342,62 @@ TEST_CASE("run --quiet keeps warnings; --force clears an earlier run's extra fra
   CHECK(slurp(out / "notes.txt") == "mine\n");
   CHECK(fs::exists(out / "mesh_final.obj"));
 }
+
+TEST_CASE("mbi deform with gmsh and VTK files from the tools: .msh/.vtk as --control and --deformed",
+          "[cli][interop][gmsh]") {
+  TempDir dir("interop");
+  const char* src = std::getenv("MBI_SOURCE_DIR");
+  REQUIRE(src != nullptr);
+  const fs::path data = fs::path(src) / "tests" / "data" / "gmsh";
+  // a dense box surface inside the 1 x 1 x 2 box, and the gmsh mesh twisted
+  Eigen::MatrixXd V;
+  Eigen::MatrixXi F;
+  mbi::generate::box_surface(Eigen::Vector3d(0.1, 0.1, 0.1), Eigen::Vector3d(0.9, 0.9, 1.9),
+                             Eigen::Vector3i(3, 3, 6), V, F);
+  mbi::io::write_surface(dir / "dense.obj", V, F);
+  const mbi::io::ControlMesh cm = mbi::io::read_gmsh(data / "box-41-bin.msh");
+  const Eigen::MatrixXd X = mbi::generate::twist_bend(cm.U, 0.5, 0.5, 0, 2, 0.8, 0.05);
+  mbi::io::write_points(dir / "x.txt", X);
+  // the deformed positions as .msh (nodes only, the file's order and tags) and as .vtk
+  {
+    std::ofstream msh(dir / "x.msh");
+    msh.precision(17);
+    msh << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n" << X.rows() << "\n";
+    for (Eigen::Index i = 0; i < X.rows(); ++i) msh << i + 7 << " " << X(i, 0) << " " << X(i, 1) << " " << X(i, 2) << "\n";
+    msh << "$EndNodes\n";
+  }
+  mbi::io::write_vtk(dir / "x.vtk", X, cm.T);
+  mbi::io::write_vtk(dir / "rest.vtk", cm.U, cm.T);  // as mbi cage --vtk writes it
+  auto deform = [&](const fs::path& control, const fs::path& deformed, const fs::path& out) {
+    return run_mbi("deform --control " + q(control) + " --deformed " + q(deformed) + " --mesh " +
+                       q(dir / "dense.obj") + " --out " + q(out),
+                   dir);
+  };
+  Result r = deform(data / "box-41-bin.msh", dir / "x.txt", dir / "ref.obj");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const Eigen::MatrixXd ref = mbi::io::read_surface(dir / "ref.obj").V;
+  for (const auto& [control, deformed] :
+       std::vector<std::pair<fs::path, fs::path>>{{data / "box-41-bin.msh", dir / "x.msh"},
+                                                  {data / "box-41-bin.msh", dir / "x.vtk"},
+                                                  {data / "box-22.msh", dir / "x.txt"},
+                                                  {data / "box-40.msh", dir / "x.msh"},
+                                                  {data / "box-bin.vtk", dir / "x.vtk"},
+                                                  {dir / "rest.vtk", dir / "x.txt"}}) {
+    INFO(control << " + " << deformed);
+    fs::remove(dir / "o.obj");
+    r = deform(control, deformed, dir / "o.obj");
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    CHECK((mbi::io::read_surface(dir / "o.obj").V - ref).cwiseAbs().maxCoeff() < 1e-6);
+  }
+  // second-order tetrahedra: used by their corners, with a notice
+  r = deform(data / "box-41-order2.msh", data / "box-41-order2.msh", dir / "o2.obj");
+  CHECK(r.code == 0);
+  CHECK_THAT(r.err, Catch::Contains("mbi deform: note: ") && Catch::Contains("higher-order tetrahedra used by their corners"));
+  // a Physical Surface only: named as such
+  r = deform(data / "surface-only.msh", dir / "x.txt", dir / "o3.obj");
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("surface mesh of a 3D model"));
+  CHECK(count_lines(r.err) == 1);
+}

@@ -221,7 +221,7 @@ TEST_CASE("TetGen reader: 1-based numbering, attributes, markers, comments", "[i
   REQUIRE(m.T.row(1) == Eigen::RowVector4i(1, 2, 3, 4));
 }
 
-TEST_CASE("Gmsh 2.2 and 4.1: tetrahedra kept, other types skipped, tags remapped", "[io]") {
+TEST_CASE("Gmsh 2.2 and 4.1: tetrahedra kept, other types skipped, every node kept in file order", "[io]") {
   TempDir tmp("gmsh");
   // Node tags 10..50 in an odd order; node 99 used only by a point element (dropped).
   write_text(tmp / "a.msh",
@@ -238,12 +238,13 @@ TEST_CASE("Gmsh 2.2 and 4.1: tetrahedra kept, other types skipped, tags remapped
     INFO(name);
     const ControlMesh m = read_control_mesh(tmp / name);
     REQUIRE(m.dim() == 3);
-    REQUIRE(m.U.rows() == 5);  // node 99 dropped
+    REQUIRE(m.U.rows() == 6);  // node 99 (a point element only) kept, as TetGen's .node would
     REQUIRE(m.T.rows() == 2);
-    // Tag 30 is the first node in the file -> index 0, tag 10 -> 1, 20 -> 2, 40 -> 3, 50 -> 4.
-    REQUIRE(m.U.row(0) == Eigen::RowVector3d(0, 1, 0));
-    REQUIRE(m.T.row(0) == Eigen::RowVector4i(1, 2, 0, 3));
-    REQUIRE(m.T.row(1) == Eigen::RowVector4i(2, 0, 3, 4));
+    // Nodes in file order: a.msh 30, 10, 20, 40, 50, 99; b.msh 99, 30, 10, 20, 40, 50.
+    const int o = std::string(name) == "b.msh" ? 1 : 0;
+    REQUIRE(m.U.row(o) == Eigen::RowVector3d(0, 1, 0));
+    REQUIRE(m.T.row(0) == Eigen::RowVector4i(1 + o, 2 + o, o, 3 + o));
+    REQUIRE(m.T.row(1) == Eigen::RowVector4i(2 + o, o, 3 + o, 4 + o));
   }
   // 2D: triangles only, z = 0 dropped.
   write_text(tmp / "c.msh",
@@ -415,13 +416,13 @@ TEST_CASE("malformed text files: IoError naming file, line and field", "[io][rob
       {"f.node", "2 3 1 1\n0 0 0 0\n1 1 0 0\n", 2, "expected 6 values"},
       {"a.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1999999999\n1 0 0 0\n$EndNodes\n",
        5, "1999999999 nodes"},
-      {"b.msh", "$MeshFormat\n2.2 1 8\n$EndMeshFormat\n", 2, "binary"},
+      {"b.msh", "$MeshFormat\n2.2 1 8\n$EndMeshFormat\n", 0, "binary: expected the int 1"},
       {"c.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1\n1 0 0 0\n$EndNodes\n"
                 "$Elements\n1\n1 4 0 1 2 3 4\n$EndElements\n", 10, "unknown node tag 2"},
       {"d.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n2\n1 0 0 0\n2 0 0 0\n3 0 0 0\n"
                 "$EndNodes\n", 8, "$EndNodes"},
       {"e.msh", "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 1000000000 1 1\n0 1 0 1\n",
-       5, "node lines"},
+       5, "1000000000 nodes"},
       {"f.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1\n1 0 0 nan\n$EndNodes\n", 6,
        "node 1 coordinate 2"},
       {"g.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1\n1 0 0 0\n$EndNodes\n", 0,

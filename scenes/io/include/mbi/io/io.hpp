@@ -118,10 +118,14 @@ void write_points(const std::filesystem::path& file, const Eigen::Ref<const Eige
 struct ControlMesh {
   Eigen::MatrixXd U;             ///< n x d rest positions, d = 2 or 3
   Eigen::MatrixXi T;             ///< m x (d+1) elements (triangles / tetrahedra), 0-based
+  /// What the reader changed or left out that a user should be told (e.g. higher-order
+  /// elements used by their corners), one line each, starting with the file name.
+  std::vector<std::string> notes;
   int dim() const { return static_cast<int>(U.cols()); }
 };
 
-/// Reads a control mesh from TetGen files or a Gmsh file, chosen by extension: ".msh" -> Gmsh,
+/// Reads a control mesh from TetGen files, a Gmsh or a legacy VTK file, chosen by extension:
+/// ".msh" -> Gmsh, ".vtk" -> VTK,
 /// ".node"/".ele"/".face" or no extension -> TetGen base name (.face itself is not read).
 ControlMesh read_control_mesh(const std::filesystem::path& file);
 
@@ -142,11 +146,26 @@ void write_tetgen(const std::filesystem::path& base, const Eigen::Ref<const Eige
 /// Writes one .node file (0-based): n x d positions.
 void write_node(const std::filesystem::path& file, const Eigen::Ref<const Eigen::MatrixXd>& X);
 
-/// Gmsh .msh, ASCII format 2.2 or 4.1. Tetrahedra (type 4) make a 3D mesh; without tetrahedra,
-/// triangles (type 2) make a 2D mesh (z must then be the same for all used nodes and is dropped).
-/// Other element types are skipped. Node tags are remapped to 0-based indices in file order;
-/// nodes that no kept element uses are dropped.
+/// Gmsh .msh, format 2.2, 4.0 or 4.1, ASCII or binary (either endianness). Nodes: every node of
+/// the file in file order, also those no element uses (so that deformed positions given per
+/// file node, e.g. read_gmsh_nodes, map 1:1), like TetGen's .node. Tetrahedra of any order
+/// (types 4, 11, 29-31) make a 3D mesh, used by their 4 corners; without tetrahedra, triangles
+/// of any order (2, 9, 20-25) make a 2D mesh (all nodes must then have the same z, which is
+/// dropped). Higher-order elements are reported in `notes`. Other element types and sections
+/// (physical names, entities, parametric coordinates of -save_parametric) are skipped; when no
+/// usable element is found the message lists what was.
 ControlMesh read_gmsh(const std::filesystem::path& file);
+/// Every node of a .msh file in file order, n x 3 (deformed positions for a mesh read by
+/// read_gmsh).
+Eigen::MatrixXd read_gmsh_nodes(const std::filesystem::path& file);
+
+/// Legacy VTK unstructured grid (format 2.0-5.1, ASCII or BINARY), as written by write_vtk,
+/// meshio or VTK: every point in file order; tetrahedra (cell type 10, quadratic 24 by its
+/// corners, reported in `notes`) make a 3D mesh, else triangles (5, 22) a 2D one (z constant,
+/// dropped). Other cells and all point/cell data are skipped.
+ControlMesh read_vtk(const std::filesystem::path& file);
+/// The POINTS of a legacy VTK file, n x 3 (deformed positions for a mesh read by read_vtk).
+Eigen::MatrixXd read_vtk_points(const std::filesystem::path& file);
 
 /// Legacy VTK unstructured grid (ASCII, for ParaView): tetrahedra (cell type 10) or triangles
 /// (type 5, z = 0). Optional per-point vectors (n x d, e.g. displacements) named `point_data`.
