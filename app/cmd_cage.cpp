@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cctype>
 #include <cstdio>
 #include <filesystem>
 
@@ -24,9 +25,10 @@ const mbi::cli::Registrar reg(
       };
       auto a = std::make_shared<Args>();
       sub.add_option("dense", a->dense, "dense surface (.obj, .off, .ply, .stl)")->required();
-      sub.add_option("--vertices,-n", a->vertices, "target number of control vertices")
-          ->required();
-      sub.add_option("--out,-o", a->out, "output base name: writes BASE.node and BASE.ele")
+      sub.add_option("--vertices,-n", a->vertices, "target number of control vertices (8 or more)")
+          ->required()
+          ->check(CLI::Range(8, 1000000));
+      sub.add_option("--out,-o", a->out, "output base name: writes BASE.node and BASE.ele (and removes a stale BASE.face, .edge, .neigh)")
           ->required();
       sub.add_option("--stats", a->stats, "write statistics as JSON to this file");
       sub.add_option("--vtk", a->vtk, "also write the control mesh as legacy VTK");
@@ -43,6 +45,19 @@ const mbi::cli::Registrar reg(
         opt.mesher = mbi::generate::parse_mesher(a->mesher);
         const mbi::generate::CageResult cage = mbi::generate::make_cage(dense.V, dense.F, opt);
         mbi::io::write_tetgen(a->out, cage.U, cage.T);
+        // TetGen companions of BASE left from an earlier mesh would not match this one: they go
+        std::filesystem::path base(a->out);
+        std::string ext = base.extension().string();
+        for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+        if (ext == ".node" || ext == ".ele" || ext == ".face") base.replace_extension();
+        for (const char* companion : {".face", ".edge", ".neigh"}) {
+          std::filesystem::path p = base;
+          p += companion;
+          std::error_code ec;
+          if (std::filesystem::is_regular_file(p, ec) && std::filesystem::remove(p, ec))
+            std::fprintf(stderr, "mbi cage: note: removed %s (left from an earlier mesh)\n",
+                         p.string().c_str());
+        }
         if (!a->vtk.empty()) mbi::io::write_vtk(a->vtk, cage.U, cage.T);
         nlohmann::json j;
         j["input"] = a->dense;

@@ -21,6 +21,7 @@
 #include <filesystem>
 #include <iostream>
 #include <optional>
+#include <regex>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -41,6 +42,13 @@ std::string lower_ext(const fs::path& p) {
   for (char& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return e;
 }
+// A library message without its function name ("validate_mesh: element 5 ..." -> "element 5
+// ..."): the user did not call that function.
+std::string plain(const std::exception& e) {
+  static const std::regex internal("^[a-z]+(_[a-z0-9]+)+: ");
+  return std::regex_replace(std::string(e.what()), internal, "");
+}
+
 bool is_point_list(const fs::path& p) {
   const std::string e = lower_ext(p);
   return e == ".txt" || e == ".xyz";
@@ -52,6 +60,7 @@ struct DeformArgs {
   double alpha = 0.0;
   bool alpha_given = false;
   bool pin_boundary = false;
+  bool force = false;
   int threads = 0;
 };
 
@@ -76,8 +85,18 @@ Problem load_files(const DeformArgs& a) {
   pb.U = cm.U;
   pb.T = cm.T;
   const int d = cm.dim();
-  pb.X = lower_ext(a.deformed) == ".node" ? io::read_node(a.deformed)
-                                          : io::read_points(a.deformed);
+  for (const std::string& note : cm.notes) std::fprintf(stderr, "mbi deform: note: %s\n", note.c_str());
+  const std::string dext = lower_ext(a.deformed);
+  pb.X = dext == ".node"  ? io::read_node(a.deformed)
+         : dext == ".msh" ? io::read_gmsh_nodes(a.deformed)
+         : dext == ".vtk" ? io::read_vtk_points(a.deformed)
+                          : io::read_points(a.deformed);
+  if (d == 2 && pb.X.cols() == 3 && (dext == ".msh" || dext == ".vtk")) {
+    // a 2D mesh file stores z: it must be one plane, then it is dropped
+    if (pb.X.rows() > 0 && (pb.X.col(2).array() != pb.X(0, 2)).any())
+      throw std::runtime_error(a.deformed + ": the control mesh is 2D but these positions are not in one plane z = const");
+    pb.X.conservativeResize(Eigen::NoChange, 2);
+  }
   if (pb.X.rows() != pb.U.rows())
     throw std::runtime_error(a.deformed + ": " + std::to_string(pb.X.rows()) +
                              " deformed positions, but the control mesh " + a.control + " has " +
@@ -129,6 +148,14 @@ int run_deform(const DeformArgs& a) {
                                   {"--mesh", &a.mesh}, {"--out", &a.out}})
       if (v->empty()) throw std::runtime_error(std::string(flag) + " is required (or use --example)");
   }
+  if (!a.out.empty() && !is_point_list(a.out) && !io::is_surface_file(a.out))
+    throw std::runtime_error("--out " + a.out + ": unknown output format '" + lower_ext(a.out) +
+                             "' (expected .obj, .ply, .off, .stl, .txt or .xyz)");
+  // the same rule as mbi run: an existing output is not replaced without --force
+  if (!a.force)
+    for (const std::string* o : {&a.out, &a.stats})
+      if (!o->empty() && fs::exists(*o))
+        throw std::runtime_error(*o + ": exists (use --force to overwrite)");
   if (a.alpha_given && !(a.alpha > 0) )
     throw std::runtime_error("--alpha must be > 0 (E_disc alone has extra null modes)");
 
@@ -142,7 +169,7 @@ int run_deform(const DeformArgs& a) {
   try {
     emb = interp::embed(pb.U, pb.T, pb.P);
   } catch (const interp::Error& e) {
-    throw std::runtime_error(pb.mesh_name + ": " + e.what());
+    throw std::runtime_error(pb.mesh_name + ": " + plain(e));
   }
   const double embed_ms = ms_since(t0);
   if (!emb.outside.empty())
@@ -154,6 +181,12 @@ int run_deform(const DeformArgs& a) {
   // One frame through the pipeline: the given positions drive it, BI skips the solve.
   pipeline::PipelineOptions po;
   po.method = *pipeline::parse_method(a.method);
+  // A 3D surface with normals gets deformed normals (the file's normals are the rest normals).
+  Eigen::MatrixXd rest_normals;
+  if (d == 3 && pb.surface && pb.surface->N.rows() == pb.P.rows()) {
+    rest_normals = pb.surface->N;
+    po.normals = true;
+  }
   po.interp.alpha = a.alpha_given ? a.alpha : 0.0;
   po.interp.pin_boundary = a.pin_boundary;
   auto given = std::make_unique<pipeline::GivenDriver>(pb.U);
@@ -162,10 +195,11 @@ int run_deform(const DeformArgs& a) {
   const interp::ModifiedBI* solver = nullptr;
   try {
     pipe.emplace(pb.U, pb.T, std::move(emb), std::move(given), po,
-                 std::make_unique<pipeline::CpuEvaluator>(pipeline::Precision::Double, a.threads));
+                 std::make_unique<pipeline::CpuEvaluator>(pipeline::Precision::Double, a.threads),
+                 rest_normals);
     solver = &pipe->solver();  // the comparison table needs modified-BI in any case
   } catch (const interp::Error& e) {
-    throw std::runtime_error(pb.control_name + ": " + e.what());
+    throw std::runtime_error(pb.control_name + ": " + plain(e));
   }
   const pipeline::FrameResult fr = pipe->step();
   if (!fr.ok) throw std::runtime_error(fr.message);
@@ -196,11 +230,19 @@ int run_deform(const DeformArgs& a) {
     Eigen::MatrixXd full(out.rows(), d + pb.P_extra.cols());
     full << out, pb.P_extra;
     const fs::path op(a.out);
-    if (is_point_list(op) || !pb.surface) {
+    if (is_point_list(op)) {
       io::write_points(op, full);
     } else {
-      io::SurfaceMesh s = *pb.surface;
-      s.V = full;
+      // The output's format follows its extension; a surface keeps what its file held besides
+      // positions (write_surface); points alone make a vertices-only surface.
+      if (full.cols() > 3)
+        throw std::runtime_error(a.out + ": points with " + std::to_string(full.cols()) +
+                                 " coordinates cannot be written as a surface (use .txt/.xyz)");
+      io::SurfaceMesh s = pb.surface ? *pb.surface : io::SurfaceMesh{};
+      s.V = Eigen::MatrixXd::Zero(full.rows(), 3);
+      s.V.leftCols(full.cols()) = full;
+      if (po.normals) s.N = pipe->normals();
+      else s.N.resize(0, 0);
       io::write_surface(op, s);
     }
   }
@@ -262,11 +304,15 @@ const Registrar reg{
     [](CLI::App& sub) -> Action {
       auto a = std::make_shared<DeformArgs>();
       sub.add_option("--control", a->control,
-                     "rest control mesh: TetGen .node/.ele (or base name) or Gmsh .msh");
+                     "REQUIRED (unless --example) rest control mesh: TetGen .node/.ele (or base name), Gmsh .msh "
+                     "or legacy VTK .vtk");
       sub.add_option("--deformed", a->deformed,
-                     "deformed control positions: .node or plain text (n lines of d numbers)");
-      sub.add_option("--mesh", a->mesh, "dense model: .obj/.ply/.off/.stl, or points .txt/.xyz");
-      sub.add_option("--out", a->out, "output: same kind as --mesh (written atomically)");
+                     "REQUIRED (unless --example) deformed control positions, one per control node in file order: "
+                     ".node, .msh, .vtk or plain text (n lines of d numbers)");
+      sub.add_option("--mesh", a->mesh, "REQUIRED (unless --example) dense model: .obj/.ply/.off/.stl, or points .txt/.xyz");
+      sub.add_option("--out", a->out,
+                     "REQUIRED (unless --example) output, format by extension: .obj/.ply/.off/.stl (keeping the input's "
+                     "attributes when the format is the same) or points .txt/.xyz");
       sub.add_option("--method", a->method, "interpolation")
           ->check(CLI::IsMember({"bi", "modified-bi", "phong"}));
       sub.add_option_function<double>(
@@ -278,6 +324,7 @@ const Registrar reg{
           "weight of E_vibr (> 0; default 0.1 in 3D, 0.2 in 2D)");
       sub.add_flag("--pin-boundary", a->pin_boundary, "M = 0 on the control mesh boundary");
       sub.add_option("--stats", a->stats, "write statistics and timings as JSON");
+      sub.add_flag("--force", a->force, "overwrite existing --out / --stats files");
       sub.add_option("--example", a->example, "built-in example instead of files: twist-bar");
       sub.add_option("--threads", a->threads, "evaluation threads (0 = all cores)")
           ->check(CLI::Range(0, 1024));

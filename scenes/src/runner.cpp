@@ -15,6 +15,7 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <regex>
 
 namespace fs = std::filesystem;
 
@@ -86,6 +87,8 @@ SceneModels load_models(const Scene& sc, const fs::path& mesh_override) {
   if (sc.dense.subdivide > 0) {
     if (m.dense.V.cols() != 3) throw SceneError(where + ": dense.subdivide: only for 3D surfaces");
     generate::loop_subdivide(m.dense, sc.dense.subdivide);
+    m.dense.N.resize(0, 0);  // the file's normals and attributes belong to the unrefined mesh
+    m.dense.attributes.reset();
   }
   if (m.dense.V.rows() == 0) throw SceneError(m.dense_name + ": the dense model has no vertices");
 
@@ -277,9 +280,13 @@ pipeline::FramePipeline make_pipeline(const Scene& sc, const SceneModels& m,
   po.interp.alpha = sc.interpolation.alpha;
   po.interp.pin_boundary = sc.interpolation.pin_boundary;
   auto driver = sc.mode == Mode::Simulate ? simulation_driver(sc, m) : drag_driver(sc, m);
-  // rest normals of a 3D surface: evaluated normals for the GPU's pictures and the viewer
-  const Eigen::MatrixXd normals = m.dim() == 3 && m.dense.F.rows() > 0 ? vertex_normals(m.dense.V, m.dense.F)
-                                                                      : Eigen::MatrixXd();
+  // rest normals of a 3D surface: evaluated normals for the GPU's pictures and the viewer; a
+  // model with normals of its own has them evaluated every frame (written with the meshes)
+  const bool file_normals = m.dim() == 3 && m.dense.N.rows() == m.dense.V.rows() && m.dense.N.cols() == 3;
+  po.normals = file_normals;
+  const Eigen::MatrixXd normals = file_normals ? m.dense.N
+                                  : m.dim() == 3 && m.dense.F.rows() > 0 ? vertex_normals(m.dense.V, m.dense.F)
+                                                                         : Eigen::MatrixXd();
   return pipeline::FramePipeline(m.U, m.T, std::move(embedding), std::move(driver), po,
                                  std::move(evaluator), normals);
 }
@@ -359,14 +366,16 @@ class Outputs {
   /// Every frame: the point cache of `dense` (the run's method). Written frames: mesh, control
   /// VTK, and in 2D the picture (`shown`: BI | the run's method | boundary-pinned).
   void frame(int f, const Eigen::MatrixXd& Xc, const Eigen::MatrixXd& dense,
-             const std::vector<const Eigen::MatrixXd*>& shown, bool write_now) {
+             const std::vector<const Eigen::MatrixXd*>& shown, bool write_now,
+             const Eigen::MatrixXd* normals) {
     if (pc2_) pc2_->append(dense);
     if (!write_now) return;
     if (sc_.output.mesh_format != MeshFormat::None) {
       const std::string ext = std::string(".") + format_name(sc_.output.mesh_format);
       const io::Encoding enc = sc_.output.mesh_format == MeshFormat::Ply ? io::Encoding::binary : io::Encoding::ascii;
       if (dense.cols() == 3) {
-        io::write_frame(dir_ / "mesh", f, ext, m_.dense, dense, enc);
+        io::write_frame(dir_ / "mesh", f, ext, m_.dense, dense, enc,
+                        normals ? *normals : Eigen::MatrixXd());
       } else {  // 2D: z = 0
         Eigen::MatrixXd V3 = Eigen::MatrixXd::Zero(dense.rows(), 3);
         V3.leftCols(dense.cols()) = dense;
@@ -400,6 +409,18 @@ class Outputs {
   std::unique_ptr<io::Pc2Writer> pc2_;
 };
 
+}  // namespace
+
+namespace {
+// Removes the files of an earlier run (only names that run_scene writes) from `dir`, so that
+// --force does not leave its extra frames beside the new ones.
+void clear_outputs(const fs::path& dir) {
+  static const std::regex ours(R"((mesh_[0-9]+\.(obj|ply)|control_[0-9]+\.vtk|frame_[0-9]+\.png|dense\.pc2|metrics\.json))");
+  std::vector<fs::path> old;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.is_regular_file() && std::regex_match(e.path().filename().string(), ours)) old.push_back(e.path());
+  for (const auto& p : old) fs::remove(p);
+}
 }  // namespace
 
 RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
@@ -501,6 +522,7 @@ RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
   metrics["frames"] = nlohmann::json::array();
 
   // ---------------------------------------------------------------- frames
+  if (opt.force && fs::exists(res.out_dir)) clear_outputs(res.out_dir);
   fs::create_directories(res.out_dir);
   Outputs out(sc, m, res.out_dir);
   Pictures3D pictures(sc, m, res.out_dir);
@@ -568,7 +590,8 @@ RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
       fr["e_disc"] = table.e_disc;
       fr["metrics_ms"] = ms_since(t0);
     }
-    out.frame(f, pipe.control_positions(), pipe.positions(), shown, write_now);
+    out.frame(f, pipe.control_positions(), pipe.positions(), shown, write_now,
+              write_now && pipe.options().normals ? &pipe.normals() : nullptr);
     metrics["frames"].push_back(fr);
     res.frames = f;
     if (opt.progress) opt.progress(f, frames);

@@ -192,7 +192,7 @@ TEST_CASE("mbi deform --example twist-bar: BI, Phong and modified-BI side by sid
   for (const char* method : {"phong", "modified-bi"}) {
     INFO("--method " << method);
     const Result r = run_mbi(std::string("deform --example twist-bar --method ") + method +
-                                 " --alpha 0.1 --stats " + q(dir / "s.json"),
+                                 " --alpha 0.1 --force --stats " + q(dir / "s.json"),
                              dir);
     INFO(r.err);
     REQUIRE(r.code == 0);

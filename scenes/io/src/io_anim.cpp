@@ -25,7 +25,8 @@ path frame_path(const path& base, int frame, const std::string& ext, int digits)
 }
 
 path write_frame(const path& base, int frame, const std::string& ext, const SurfaceMesh& topology,
-                 const Eigen::Ref<const Eigen::MatrixXd>& V, Encoding encoding) {
+                 const Eigen::Ref<const Eigen::MatrixXd>& V, Encoding encoding,
+                 const Eigen::Ref<const Eigen::MatrixXd>& N) {
   const path p = frame_path(base, frame, ext);
   const std::string e = detail::extension(p);
   if (e != ".obj" && e != ".ply") fail(p, 0, "frame sequences are .obj or .ply");
@@ -33,7 +34,7 @@ path write_frame(const path& base, int frame, const std::string& ext, const Surf
   if (V.rows() != n || V.cols() != 3)
     fail(p, 0, "frame positions must be " + std::to_string(n) + " x 3, got " +
                    std::to_string(V.rows()) + " x " + std::to_string(V.cols()));
-  detail::write_surface_positions(p, topology, V, encoding);
+  detail::write_surface_positions(p, topology, V, N, encoding);
   return p;
 }
 

@@ -43,10 +43,11 @@ std::string fmt(double x);
 void write_atomic(const std::filesystem::path& target,
                   const std::function<void(std::FILE*)>& body);
 
-/// write_surface with the faces of `mesh` and the positions V (n x 3) in place of mesh.V (no
-/// copy of the mesh per written frame).
+/// write_surface with the faces and attributes of `mesh`, and the positions V (n x 3) and
+/// normals N (n x 3 or empty) in place of mesh.V and mesh.N (no copy of the mesh per frame).
 void write_surface_positions(const std::filesystem::path& file, const SurfaceMesh& mesh,
-                             const Eigen::Ref<const Eigen::MatrixXd>& V, Encoding encoding);
+                             const Eigen::Ref<const Eigen::MatrixXd>& V,
+                             const Eigen::Ref<const Eigen::MatrixXd>& N, Encoding encoding);
 
 /// fwrite / fputs that throw IoError on failure.
 void put(std::FILE* f, const void* data, std::size_t bytes, const std::filesystem::path& file);

@@ -1,10 +1,16 @@
-// Control meshes: TetGen .node/.ele/.face, Gmsh .msh (2.2 and 4.1 ASCII), legacy VTK output.
+// Control meshes: TetGen .node/.ele (and .face output), Gmsh .msh (2.2, 4.0, 4.1; ASCII and
+// binary), legacy VTK output.
 #include "io_common.hpp"
 
 #include <Eigen/Dense>
 
+#include <algorithm>
+#include <bit>
 #include <array>
+#include <cctype>
 #include <cmath>
+#include <cstring>
+#include <map>
 #include <unordered_map>
 
 namespace mbi::io {
@@ -113,7 +119,6 @@ Eigen::MatrixXd read_node(const path& file) { return parse_node(file).X; }
 ControlMesh read_tetgen(const path& p) {
   const path node = with_ext(p, ".node");
   const path ele = with_ext(p, ".ele");
-  const path face = with_ext(p, ".face");
   NodeFile nf = parse_node(node);
   ControlMesh m;
   m.U = std::move(nf.X);
@@ -131,6 +136,9 @@ ControlMesh read_tetgen(const path& p) {
     fail(ele, h.number, "header nodes per element: " + std::to_string(k) + " (expected " +
                             std::to_string(d + 1) + " or " + (d == 3 ? "10" : "6") + ")");
   check_remaining(ele, h, m_count, lines.size() - 1, "elements");
+  if (k != d + 1 && m_count > 0)
+    m.notes.push_back(ele.string() + ": " + std::to_string(m_count) + " " + std::to_string(k) + "-node " +
+                      (d == 3 ? "tetrahedra" : "triangles") + " used by their corners; their other nodes stay in the numbering, unconnected");
   m.T.resize(static_cast<Eigen::Index>(m_count), d + 1);
   std::vector<int> line_of(static_cast<std::size_t>(m_count));
   for (long long e = 0; e < m_count; ++e) {
@@ -147,33 +155,6 @@ ControlMesh read_tetgen(const path& p) {
   }
   check_elements(ele, line_of, m.U, m.T);
 
-  std::error_code ec;
-  if (d == 3 && std::filesystem::exists(face, ec)) {
-    const std::string ftext = detail::slurp(face);
-    const auto fl = detail::tokenize(ftext);
-    if (fl.empty()) fail(face, 0, "empty .face file");
-    const Line& fh = fl[0];
-    const long long nb = detail::to_int(fh.tok[0], face, fh.number, "header face count", 0, kMax);
-    const long long has_marker =
-        fh.tok.size() > 1 ? detail::to_int(fh.tok[1], face, fh.number, "header marker flag", 0, 1)
-                          : 0;
-    check_remaining(face, fh, nb, fl.size() - 1, "faces");
-    m.faces.resize(static_cast<Eigen::Index>(nb), 3);
-    m.face_markers = Eigen::VectorXi::Zero(static_cast<Eigen::Index>(nb));
-    for (long long i = 0; i < nb; ++i) {
-      const Line& l = fl[static_cast<std::size_t>(i + 1)];
-      const std::string field = "face " + std::to_string(i);
-      if (static_cast<long long>(l.tok.size()) < 4 + has_marker)
-        fail(face, l.number, field + ": expected " + std::to_string(4 + has_marker) + " values");
-      for (int c = 0; c < 3; ++c)
-        m.faces(static_cast<Eigen::Index>(i), c) = static_cast<int>(
-            detail::to_int(l.tok[static_cast<std::size_t>(1 + c)], face, l.number,
-                           field + " node", nf.base, nf.base + n - 1) - nf.base);
-      if (has_marker)
-        m.face_markers(static_cast<Eigen::Index>(i)) = static_cast<int>(
-            detail::to_int(l.tok[4], face, l.number, field + " marker", -kMax, kMax));
-    }
-  }
   return m;
 }
 
@@ -226,194 +207,567 @@ void write_tetgen(const path& base, const Eigen::Ref<const Eigen::MatrixXd>& U,
 }
 
 // --------------------------------------------------------------------------------------- Gmsh
-ControlMesh read_gmsh(const path& file) {
-  const std::string text = detail::slurp(file);
-  const auto lines = detail::tokenize(text, 0);
-  std::size_t i = 0;
-  auto need = [&](std::size_t at, const char* what) -> const Line& {
-    if (at >= lines.size()) fail(file, 0, std::string("file truncated: expected ") + what);
-    return lines[at];
-  };
-  std::string version;
-  std::vector<std::array<double, 3>> xyz;
-  std::unordered_map<long long, int> index_of;
+namespace {
+
+// Reads numbers from a .msh file, ASCII (blank-separated words) or binary (the file's
+// endianness, found from the int 1 after the format line). Messages name the line (ASCII) or
+// the byte offset (binary).
+struct MshCursor {
+  const std::string& d;
+  const path& file;
+  std::size_t pos = 0;
+  std::size_t last = 0;  // where the last word / value began
+  bool binary = false, swap = false;
+
+  int line_at(std::size_t at) const {
+    return binary && at > 0 ? 0 : 1 + static_cast<int>(std::count(d.begin(), d.begin() + static_cast<long>(std::min(at, d.size())), '\n'));
+  }
+  [[noreturn]] void fail_here(const std::string& what) const {
+    if (binary) fail(file, 0, what + " (byte " + std::to_string(last) + ")");
+    fail(file, line_at(last), what);
+  }
+  bool at_end() {
+    while (pos < d.size() && std::isspace(static_cast<unsigned char>(d[pos]))) ++pos;
+    return pos >= d.size();
+  }
+  std::string_view word(const char* what) {
+    if (at_end()) {
+      last = d.size();
+      fail(file, 0, std::string("file truncated: expected ") + what);
+    }
+    last = pos;
+    while (pos < d.size() && !std::isspace(static_cast<unsigned char>(d[pos]))) ++pos;
+    return std::string_view(d).substr(last, pos - last);
+  }
+  // After a section keyword of a binary file: exactly one newline, then binary data.
+  void end_of_line() {
+    while (pos < d.size() && d[pos] != '\n') ++pos;
+    if (pos < d.size()) ++pos;
+  }
+  template <typename T>
+  T get(const std::string& what) {
+    last = pos;
+    if (d.size() - pos < sizeof(T)) fail(file, 0, what + ": file truncated (byte " + std::to_string(pos) + ")");
+    unsigned char b[sizeof(T)];
+    std::memcpy(b, d.data() + pos, sizeof(T));
+    pos += sizeof(T);
+    if (swap) std::reverse(b, b + sizeof(T));
+    T x;
+    std::memcpy(&x, b, sizeof(T));
+    return x;
+  }
+  long long integer(const std::string& what, long long lo, long long hi) {
+    const std::string_view w = word(what.c_str());
+    return detail::to_int(w, file, line_at(last), what, lo, hi);
+  }
+  double real(const std::string& what) {
+    if (binary) {
+      const double x = get<double>(what);
+      if (!std::isfinite(x)) fail_here(what + ": non-finite value");
+      return x;
+    }
+    const std::string_view w = word(what.c_str());
+    return detail::to_double(w, file, line_at(last), what);
+  }
+  // An int (binary: int32) / a size (binary: `size_bytes` unsigned) / in ASCII a word.
+  long long i32(const std::string& what, long long lo, long long hi) {
+    if (!binary) return integer(what, lo, hi);
+    const long long x = get<std::int32_t>(what);
+    if (x < lo || x > hi) fail_here(what + ": " + std::to_string(x) + " out of range [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    return x;
+  }
+  long long size(const std::string& what, long long lo, long long hi, int size_bytes) {
+    if (!binary) return integer(what, lo, hi);
+    const unsigned long long x = size_bytes == 8 ? get<std::uint64_t>(what) : get<std::uint32_t>(what);
+    if (x > static_cast<unsigned long long>(hi) || static_cast<long long>(x) < lo)
+      fail_here(what + ": " + std::to_string(x) + " out of range [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    return static_cast<long long>(x);
+  }
+  // Fails unless `count` items of at least `bytes` each can follow.
+  void room(long long count, std::size_t bytes, const std::string& what) {
+    const long double need = static_cast<long double>(count) * static_cast<long double>(bytes);
+    if (need > static_cast<long double>(d.size() - pos))
+      fail_here("header says " + std::to_string(count) + " " + what + " but only " + std::to_string(d.size() - pos) + " bytes follow");
+  }
+  void expect(const char* keyword, const char* hint) {
+    const std::string_view w = word(keyword);
+    if (w != keyword) fail_here(std::string("expected ") + keyword + ", found '" + std::string(w.substr(0, 40)) + "'" + hint);
+  }
+};
+
+// Gmsh element types: number of nodes, and for triangles / tetrahedra of any order, which.
+int msh_nodes(int type) {
+  switch (type) {
+    case 1: return 2;   case 2: return 3;   case 3: return 4;   case 4: return 4;
+    case 5: return 8;   case 6: return 6;   case 7: return 5;   case 8: return 3;
+    case 9: return 6;   case 10: return 9;  case 11: return 10; case 12: return 27;
+    case 13: return 18; case 14: return 14; case 15: return 1;  case 16: return 8;
+    case 17: return 20; case 18: return 15; case 19: return 13; case 20: return 9;
+    case 21: return 10; case 22: return 12; case 23: return 15; case 24: return 15;
+    case 25: return 21; case 26: return 4;  case 27: return 5;  case 28: return 6;
+    case 29: return 20; case 30: return 35; case 31: return 56;
+    default: return -1;
+  }
+}
+bool msh_tet(int type) { return type == 4 || type == 11 || (type >= 29 && type <= 31); }
+bool msh_tri(int type) { return type == 2 || type == 9 || (type >= 20 && type <= 25); }
+std::string msh_type_name(int type) {
+  const char* n = "elements";
+  switch (type) {
+    case 1: case 8: case 26: case 27: case 28: n = "lines"; break;
+    case 15: n = "points"; break;
+    case 3: case 10: case 16: n = "quadrangles"; break;
+    case 5: case 12: case 17: n = "hexahedra"; break;
+    case 6: case 13: case 18: n = "prisms"; break;
+    case 7: case 14: case 19: n = "pyramids"; break;
+    default: if (msh_tet(type)) n = "tetrahedra"; else if (msh_tri(type)) n = "triangles";
+  }
+  return std::string(n) + " (type " + std::to_string(type) + ")";
+}
+
+struct MshData {
+  std::vector<std::array<double, 3>> xyz;  // every node, file order
   struct Elem {
     int type;
-    std::vector<int> nodes;
+    std::array<int, 4> corners;  // node indices (first 3 or 4 used)
     int line;
   };
-  std::vector<Elem> elems;
-  auto add_node = [&](long long tag, const Line& l, std::size_t tok0) {
-    const std::string field = "node " + std::to_string(tag);
-    if (l.tok.size() < tok0 + 3) fail(file, l.number, field + ": expected x y z");
+  std::vector<Elem> tets, tris;
+  std::map<int, long long> count_of_type;
+};
+
+MshData parse_msh(const path& file) {
+  const std::string data = detail::slurp(file);
+  MshCursor c{data, file};
+  MshData out;
+  std::string version;
+  int size_bytes = 8;
+  std::unordered_map<long long, int> index_of;
+  auto add_node = [&](long long tag, const std::array<double, 3>& p) {
+    if (!index_of.emplace(tag, static_cast<int>(out.xyz.size())).second)
+      c.fail_here("node " + std::to_string(tag) + ": duplicate node tag");
+    out.xyz.push_back(p);
+  };
+  auto node_xyz = [&](const std::string& field, int params) {
     std::array<double, 3> p{};
-    for (int c = 0; c < 3; ++c)
-      p[c] = detail::to_double(l.tok[tok0 + static_cast<std::size_t>(c)], file, l.number,
-                               field + " coordinate " + std::to_string(c));
-    if (!index_of.emplace(tag, static_cast<int>(xyz.size())).second)
-      fail(file, l.number, field + ": duplicate node tag");
-    xyz.push_back(p);
+    for (int k = 0; k < 3; ++k) p[static_cast<std::size_t>(k)] = c.real(field + " coordinate " + std::to_string(k));
+    for (int k = 0; k < params; ++k) c.real(field + " parametric coordinate");  // -save_parametric
+    return p;
   };
-  auto node_index = [&](std::string_view s, const Line& l, const std::string& field) {
-    const long long tag = detail::to_int(s, file, l.number, field + " node tag", 0, 1LL << 62);
-    const auto it = index_of.find(tag);
-    if (it == index_of.end())
-      fail(file, l.number, field + ": unknown node tag " + std::to_string(tag));
-    return it->second;
-  };
-  auto nodes_per = [](int type) {
-    switch (type) {
-      case 1: return 2;  case 2: return 3;  case 3: return 4;  case 4: return 4;
-      case 5: return 8;  case 6: return 6;  case 7: return 5;  case 8: return 3;
-      case 9: return 6;  case 10: return 9; case 11: return 10; case 15: return 1;
-      default: return -1;
+  auto add_elem = [&](int type, const std::vector<long long>& tags, long long tag, int line) {
+    ++out.count_of_type[type];
+    const bool tet = msh_tet(type), tri = msh_tri(type);
+    if (!tet && !tri) return;
+    MshData::Elem e{type, {-1, -1, -1, -1}, line};
+    for (int k = 0; k < (tet ? 4 : 3); ++k) {
+      const auto it = index_of.find(tags[static_cast<std::size_t>(k)]);
+      if (it == index_of.end())
+        fail(file, line, "element " + std::to_string(tag) + ": unknown node tag " + std::to_string(tags[static_cast<std::size_t>(k)]));
+      e.corners[static_cast<std::size_t>(k)] = it->second;
     }
+    (tet ? out.tets : out.tris).push_back(e);
   };
-  while (i < lines.size()) {
-    const Line& l = lines[i];
-    const std::string_view key = l.tok[0];
+  const long long kTag = 1LL << 62;
+  while (!c.at_end()) {
+    const std::string_view key = c.word("a section");
     if (key == "$MeshFormat") {
-      const Line& f = need(i + 1, "format line");
-      if (f.tok.size() < 3) fail(file, f.number, "format: expected '<version> <binary> <size>'");
-      version = std::string(f.tok[0]);
-      if (version != "2.2" && version != "4.1" && version != "2" && version != "4")
-        fail(file, f.number, "format: version " + version + " not supported (2.2 or 4.1)");
-      if (f.tok[1] != "0") fail(file, f.number, "format: binary .msh not supported (ASCII only)");
-      if (need(i + 2, "$EndMeshFormat").tok[0] != "$EndMeshFormat")
-        fail(file, lines[i + 2].number, "expected $EndMeshFormat");
-      i += 3;
+      version = std::string(c.word("format version"));
+      const long long type = c.integer("format file-type", 0, 1);
+      size_bytes = static_cast<int>(c.integer("format data-size", 4, 8));
+      if (version != "2.2" && version != "2" && version != "2.0" && version != "2.1" &&
+          version != "4" && version != "4.0" && version != "4.1")
+        c.fail_here("format: version " + version + " not supported (2.2, 4.0 and 4.1 are)");
+      c.binary = type == 1;
+      if (c.binary) {
+        c.end_of_line();
+        const std::int32_t one = c.get<std::int32_t>("binary endianness marker");
+        if (one != 1) {
+          c.swap = true;
+          if (__builtin_bswap32(static_cast<std::uint32_t>(one)) != 1)
+            c.fail_here("binary: expected the int 1 after the format line");
+        }
+      }
+      c.expect("$EndMeshFormat", "");
     } else if (key == "$Nodes") {
-      if (version.empty()) fail(file, l.number, "$Nodes before $MeshFormat");
-      const Line& h = need(i + 1, "node count");
-      std::size_t at = i + 2;
+      if (version.empty()) c.fail_here("$Nodes before $MeshFormat");
       if (version[0] == '2') {
-        const long long n = detail::to_int(h.tok[0], file, h.number, "node count", 0, kMax);
-        check_remaining(file, h, n, lines.size() - at, "nodes");
-        for (long long k = 0; k < n; ++k, ++at) {
-          const Line& nl = lines[at];
-          add_node(detail::to_int(nl.tok[0], file, nl.number, "node tag", 0, 1LL << 62), nl, 1);
+        const long long n = c.integer("node count", 0, kMax);
+        c.room(n, c.binary ? 28 : 8, "nodes");
+        if (c.binary) c.end_of_line();
+        for (long long k = 0; k < n; ++k) {
+          const long long tag = c.i32("node tag", 0, kMax);
+          add_node(tag, node_xyz("node " + std::to_string(tag), 0));
         }
       } else {
-        if (h.tok.size() < 4) fail(file, h.number, "$Nodes header: expected 4 numbers");
-        const long long blocks = detail::to_int(h.tok[0], file, h.number, "node block count", 0, kMax);
-        const long long total = detail::to_int(h.tok[1], file, h.number, "node count", 0, kMax);
-        check_remaining(file, h, blocks + 2 * total, lines.size() - at, "node lines");
+        const bool v41 = version == "4.1";
+        if (c.binary) c.end_of_line();
+        const long long blocks = c.size("node block count", 0, kMax, size_bytes);
+        const long long total = c.size("node count", 0, kMax, size_bytes);
+        if (v41) {
+          c.size("min node tag", 0, kTag, size_bytes);
+          c.size("max node tag", 0, kTag, size_bytes);
+        }
+        c.room(total, c.binary ? 32 : 8, "nodes");
         for (long long b = 0; b < blocks; ++b) {
-          const Line& bh = need(at++, "node block header");
-          if (bh.tok.size() < 4) fail(file, bh.number, "node block: expected 4 numbers");
-          const long long param = detail::to_int(bh.tok[2], file, bh.number, "parametric flag", 0, 1);
-          const long long nb = detail::to_int(bh.tok[3], file, bh.number, "nodes in block", 0, kMax);
-          check_remaining(file, bh, 2 * nb, lines.size() - at, "node lines in the block");
-          if (param) fail(file, bh.number, "parametric nodes are not supported");
-          for (long long k = 0; k < nb; ++k) {
-            const Line& tl = lines[at + static_cast<std::size_t>(k)];
-            const Line& cl = lines[at + static_cast<std::size_t>(nb + k)];
-            add_node(detail::to_int(tl.tok[0], file, tl.number, "node tag", 0, 1LL << 62), cl, 0);
+          long long dim = 0, param = 0, nb = 0;
+          if (v41) {
+            dim = c.i32("node block entity dimension", 0, 3);
+            c.i32("node block entity tag", -kMax, kMax);
+            param = c.i32("node block parametric flag", 0, 1);
+            nb = c.size("nodes in block", 0, total, size_bytes);
+          } else {
+            c.i32("node block entity tag", -kMax, kMax);
+            dim = c.i32("node block entity dimension", 0, 3);
+            param = c.i32("node block parametric flag", 0, 1);
+            nb = c.size("nodes in block", 0, total, size_bytes);
           }
-          at += static_cast<std::size_t>(2 * nb);
+          const int params = param ? static_cast<int>(dim) : 0;
+          if (v41) {
+            std::vector<long long> tags(static_cast<std::size_t>(nb));
+            for (auto& t : tags) t = c.size("node tag", 1, kTag, size_bytes);
+            for (long long t : tags) add_node(t, node_xyz("node " + std::to_string(t), params));
+          } else {
+            for (long long k = 0; k < nb; ++k) {
+              const long long tag = c.i32("node tag", 1, kMax);
+              add_node(tag, node_xyz("node " + std::to_string(tag), params));
+            }
+          }
         }
       }
-      if (need(at, "$EndNodes").tok[0] != "$EndNodes")
-        fail(file, lines[at].number, "expected $EndNodes (node count wrong?)");
-      i = at + 1;
+      c.expect("$EndNodes", " (node count wrong?)");
     } else if (key == "$Elements") {
-      if (version.empty()) fail(file, l.number, "$Elements before $MeshFormat");
-      const Line& h = need(i + 1, "element count");
-      std::size_t at = i + 2;
-      auto add_elem = [&](int type, const Line& el, std::size_t tok0) {
-        const int k = nodes_per(type);
-        if (type != 2 && type != 4) return;  // other types skipped
-        const std::string field = "element " + std::string(el.tok[0]);
-        if (el.tok.size() < tok0 + static_cast<std::size_t>(k))
-          fail(file, el.number, field + ": expected " + std::to_string(k) + " nodes");
-        Elem e{type, {}, el.number};
-        for (int c = 0; c < k; ++c)
-          e.nodes.push_back(node_index(el.tok[tok0 + static_cast<std::size_t>(c)], el, field));
-        elems.push_back(std::move(e));
-      };
+      if (version.empty()) c.fail_here("$Elements before $MeshFormat");
+      std::vector<long long> tags;
       if (version[0] == '2') {
-        const long long m = detail::to_int(h.tok[0], file, h.number, "element count", 0, kMax);
-        check_remaining(file, h, m, lines.size() - at, "elements");
-        for (long long k = 0; k < m; ++k, ++at) {
-          const Line& el = lines[at];
-          if (el.tok.size() < 3) fail(file, el.number, "element: expected '<tag> <type> <ntags> ...'");
-          const int type = static_cast<int>(detail::to_int(el.tok[1], file, el.number, "element type", 1, 1000));
-          const long long nt = detail::to_int(el.tok[2], file, el.number, "element tag count", 0, 1000);
-          add_elem(type, el, static_cast<std::size_t>(3 + nt));
+        const long long m = c.integer("element count", 0, kMax);
+        c.room(m, c.binary ? 12 : 8, "elements");
+        if (c.binary) {
+          c.end_of_line();
+          long long done = 0;
+          while (done < m) {
+            const int type = static_cast<int>(c.i32("element type", 1, 1000));
+            const long long follow = c.i32("elements following", 1, m - done);
+            const long long ntags = c.i32("element tag count", 0, 1000);
+            const int k = msh_nodes(type);
+            if (k < 0) c.fail_here("element type " + std::to_string(type) + " unknown to this reader");
+            for (long long e = 0; e < follow; ++e) {
+              const long long tag = c.i32("element tag", 0, kMax);
+              for (long long t = 0; t < ntags; ++t) c.i32("element tag", -kMax, kMax);
+              tags.assign(static_cast<std::size_t>(k), 0);
+              for (auto& t : tags) t = c.i32("element node", 0, kMax);
+              add_elem(type, tags, tag, 0);
+            }
+            done += follow;
+          }
+        } else {
+          for (long long e = 0; e < m; ++e) {
+            const long long tag = c.integer("element tag", 0, kTag);
+            const int line = c.line_at(c.last);
+            const int type = static_cast<int>(c.integer("element type", 1, 1000));
+            const long long ntags = c.integer("element tag count", 0, 1000);
+            for (long long t = 0; t < ntags; ++t) c.integer("element tag", -kTag, kTag);
+            const int k = msh_nodes(type);
+            if (k < 0) fail(file, line, "element " + std::to_string(tag) + ": type " + std::to_string(type) + " unknown to this reader");
+            tags.assign(static_cast<std::size_t>(k), 0);
+            for (auto& t : tags) t = c.integer("element " + std::to_string(tag) + " node tag", 0, kTag);
+            if (c.line_at(c.last) != line) fail(file, line, "element " + std::to_string(tag) + ": expected " + std::to_string(k) + " nodes");
+            add_elem(type, tags, tag, line);
+          }
         }
       } else {
-        if (h.tok.size() < 4) fail(file, h.number, "$Elements header: expected 4 numbers");
-        const long long blocks = detail::to_int(h.tok[0], file, h.number, "element block count", 0, kMax);
-        const long long total = detail::to_int(h.tok[1], file, h.number, "element count", 0, kMax);
-        check_remaining(file, h, blocks + total, lines.size() - at, "element lines");
+        const bool v41 = version == "4.1";
+        if (c.binary) c.end_of_line();
+        const long long blocks = c.size("element block count", 0, kMax, size_bytes);
+        const long long total = c.size("element count", 0, kMax, size_bytes);
+        if (v41) {
+          c.size("min element tag", 0, kTag, size_bytes);
+          c.size("max element tag", 0, kTag, size_bytes);
+        }
+        c.room(total, c.binary ? 8 : 4, "elements");
         for (long long b = 0; b < blocks; ++b) {
-          const Line& bh = need(at++, "element block header");
-          if (bh.tok.size() < 4) fail(file, bh.number, "element block: expected 4 numbers");
-          const int type = static_cast<int>(detail::to_int(bh.tok[2], file, bh.number, "element type", 1, 1000));
-          const long long nb = detail::to_int(bh.tok[3], file, bh.number, "elements in block", 0, kMax);
-          check_remaining(file, bh, nb, lines.size() - at, "element lines in the block");
-          for (long long k = 0; k < nb; ++k) add_elem(type, lines[at++], 1);
+          int type = 0;
+          if (v41) {
+            c.i32("element block entity dimension", 0, 3);
+            c.i32("element block entity tag", -kMax, kMax);
+          } else {
+            c.i32("element block entity tag", -kMax, kMax);
+            c.i32("element block entity dimension", 0, 3);
+          }
+          type = static_cast<int>(c.i32("element type", 1, 1000));
+          const long long nb = c.size("elements in block", 0, total, size_bytes);
+          const int k = msh_nodes(type);
+          if (k < 0) c.fail_here("element type " + std::to_string(type) + " unknown to this reader");
+          for (long long e = 0; e < nb; ++e) {
+            const long long tag = v41 ? c.size("element tag", 0, kTag, size_bytes) : c.i32("element tag", 0, kMax);
+            const int line = c.line_at(c.last);
+            tags.assign(static_cast<std::size_t>(k), 0);
+            for (auto& t : tags)
+              t = v41 ? c.size("element " + std::to_string(tag) + " node tag", 0, kTag, size_bytes)
+                      : c.i32("element " + std::to_string(tag) + " node tag", 0, kMax);
+            add_elem(type, tags, tag, line);
+          }
         }
       }
-      if (need(at, "$EndElements").tok[0] != "$EndElements")
-        fail(file, lines[at].number, "expected $EndElements (element count wrong?)");
-      i = at + 1;
+      c.expect("$EndElements", " (element count wrong?)");
     } else if (key.size() > 1 && key[0] == '$' && key.substr(0, 4) != "$End") {
-      // Unknown section: skip to its $End line.
-      const std::string end = "$End" + std::string(key.substr(1));
-      std::size_t at = i + 1;
-      while (at < lines.size() && lines[at].tok[0] != end) ++at;
-      if (at >= lines.size()) fail(file, l.number, "section " + std::string(key) + " not closed");
-      i = at + 1;
+      // Any other section ($PhysicalNames, $Entities, $NodeData, ...): skipped to its $End line.
+      const std::string end = "\n$End" + std::string(key.substr(1));
+      const std::size_t at = data.find(end, c.pos);
+      if (at == std::string::npos) c.fail_here("section " + std::string(key) + " not closed");
+      c.pos = at + end.size();
     } else {
-      fail(file, l.number, "unexpected '" + std::string(key) + "' outside a section");
+      c.fail_here("unexpected '" + std::string(key.substr(0, 40)) + "' outside a section");
     }
   }
   if (version.empty()) fail(file, 0, "no $MeshFormat section (not a Gmsh file?)");
-  bool has_tet = false, has_tri = false;
-  for (const auto& e : elems) (e.type == 4 ? has_tet : has_tri) = true;
-  if (!has_tet && !has_tri) fail(file, 0, "no tetrahedra (type 4) or triangles (type 2)");
-  const int want = has_tet ? 4 : 2;
-  const int d = has_tet ? 3 : 2;
-  std::vector<int> remap(xyz.size(), -1);
-  std::vector<int> line_of;
-  int n = 0;
-  for (const auto& e : elems)
-    if (e.type == want)
-      for (int v : e.nodes) remap[static_cast<std::size_t>(v)] = 0;
-  for (auto& r : remap)
-    if (r == 0) r = n++;
+  return out;
+}
+
+std::string found_list(const MshData& m) {
+  std::string s;
+  for (const auto& [type, n] : m.count_of_type)
+    s += (s.empty() ? "" : ", ") + std::to_string(n) + " " + msh_type_name(type);
+  return s.empty() ? "no elements" : s;
+}
+
+}  // namespace
+
+ControlMesh read_gmsh(const path& file) {
+  const MshData msh = parse_msh(file);
+  const bool three_d = !msh.tets.empty();
+  if (!three_d && msh.tris.empty())
+    fail(file, 0, "no tetrahedra or triangles (found " + found_list(msh) + ")");
+  const int d = three_d ? 3 : 2;
+  const auto& elems = three_d ? msh.tets : msh.tris;
   ControlMesh m;
+  const auto n = static_cast<Eigen::Index>(msh.xyz.size());
   m.U.resize(n, d);
-  double z0 = 0.0;
-  bool first = true;
-  for (std::size_t v = 0; v < xyz.size(); ++v) {
-    if (remap[v] < 0) continue;
-    for (int c = 0; c < d; ++c) m.U(remap[v], c) = xyz[v][static_cast<std::size_t>(c)];
-    if (d == 2) {
-      if (first) z0 = xyz[v][2];
-      else if (xyz[v][2] != z0)
-        fail(file, 0, "2D mesh (triangles only) with nodes at different z (" +
-                          detail::fmt(z0) + " and " + detail::fmt(xyz[v][2]) + ")");
-      first = false;
-    }
+  for (Eigen::Index v = 0; v < n; ++v)
+    for (int c = 0; c < d; ++c) m.U(v, c) = msh.xyz[static_cast<std::size_t>(v)][static_cast<std::size_t>(c)];
+  if (!three_d)
+    for (Eigen::Index v = 1; v < n; ++v)
+      if (msh.xyz[static_cast<std::size_t>(v)][2] != msh.xyz[0][2])
+        fail(file, 0, "no tetrahedra, and the " + std::to_string(msh.tris.size()) +
+                          " triangles are not in one plane z = const (nodes at z = " +
+                          detail::fmt(msh.xyz[0][2]) + " and " + detail::fmt(msh.xyz[static_cast<std::size_t>(v)][2]) +
+                          "): a surface mesh of a 3D model? Mesh the volume (gmsh -3) and save it "
+                          "(a Physical Volume, or -save_all); found " + found_list(msh));
+  m.T.resize(static_cast<Eigen::Index>(elems.size()), d + 1);
+  std::vector<int> line_of;
+  long long higher = 0;
+  for (std::size_t e = 0; e < elems.size(); ++e) {
+    for (int c = 0; c <= d; ++c) m.T(static_cast<Eigen::Index>(e), c) = elems[e].corners[static_cast<std::size_t>(c)];
+    line_of.push_back(elems[e].line);
+    higher += elems[e].type != (three_d ? 4 : 2);
   }
-  long long count = 0;
-  for (const auto& e : elems) count += e.type == want;
-  m.T.resize(static_cast<Eigen::Index>(count), d + 1);
-  Eigen::Index r = 0;
-  for (const auto& e : elems) {
-    if (e.type != want) continue;
-    for (int c = 0; c <= d; ++c) m.T(r, c) = remap[static_cast<std::size_t>(e.nodes[static_cast<std::size_t>(c)])];
-    line_of.push_back(e.line);
-    ++r;
-  }
+  if (higher > 0)
+    m.notes.push_back(file.string() + ": " + std::to_string(higher) + " higher-order " +
+                      (three_d ? "tetrahedra" : "triangles") + " used by their corners; their other nodes stay in the numbering, unconnected");
   check_elements(file, line_of, m.U, m.T);
   return m;
 }
 
+Eigen::MatrixXd read_gmsh_nodes(const path& file) {
+  const MshData msh = parse_msh(file);
+  Eigen::MatrixXd X(static_cast<Eigen::Index>(msh.xyz.size()), 3);
+  for (std::size_t v = 0; v < msh.xyz.size(); ++v)
+    for (int c = 0; c < 3; ++c) X(static_cast<Eigen::Index>(v), c) = msh.xyz[v][static_cast<std::size_t>(c)];
+  return X;
+}
+
+// ------------------------------------------------------------------------------ VTK (reading)
+namespace {
+
+struct VtkData {
+  Eigen::MatrixXd P;  // n x 3
+  struct Cell {
+    int type;
+    std::vector<long long> nodes;
+  };
+  std::vector<Cell> cells;
+};
+
+// One value of a legacy VTK data type (binary: big endian).
+double vtk_value(MshCursor& c, const std::string& type, const std::string& what) {
+  if (!c.binary) return c.real(what);
+  if (type == "float") return static_cast<double>(c.get<float>(what));
+  if (type == "double") return c.get<double>(what);
+  if (type == "int" || type == "vtktypeint32") return c.get<std::int32_t>(what);
+  if (type == "unsigned_int" || type == "vtktypeuint32") return c.get<std::uint32_t>(what);
+  if (type == "long" || type == "vtktypeint64") return static_cast<double>(c.get<std::int64_t>(what));
+  if (type == "unsigned_long" || type == "vtktypeuint64") return static_cast<double>(c.get<std::uint64_t>(what));
+  if (type == "short") return c.get<std::int16_t>(what);
+  if (type == "unsigned_short") return c.get<std::uint16_t>(what);
+  if (type == "char") return c.get<std::int8_t>(what);
+  if (type == "unsigned_char") return c.get<std::uint8_t>(what);
+  c.fail_here("data type '" + type + "' not supported");
+}
+std::size_t vtk_size(const std::string& type) {
+  if (type == "double" || type == "long" || type == "unsigned_long" || type.find("64") != std::string::npos) return 8;
+  if (type == "short" || type == "unsigned_short") return 2;
+  if (type == "char" || type == "unsigned_char") return 1;
+  return 4;
+}
+
+VtkData parse_vtk(const path& file) {
+  const std::string data = detail::slurp(file);
+  if (data.compare(0, 22, "# vtk DataFile Version") != 0)
+    fail(file, 1, "not a legacy VTK file (expected '# vtk DataFile Version')");
+  std::size_t at = data.find('\n');
+  const std::size_t title_end = at == std::string::npos ? at : data.find('\n', at + 1);
+  if (title_end == std::string::npos) fail(file, 0, "file truncated: expected the title and ASCII/BINARY lines");
+  MshCursor c{data, file};
+  c.pos = title_end + 1;
+  const std::string_view enc = c.word("ASCII or BINARY");
+  if (enc == "BINARY") c.binary = true, c.swap = std::endian::native == std::endian::little;
+  else if (enc != "ASCII") c.fail_here("expected ASCII or BINARY, found '" + std::string(enc.substr(0, 40)) + "'");
+  const bool binary = c.binary;
+  c.binary = false;  // keywords are text; data after them follows the encoding
+  VtkData out;
+  bool have_points = false;
+  std::vector<long long> offsets, connectivity;
+  long long legacy_cells = -1;
+  std::vector<int> types;
+  auto numbers = [&](long long count, const std::string& type, const std::string& what, std::vector<long long>& v) {
+    c.room(count, binary ? vtk_size(type) : 2, what);
+    if (binary) c.end_of_line();
+    c.binary = binary;
+    v.resize(static_cast<std::size_t>(count));
+    for (auto& x : v) {
+      const double y = vtk_value(c, type, what);
+      if (y != std::floor(y) || std::abs(y) > 9e15) c.fail_here(what + ": not an integer");
+      x = static_cast<long long>(y);
+    }
+    c.binary = false;
+  };
+  while (!c.at_end()) {
+    const std::string key(c.word("a keyword"));
+    if (key == "DATASET") {
+      const std::string_view t = c.word("dataset type");
+      if (t != "UNSTRUCTURED_GRID")
+        c.fail_here("dataset " + std::string(t) + " (only UNSTRUCTURED_GRID is a control mesh)");
+    } else if (key == "POINTS") {
+      const long long n = c.integer("point count", 0, kMax);
+      const std::string type(c.word("point data type"));
+      c.room(3 * n, binary ? vtk_size(type) : 2, "point coordinates");
+      if (binary) c.end_of_line();
+      c.binary = binary;
+      out.P.resize(n, 3);
+      for (long long i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k) {
+          const double x = vtk_value(c, type, "point " + std::to_string(i) + " coordinate " + std::to_string(k));
+          if (!std::isfinite(x)) c.fail_here("point " + std::to_string(i) + ": non-finite coordinate");
+          out.P(i, k) = x;
+        }
+      c.binary = false;
+      have_points = true;
+    } else if (key == "CELLS") {
+      const long long m = c.integer("cell count", 0, kMax);
+      const long long size = c.integer("cell list size", 0, kMax);
+      const std::size_t save = c.pos;
+      const std::string_view next = c.word("cell data");
+      if (next == "OFFSETS") {  // format 5.1: offsets (m of them, cells + 1), then connectivity
+        const std::string otype(c.word("offsets type"));
+        numbers(m, otype, "cell offsets", offsets);
+        c.expect("CONNECTIVITY", "");
+        const std::string ctype(c.word("connectivity type"));
+        numbers(size, ctype, "cell connectivity", connectivity);
+      } else {
+        c.pos = save;
+        std::vector<long long> flat;
+        numbers(size, "int", "cell list", flat);
+        legacy_cells = m;
+        offsets.assign(1, 0);
+        std::size_t i = 0;
+        for (long long e = 0; e < m; ++e) {
+          if (i >= flat.size()) c.fail_here("CELLS: the list is shorter than its " + std::to_string(m) + " cells");
+          const long long k = flat[i++];
+          if (k < 0 || i + static_cast<std::size_t>(k) > flat.size()) c.fail_here("cell " + std::to_string(e) + ": bad point count " + std::to_string(k));
+          connectivity.insert(connectivity.end(), flat.begin() + static_cast<long>(i), flat.begin() + static_cast<long>(i + static_cast<std::size_t>(k)));
+          i += static_cast<std::size_t>(k);
+          offsets.push_back(static_cast<long long>(connectivity.size()));
+        }
+      }
+    } else if (key == "CELL_TYPES") {
+      const long long m = c.integer("cell type count", 0, kMax);
+      std::vector<long long> t;
+      numbers(m, "int", "cell types", t);
+      types.assign(t.begin(), t.end());
+    } else if (key == "POINT_DATA" || key == "CELL_DATA") {
+      break;  // attributes: not needed
+    } else if (key == "FIELD" || key == "METADATA") {
+      break;
+    } else {
+      c.fail_here("unexpected '" + key.substr(0, 40) + "'");
+    }
+  }
+  if (!have_points) fail(file, 0, "no POINTS");
+  const long long cells = static_cast<long long>(offsets.empty() ? 0 : offsets.size() - 1);
+  (void)legacy_cells;
+  if (static_cast<long long>(types.size()) != cells)
+    fail(file, 0, "CELLS has " + std::to_string(cells) + " cells but CELL_TYPES " + std::to_string(types.size()));
+  for (long long e = 0; e < cells; ++e) {
+    VtkData::Cell cell{types[static_cast<std::size_t>(e)], {}};
+    const long long b = offsets[static_cast<std::size_t>(e)], en = offsets[static_cast<std::size_t>(e + 1)];
+    if (b < 0 || en < b || en > static_cast<long long>(connectivity.size()))
+      fail(file, 0, "cell " + std::to_string(e) + ": bad offsets");
+    for (long long k = b; k < en; ++k) {
+      const long long v = connectivity[static_cast<std::size_t>(k)];
+      if (v < 0 || v >= out.P.rows())
+        fail(file, 0, "cell " + std::to_string(e) + ": point index " + std::to_string(v) + " out of range [0, " + std::to_string(out.P.rows()) + ")");
+      cell.nodes.push_back(v);
+    }
+    out.cells.push_back(std::move(cell));
+  }
+  return out;
+}
+
+}  // namespace
+
+ControlMesh read_vtk(const path& file) {
+  const VtkData v = parse_vtk(file);
+  // tetrahedra (10; quadratic 24 by its corners), else triangles (5; quadratic 22)
+  long long tets = 0, tris = 0, higher = 0;
+  std::map<int, long long> other;
+  for (const auto& c : v.cells) {
+    if (c.type == 10 || c.type == 24) ++tets;
+    else if (c.type == 5 || c.type == 22) ++tris;
+    else ++other[c.type];
+  }
+  if (tets == 0 && tris == 0) {
+    std::string found;
+    for (const auto& [t, n] : other) found += (found.empty() ? "" : ", ") + std::to_string(n) + " of type " + std::to_string(t);
+    fail(file, 0, "no tetrahedra (cell type 10) or triangles (type 5); found " + (found.empty() ? std::string("no cells") : found));
+  }
+  const int d = tets > 0 ? 3 : 2;
+  ControlMesh m;
+  m.U = v.P.leftCols(d);
+  if (d == 2 && v.P.rows() > 0 && (v.P.col(2).array() != v.P(0, 2)).any())
+    fail(file, 0, "no tetrahedra, and the triangles are not in one plane z = const (a surface mesh of a 3D model?)");
+  m.T.resize(d == 3 ? tets : tris, d + 1);
+  Eigen::Index r = 0;
+  for (const auto& c : v.cells) {
+    const bool use = d == 3 ? (c.type == 10 || c.type == 24) : (c.type == 5 || c.type == 22);
+    if (!use) continue;
+    const std::size_t need = static_cast<std::size_t>(c.type == 24 ? 10 : c.type == 22 ? 6 : d + 1);
+    if (c.nodes.size() != need)
+      fail(file, 0, "cell " + std::to_string(r) + " of type " + std::to_string(c.type) + ": " + std::to_string(c.nodes.size()) + " points, expected " + std::to_string(need));
+    higher += c.type == 24 || c.type == 22;
+    for (int k = 0; k <= d; ++k) m.T(r, k) = static_cast<int>(c.nodes[static_cast<std::size_t>(k)]);
+    ++r;
+  }
+  if (higher > 0)
+    m.notes.push_back(file.string() + ": " + std::to_string(higher) + " quadratic cells used by their corners; their other points stay in the numbering, unconnected");
+  check_elements(file, {}, m.U, m.T);
+  return m;
+}
+
+Eigen::MatrixXd read_vtk_points(const path& file) { return parse_vtk(file).P; }
+
 ControlMesh read_control_mesh(const path& file) {
-  if (detail::extension(file) == ".msh") return read_gmsh(file);
+  const std::string ext = detail::extension(file);
+  if (ext == ".msh") return read_gmsh(file);
+  if (ext == ".vtk") return read_vtk(file);
   return read_tetgen(file);
 }
 

@@ -190,8 +190,8 @@ TEST_CASE("TetGen files round-trip exactly, 3D and 2D", "[io]") {
     REQUIRE(m.dim() == 3);
     REQUIRE((m.U.array() == U.array()).all());
     REQUIRE(m.T == T);
-    REQUIRE(m.faces == B);
   }
+  REQUIRE(read_text(tmp / "c.face") == "2 0\n0 0 1 2\n1 1 3 4\n");  // written, never read
   REQUIRE((read_node(tmp / "c.node").array() == U.array()).all());
   REQUIRE(read_control_mesh(tmp / "c.ele").T == T);
 
@@ -214,16 +214,14 @@ TEST_CASE("TetGen reader: 1-based numbering, attributes, markers, comments", "[i
              "4 0 0 1 7 8 0 # c\n5 1 1 1 7 8 1\n");
   write_text(tmp / "a.ele", "2 4 1\n1 1 2 3 4 9\n2 2 3 4 5 9\n");
   write_text(tmp / "a.face", "1 1\n1 1 2 3 -1\n");
-  const ControlMesh m = read_tetgen(tmp / "a");
+  const ControlMesh m = read_tetgen(tmp / "a.face");  // the base name, from any companion
   REQUIRE(m.U.rows() == 5);
   REQUIRE(m.U(4, 2) == 1.0);
   REQUIRE(m.T.row(0) == Eigen::RowVector4i(0, 1, 2, 3));
   REQUIRE(m.T.row(1) == Eigen::RowVector4i(1, 2, 3, 4));
-  REQUIRE(m.faces.row(0) == Eigen::RowVector3i(0, 1, 2));
-  REQUIRE(m.face_markers(0) == -1);
 }
 
-TEST_CASE("Gmsh 2.2 and 4.1: tetrahedra kept, other types skipped, tags remapped", "[io]") {
+TEST_CASE("Gmsh 2.2 and 4.1: tetrahedra kept, other types skipped, every node kept in file order", "[io]") {
   TempDir tmp("gmsh");
   // Node tags 10..50 in an odd order; node 99 used only by a point element (dropped).
   write_text(tmp / "a.msh",
@@ -240,12 +238,13 @@ TEST_CASE("Gmsh 2.2 and 4.1: tetrahedra kept, other types skipped, tags remapped
     INFO(name);
     const ControlMesh m = read_control_mesh(tmp / name);
     REQUIRE(m.dim() == 3);
-    REQUIRE(m.U.rows() == 5);  // node 99 dropped
+    REQUIRE(m.U.rows() == 6);  // node 99 (a point element only) kept, as TetGen's .node would
     REQUIRE(m.T.rows() == 2);
-    // Tag 30 is the first node in the file -> index 0, tag 10 -> 1, 20 -> 2, 40 -> 3, 50 -> 4.
-    REQUIRE(m.U.row(0) == Eigen::RowVector3d(0, 1, 0));
-    REQUIRE(m.T.row(0) == Eigen::RowVector4i(1, 2, 0, 3));
-    REQUIRE(m.T.row(1) == Eigen::RowVector4i(2, 0, 3, 4));
+    // Nodes in file order: a.msh 30, 10, 20, 40, 50, 99; b.msh 99, 30, 10, 20, 40, 50.
+    const int o = std::string(name) == "b.msh" ? 1 : 0;
+    REQUIRE(m.U.row(o) == Eigen::RowVector3d(0, 1, 0));
+    REQUIRE(m.T.row(0) == Eigen::RowVector4i(1 + o, 2 + o, o, 3 + o));
+    REQUIRE(m.T.row(1) == Eigen::RowVector4i(2 + o, o, 3 + o, 4 + o));
   }
   // 2D: triangles only, z = 0 dropped.
   write_text(tmp / "c.msh",
@@ -417,13 +416,13 @@ TEST_CASE("malformed text files: IoError naming file, line and field", "[io][rob
       {"f.node", "2 3 1 1\n0 0 0 0\n1 1 0 0\n", 2, "expected 6 values"},
       {"a.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1999999999\n1 0 0 0\n$EndNodes\n",
        5, "1999999999 nodes"},
-      {"b.msh", "$MeshFormat\n2.2 1 8\n$EndMeshFormat\n", 2, "binary"},
+      {"b.msh", "$MeshFormat\n2.2 1 8\n$EndMeshFormat\n", 0, "binary: expected the int 1"},
       {"c.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1\n1 0 0 0\n$EndNodes\n"
                 "$Elements\n1\n1 4 0 1 2 3 4\n$EndElements\n", 10, "unknown node tag 2"},
       {"d.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n2\n1 0 0 0\n2 0 0 0\n3 0 0 0\n"
                 "$EndNodes\n", 8, "$EndNodes"},
       {"e.msh", "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 1000000000 1 1\n0 1 0 1\n",
-       5, "node lines"},
+       5, "1000000000 nodes"},
       {"f.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1\n1 0 0 nan\n$EndNodes\n", 6,
        "node 1 coordinate 2"},
       {"g.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1\n1 0 0 0\n$EndNodes\n", 0,
@@ -446,7 +445,7 @@ TEST_CASE("malformed text files: IoError naming file, line and field", "[io][rob
   require_io_error([&] { read_surface(tmp / "x.abc"); }, tmp / "x.abc", 0, "unknown surface");
 }
 
-TEST_CASE("malformed TetGen element and face files", "[io][robustness]") {
+TEST_CASE("malformed TetGen element files; .face files are not read", "[io][robustness]") {
   TempDir tmp("badele");
   write_text(tmp / "m.node", "5 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n4 1 1 0\n");
   struct Case {
@@ -468,11 +467,12 @@ TEST_CASE("malformed TetGen element and face files", "[io][robustness]") {
     write_text(tmp / "m.ele", c.ele);
     require_io_error([&] { read_tetgen(tmp / "m"); }, tmp / "m.ele", c.line, c.what);
   }
+  // a stale or broken .face beside them is not read (nothing uses it)
   write_text(tmp / "m.ele", "1 4 0\n0 0 1 2 3\n");
-  write_text(tmp / "m.face", "1 0\n0 0 1 9\n");
-  require_io_error([&] { read_tetgen(tmp / "m"); }, tmp / "m.face", 2, "face 0 node");
-  write_text(tmp / "m.face", "1000000000 0\n0 0 1 2\n");
-  require_io_error([&] { read_tetgen(tmp / "m"); }, tmp / "m.face", 1, "1000000000 faces");
+  for (const char* face : {"1 0\n0 0 1 9\n", "1000000000 0\n0 0 1 2\n", "garbage\n"}) {
+    write_text(tmp / "m.face", face);
+    REQUIRE(read_tetgen(tmp / "m").T.rows() == 1);
+  }
 }
 
 TEST_CASE("malformed binary files: absurd counts and truncation", "[io][robustness]") {

@@ -39,6 +39,10 @@ class AtomicFile;
 // Dense surfaces
 // ----------------------------------------------------------------------------------------------
 
+/// Everything a surface file holds besides positions, faces and normals, kept so that a writer
+/// of the same format can write it back (defined in the implementation; see read_surface).
+struct SurfaceAttributes;
+
 /// A surface mesh as stored in a file. Vertex order and count are exactly the file's: vertices
 /// that no face uses, duplicated positions, holes, several components and non-manifold faces
 /// are all kept as they are.
@@ -48,27 +52,53 @@ struct SurfaceMesh {
   /// Faces as written in the file (0-based, any size >= 3). Writers use these when non-empty
   /// (so polygons are written back unchanged), otherwise F.
   std::vector<std::vector<int>> polygons;
+  /// n x 3 unit vertex normals, or empty (0 x 0) when the file has none. OBJ: a vertex takes
+  /// the `vn` of the first face corner that names it (corners of one vertex with different
+  /// normals, i.e. hard edges, are merged that way); vertices that no corner gives a normal get
+  /// the area-weighted normal of their faces. PLY: properties nx, ny, nz. Writers write these
+  /// (OBJ: one `vn` per vertex, referenced by every face corner; PLY: nx, ny, nz); they depend
+  /// on positions, so a deformed mesh should carry deformed normals (or none).
+  Eigen::MatrixXd N;
+  /// What the file held besides that (null for meshes not read from a file): its format and
+  /// encoding, and OBJ: texture coordinates `vt` and the corners' vt indices, `g`, `o`,
+  /// `usemtl`, `mtllib`, `s` and other records in file order, extra numbers of `v` lines
+  /// (vertex colours); PLY: every property and element, header comments, endianness; STL: the
+  /// 80-byte header and the attribute word of each triangle, or the solid's name. Comments of
+  /// OBJ files are not kept. A writer of the same format writes all of it back (positions and
+  /// normals replaced) as long as the vertex count and the faces' sizes still match the file's;
+  /// otherwise, or for another format, only positions, faces and normals are written.
+  std::shared_ptr<const SurfaceAttributes> attributes;
 };
 
 /// Reads .obj, .off, .ply (ASCII or binary, little or big endian) or .stl (ASCII or binary),
 /// chosen by extension (case-insensitive). OBJ: "v" and "f" lines (v, v/t, v//n, v/t/n, negative
-/// relative indices); other records are ignored. OFF: ASCII. PLY: vertex x,y,z of any scalar
-/// type, face "vertex_indices"/"vertex_index" list; other properties and elements are skipped.
-/// STL has no shared vertices: the corners of its triangles are merged when bitwise equal, in
-/// order of first appearance (STL stores float32).
+/// relative indices), "vn" for N; other records are kept in `attributes`. OFF: ASCII, positions
+/// and faces. PLY: vertex x,y,z of any scalar type, face "vertex_indices"/"vertex_index" list,
+/// nx,ny,nz for N; every property and element is kept in `attributes`. STL has no shared
+/// vertices: the corners of its triangles are merged when bitwise equal, in order of first
+/// appearance (STL stores float32).
 SurfaceMesh read_surface(const std::filesystem::path& file);
 
-enum class Encoding { ascii, binary };
+/// ascii / binary: as named (binary: PLY keeps the endianness of a binary file it was read
+/// from, little endian otherwise). as_read: the encoding of the file the mesh was read from
+/// when it has the output's format, ASCII otherwise.
+enum class Encoding { ascii, binary, as_read };
 
-/// Writes `mesh` to .obj, .off, .ply or .stl (by extension). Encoding applies to PLY (binary =
-/// little endian, float64 coordinates, int32 indices) and STL (binary = float32, the format's
-/// only precision); OBJ and OFF are always ASCII. STL writes the triangles F (polygons cannot be
-/// stored). Throws IoError on out-of-range indices or non-finite positions (nothing written).
+/// Writes `mesh` to .obj, .off, .ply or .stl (by extension), with its normals N when present
+/// and its `attributes` when they came from a file of the same format (see SurfaceMesh). PLY
+/// written fresh: float64 coordinates and normals, int32 indices; with attributes every
+/// property keeps its type. Binary STL: float32, the format's only precision. OBJ and OFF are
+/// always ASCII. STL writes the triangles F (polygons cannot be stored). A mesh without faces
+/// writes its vertices only (OBJ: `v` lines). Throws IoError on out-of-range indices or
+/// non-finite positions (nothing written).
 void write_surface(const std::filesystem::path& file, const SurfaceMesh& mesh,
-                   Encoding encoding = Encoding::ascii);
+                   Encoding encoding = Encoding::as_read);
 /// Same, from plain arrays: V n x 3, F t x 3 (0-based).
 void write_surface(const std::filesystem::path& file, const Eigen::Ref<const Eigen::MatrixXd>& V,
                    const Eigen::Ref<const Eigen::MatrixXi>& F, Encoding encoding = Encoding::ascii);
+
+/// True for the extensions read_surface reads (.obj, .off, .ply, .stl, any case).
+bool is_surface_file(const std::filesystem::path& file);
 
 // ----------------------------------------------------------------------------------------------
 // Point lists (.txt, .xyz): one point per line, d numbers separated by blanks or commas; blank
@@ -88,17 +118,20 @@ void write_points(const std::filesystem::path& file, const Eigen::Ref<const Eige
 struct ControlMesh {
   Eigen::MatrixXd U;             ///< n x d rest positions, d = 2 or 3
   Eigen::MatrixXi T;             ///< m x (d+1) elements (triangles / tetrahedra), 0-based
-  Eigen::MatrixXi faces;         ///< b x d boundary faces from a .face file (may be empty)
-  Eigen::VectorXi face_markers;  ///< b boundary markers of those faces (0 when absent)
+  /// What the reader changed or left out that a user should be told (e.g. higher-order
+  /// elements used by their corners), one line each, starting with the file name.
+  std::vector<std::string> notes;
   int dim() const { return static_cast<int>(U.cols()); }
 };
 
-/// Reads a control mesh from TetGen files or a Gmsh file, chosen by extension: ".msh" -> Gmsh,
-/// ".node"/".ele"/".face" or no extension -> TetGen base name.
+/// Reads a control mesh from TetGen files, a Gmsh or a legacy VTK file, chosen by extension:
+/// ".msh" -> Gmsh, ".vtk" -> VTK,
+/// ".node"/".ele"/".face" or no extension -> TetGen base name (.face itself is not read).
 ControlMesh read_control_mesh(const std::filesystem::path& file);
 
-/// TetGen: `path` is the base name or any of BASE.node / BASE.ele. Reads BASE.node and
-/// BASE.ele, and BASE.face when present (3D). Point numbering may start at 0 or 1 (the first
+/// TetGen: `path` is the base name or any of BASE.node / BASE.ele / BASE.face. Reads BASE.node
+/// and BASE.ele only: the boundary follows from the elements, so a BASE.face (or .edge, .neigh)
+/// beside them, stale or not, is never read. Point numbering may start at 0 or 1 (the first
 /// point's number decides; numbers must then be consecutive); attributes and boundary markers
 /// are read past. 2D: .node with dimension 2 and .ele with 3 (or 6) nodes per triangle.
 /// 10-node tetrahedra keep their 4 corners.
@@ -113,11 +146,26 @@ void write_tetgen(const std::filesystem::path& base, const Eigen::Ref<const Eige
 /// Writes one .node file (0-based): n x d positions.
 void write_node(const std::filesystem::path& file, const Eigen::Ref<const Eigen::MatrixXd>& X);
 
-/// Gmsh .msh, ASCII format 2.2 or 4.1. Tetrahedra (type 4) make a 3D mesh; without tetrahedra,
-/// triangles (type 2) make a 2D mesh (z must then be the same for all used nodes and is dropped).
-/// Other element types are skipped. Node tags are remapped to 0-based indices in file order;
-/// nodes that no kept element uses are dropped.
+/// Gmsh .msh, format 2.2, 4.0 or 4.1, ASCII or binary (either endianness). Nodes: every node of
+/// the file in file order, also those no element uses (so that deformed positions given per
+/// file node, e.g. read_gmsh_nodes, map 1:1), like TetGen's .node. Tetrahedra of any order
+/// (types 4, 11, 29-31) make a 3D mesh, used by their 4 corners; without tetrahedra, triangles
+/// of any order (2, 9, 20-25) make a 2D mesh (all nodes must then have the same z, which is
+/// dropped). Higher-order elements are reported in `notes`. Other element types and sections
+/// (physical names, entities, parametric coordinates of -save_parametric) are skipped; when no
+/// usable element is found the message lists what was.
 ControlMesh read_gmsh(const std::filesystem::path& file);
+/// Every node of a .msh file in file order, n x 3 (deformed positions for a mesh read by
+/// read_gmsh).
+Eigen::MatrixXd read_gmsh_nodes(const std::filesystem::path& file);
+
+/// Legacy VTK unstructured grid (format 2.0-5.1, ASCII or BINARY), as written by write_vtk,
+/// meshio or VTK: every point in file order; tetrahedra (cell type 10, quadratic 24 by its
+/// corners, reported in `notes`) make a 3D mesh, else triangles (5, 22) a 2D one (z constant,
+/// dropped). Other cells and all point/cell data are skipped.
+ControlMesh read_vtk(const std::filesystem::path& file);
+/// The POINTS of a legacy VTK file, n x 3 (deformed positions for a mesh read by read_vtk).
+Eigen::MatrixXd read_vtk_points(const std::filesystem::path& file);
 
 /// Legacy VTK unstructured grid (ASCII, for ParaView): tetrahedra (cell type 10) or triangles
 /// (type 5, z = 0). Optional per-point vectors (n x d, e.g. displacements) named `point_data`.
@@ -134,13 +182,14 @@ void write_vtk(const std::filesystem::path& file, const Eigen::Ref<const Eigen::
 /// "out/bunny_0007.obj". Throws IoError on a negative frame.
 std::filesystem::path frame_path(const std::filesystem::path& base, int frame,
                                  const std::string& ext, int digits = 4);
-/// Writes one frame of a sequence: the positions V (n x 3) with the faces of `topology`
-/// (its polygons when present) to frame_path(base, frame, ext); ext is ".obj" or ".ply" (PLY
-/// binary when encoding says so). Returns the path written.
+/// Writes one frame of a sequence: the positions V (n x 3) and normals N (n x 3, or empty: no
+/// normals) with the faces and attributes of `topology` (see write_surface) to
+/// frame_path(base, frame, ext); ext is ".obj" or ".ply". Returns the path written.
 std::filesystem::path write_frame(const std::filesystem::path& base, int frame,
                                   const std::string& ext, const SurfaceMesh& topology,
                                   const Eigen::Ref<const Eigen::MatrixXd>& V,
-                                  Encoding encoding = Encoding::ascii);
+                                  Encoding encoding = Encoding::as_read,
+                                  const Eigen::Ref<const Eigen::MatrixXd>& N = Eigen::MatrixXd());
 
 /// PC2 point cache (Blender "Mesh Cache" modifier): header "POINTCACHE2\0", int32 version 1,
 /// int32 numPoints, float32 startFrame, float32 sampleRate, int32 numSamples, then float32 x,y,z
