@@ -52,7 +52,7 @@ struct VtkMesh {
   Eigen::MatrixXi T;  // m x 4
 };
 
-VtkMesh read_vtk(const fs::path& p) {
+VtkMesh parse_vtk(const fs::path& p) {
   std::ifstream in(p);
   REQUIRE(in.good());
   VtkMesh m;
@@ -207,8 +207,8 @@ TEST_CASE("a mesh override replaces the dense model and method bi gives BI outpu
 
   // BI evaluated here from the written control meshes: rest U (frame 0) and X (frame `last`),
   // x(p) = sum_k bary_k(p) X(T(e(p), k)) with the embedding of the rest dense vertices in U.
-  const VtkMesh c0 = read_vtk(frame_path(bi_dir / "control", 0, ".vtk"));
-  const VtkMesh cx = read_vtk(frame_path(bi_dir / "control", last, ".vtk"));
+  const VtkMesh c0 = parse_vtk(frame_path(bi_dir / "control", 0, ".vtk"));
+  const VtkMesh cx = parse_vtk(frame_path(bi_dir / "control", last, ".vtk"));
   REQUIRE(cx.T == c0.T);
   const double moved = (cx.X - c0.X).rowwise().norm().maxCoeff();
   INFO("largest control displacement " << moved << ", model size " << size);
@@ -227,7 +227,7 @@ TEST_CASE("a mesh override replaces the dense model and method bi gives BI outpu
   // mesh does. It agrees with interp::ModifiedBI applied here to the written X, and differs
   // from BI by far more than the tolerance above.
   const fs::path mbi_dir = run(mbi::pipeline::Method::ModifiedBI, "modified-bi");
-  const VtkMesh cm = read_vtk(frame_path(mbi_dir / "control", last, ".vtk"));
+  const VtkMesh cm = parse_vtk(frame_path(mbi_dir / "control", last, ".vtk"));
   CHECK((cm.X - cx.X).cwiseAbs().maxCoeff() <= 1e-12 * size);
   const SurfaceMesh mod = read_surface(frame_path(mbi_dir / "mesh", last, ".obj"));
   mbi::interp::Options io;
@@ -509,8 +509,8 @@ TEST_CASE("twist-bar: the last frame's discontinuity ratios that the README quot
   CHECK(m["last_disc"]["ratio"]["mean"].get<double>() == r.last_table.ratio.mean);
   // "twisted by 90 degrees": the kinematic end (z = 6) of the last control mesh written is the
   // rest end turned by pi/2 about the z axis through (0, 0, 6)
-  const VtkMesh rest = read_vtk(frame_path(o.out_dir / "control", 0, ".vtk"));
-  const VtkMesh end = read_vtk(frame_path(o.out_dir / "control", r.frames, ".vtk"));
+  const VtkMesh rest = parse_vtk(frame_path(o.out_dir / "control", 0, ".vtk"));
+  const VtkMesh end = parse_vtk(frame_path(o.out_dir / "control", r.frames, ".vtk"));
   const double top = rest.X.col(2).maxCoeff();
   int at_top = 0;
   for (Eigen::Index i = 0; i < rest.X.rows(); ++i) {
