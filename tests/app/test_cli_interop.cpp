@@ -104,7 +104,7 @@ struct Setup {
 
 }  // namespace
 
-TEST_CASE("mbi deform keeps UVs, groups, materials, smoothing; normals are deformed", "[cli][interop]") {
+TEST_CASE("mbi deform keeps UVs, groups, materials, smoothing, normals are deformed", "[cli][interop]") {
   TempDir dir("interop");
   Setup s(dir);
   const fs::path out = dir / "out.obj";
@@ -143,7 +143,7 @@ TEST_CASE("mbi deform keeps UVs, groups, materials, smoothing; normals are defor
   CHECK((m.N - rest.N).cwiseAbs().maxCoeff() > 0.1);  // they did move
 }
 
-TEST_CASE("mbi deform: output format follows the extension; points as .obj are a valid OBJ",
+TEST_CASE("mbi deform: output format follows the extension, points as .obj are a valid OBJ",
           "[cli][interop]") {
   TempDir dir("interop");
   Setup s(dir);
@@ -255,7 +255,7 @@ TEST_CASE("CLI messages: unknown subcommand with a suggestion, one-line prefixed
   CHECK_THAT(run_mbi("run --help", dir).out, Catch::Contains("scene TEXT REQUIRED"));
 }
 
-TEST_CASE("a stale .face beside .node/.ele breaks neither deform nor run; cage removes it",
+TEST_CASE("a stale .face beside .node/.ele breaks neither deform nor run, cage removes it",
           "[cli][interop]") {
   TempDir dir("interop");
   Setup s(dir);
@@ -301,7 +301,7 @@ TEST_CASE("deform refuses an existing output unless --force, as run does", "[cli
   CHECK(slurp(dir / "stats.json").size() > 10);
 }
 
-TEST_CASE("run --quiet keeps warnings; --force clears an earlier run's extra frames only",
+TEST_CASE("run --quiet keeps warnings, --force clears an earlier run's extra frames only",
           "[cli][interop]") {
   TempDir dir("interop");
   Setup s(dir);

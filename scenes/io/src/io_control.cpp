@@ -724,7 +724,7 @@ VtkData parse_vtk(const path& file) {
 
 }  // namespace
 
-ControlMesh read_vtk(const path& file) {
+ControlMesh read_vtk_mesh(const path& file) {
   const VtkData v = parse_vtk(file);
   // tetrahedra (10; quadratic 24 by its corners), else triangles (5; quadratic 22)
   long long tets = 0, tris = 0, higher = 0;
@@ -767,7 +767,7 @@ Eigen::MatrixXd read_vtk_points(const path& file) { return parse_vtk(file).P; }
 ControlMesh read_control_mesh(const path& file) {
   const std::string ext = detail::extension(file);
   if (ext == ".msh") return read_gmsh(file);
-  if (ext == ".vtk") return read_vtk(file);
+  if (ext == ".vtk") return read_vtk_mesh(file);
   return read_tetgen(file);
 }
 

@@ -92,7 +92,7 @@ const char* kObj =
 
 }  // namespace
 
-TEST_CASE("OBJ keeps vt, groups, objects, materials, smoothing, vertex colours; normals replaced",
+TEST_CASE("OBJ keeps vt, groups, objects, materials, smoothing, vertex colours, normals replaced",
           "[io][attributes]") {
   TempDir tmp("obj-attr");
   write_bytes(tmp / "in.obj", kObj);
@@ -159,7 +159,7 @@ TEST_CASE("OBJ keeps vt, groups, objects, materials, smoothing, vertex colours; 
   }
 }
 
-TEST_CASE("OBJ: normals of corners mapped through their vertex; bad vt/vn indices named",
+TEST_CASE("OBJ: normals of corners mapped through their vertex, bad vt/vn indices named",
           "[io][attributes]") {
   TempDir tmp("obj-n");
   // vertex 4 has no normal of its own: it gets its faces' (area-weighted) normal
@@ -288,7 +288,7 @@ TEST_CASE("binary PLY stays binary with the same endianness, every byte of extra
   }
 }
 
-TEST_CASE("STL: binary stays binary with its header and attribute words; ASCII keeps its name",
+TEST_CASE("STL: binary stays binary with its header and attribute words, ASCII keeps its name",
           "[io][attributes]") {
   TempDir tmp("stl-attr");
   std::string stl(80, '\0');

@@ -77,7 +77,7 @@ TEST_CASE("Gmsh second-order tetrahedra: corners used, a note, mid-edge nodes ke
   }
 }
 
-TEST_CASE("Gmsh: a Physical Surface only is named as such; unknown types listed", "[io][gmsh]") {
+TEST_CASE("Gmsh: a Physical Surface only is named as such, unknown types listed", "[io][gmsh]") {
   REQUIRE_THROWS_WITH(read_gmsh(data("surface-only.msh")),
                       Catch::Contains("no tetrahedra") && Catch::Contains("not in one plane") &&
                           Catch::Contains("surface mesh of a 3D model") && Catch::Contains("triangles (type 2)"));
@@ -110,7 +110,7 @@ TEST_CASE("legacy VTK from gmsh (ASCII, binary) and from write_vtk as control me
   CHECK(read_vtk_points(data("box-bin.vtk")) == b.U);
   TempDir tmp("vtk-read");
   write_vtk(tmp / "c.vtk", a.U, a.T, a.U);  // with point vectors after the cells
-  const ControlMesh c = read_vtk(tmp / "c.vtk");
+  const ControlMesh c = read_vtk_mesh(tmp / "c.vtk");
   CHECK(c.U == a.U);
   CHECK(c.T == a.T);
   Eigen::MatrixXd U2(4, 2);
@@ -118,7 +118,7 @@ TEST_CASE("legacy VTK from gmsh (ASCII, binary) and from write_vtk as control me
   Eigen::MatrixXi T2(2, 3);
   T2 << 0, 1, 2, 0, 2, 3;
   write_vtk(tmp / "d.vtk", U2, T2);
-  const ControlMesh d = read_vtk(tmp / "d.vtk");
+  const ControlMesh d = read_vtk_mesh(tmp / "d.vtk");
   CHECK(d.dim() == 2);
   CHECK(d.U == U2);
   CHECK(d.T == T2);

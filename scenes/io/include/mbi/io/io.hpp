@@ -163,8 +163,8 @@ Eigen::MatrixXd read_gmsh_nodes(const std::filesystem::path& file);
 /// meshio or VTK: every point in file order; tetrahedra (cell type 10, quadratic 24 by its
 /// corners, reported in `notes`) make a 3D mesh, else triangles (5, 22) a 2D one (z constant,
 /// dropped). Other cells and all point/cell data are skipped.
-ControlMesh read_vtk(const std::filesystem::path& file);
-/// The POINTS of a legacy VTK file, n x 3 (deformed positions for a mesh read by read_vtk).
+ControlMesh read_vtk_mesh(const std::filesystem::path& file);
+/// The POINTS of a legacy VTK file, n x 3 (deformed positions for a mesh read by read_vtk_mesh).
 Eigen::MatrixXd read_vtk_points(const std::filesystem::path& file);
 
 /// Legacy VTK unstructured grid (ASCII, for ParaView): tetrahedra (cell type 10) or triangles
