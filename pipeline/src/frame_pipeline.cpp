@@ -81,7 +81,8 @@ struct FramePipeline::Impl {
     auto t0 = Clock::now();
     const int n = static_cast<int>(U.rows()), d = static_cast<int>(U.cols());
     if (options.method == Method::BI) {
-      M.setZero(static_cast<Eigen::Index>(n) * d, d);
+      if (M.rows() != static_cast<Eigen::Index>(n) * d || M.cols() != d || M.any())
+        M.setZero(static_cast<Eigen::Index>(n) * d, d);  // BI: M = 0, set once, not every frame
       timings.solve_ms = 0;
       t0 = Clock::now();
       B = interp::bezier_bi(X, T);

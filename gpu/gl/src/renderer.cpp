@@ -148,13 +148,17 @@ void Renderer::draw(const GpuEvaluator& ev, const Eigen::Matrix4d& view_projecti
   glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(indices_), GL_UNSIGNED_INT, nullptr);
   glDisable(GL_POLYGON_OFFSET_FILL);
   if (wire_X && wire_T && wire_T->cols() == 4) {
-    std::set<std::pair<int, int>> edges;
-    for (Eigen::Index e = 0; e < wire_T->rows(); ++e)
-      for (int a = 0; a < 4; ++a)
-        for (int b = a + 1; b < 4; ++b) edges.insert(std::minmax((*wire_T)(e, a), (*wire_T)(e, b)));
+    if (wire_T->rows() != edges_of_ || wire_T->size() == 0 || edges_.empty()) {  // once per control mesh
+      std::set<std::pair<int, int>> unique;
+      for (Eigen::Index e = 0; e < wire_T->rows(); ++e)
+        for (int a = 0; a < 4; ++a)
+          for (int b = a + 1; b < 4; ++b) unique.insert(std::minmax((*wire_T)(e, a), (*wire_T)(e, b)));
+      edges_.assign(unique.begin(), unique.end());
+      edges_of_ = wire_T->rows();
+    }
     std::vector<float> lines;
-    lines.reserve(edges.size() * 6);
-    for (const auto& [a, b] : edges)
+    lines.reserve(edges_.size() * 6);
+    for (const auto& [a, b] : edges_)
       for (int v : {a, b})
         for (int c = 0; c < 3; ++c) lines.push_back(static_cast<float>((*wire_X)(v, c) - ev.origin()(c)));
     glUseProgram(line_program_);

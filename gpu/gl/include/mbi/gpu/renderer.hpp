@@ -7,6 +7,9 @@
 #include <mbi/io/image.hpp>
 #include <mbi/raster/raster.hpp>
 
+#include <utility>
+#include <vector>
+
 namespace mbi::gpu {
 
 class Renderer {
@@ -56,6 +59,8 @@ class Renderer {
   unsigned texture_program_ = 0, texture_ = 0;
   const io::Image* texture_image_ = nullptr;
   int width_ = 0, height_ = 0;
+  std::vector<std::pair<int, int>> edges_;  // unique control-mesh edges (wireframe)
+  long long edges_of_ = -1;                 // element count they were built from
 };
 
 }  // namespace mbi::gpu
