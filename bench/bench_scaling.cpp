@@ -13,6 +13,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include <cstdlib>
 #include <map>
 #include <memory>
 
@@ -56,16 +57,25 @@ void counters(benchmark::State& st, const Box& b) {
   st.counters["tets"] = static_cast<double>(b.T.rows());
 }
 
-// Argument: nominal control-vertex count (35, 100, 450, 1300, 2000, 10000).
+// Arguments: nominal control-vertex count (35, 100, 450, 1300, 2000, 10000) and the
+// factorization (cholmod 0 = Eigen SimplicialLLT, 1 = CHOLMOD supernodal). Counters: the factor's
+// nonzeros and the memory the precompute keeps (MB).
 void BM_ScalePrecompute(benchmark::State& st) {
   const int control = static_cast<int>(st.range(0));
   const Box& b = box(control);
+  mbi::interp::Options o;
+  o.factorization = st.range(1) ? mbi::interp::Factorization::Cholmod : mbi::interp::Factorization::Eigen;
   std::unique_ptr<mbi::interp::ModifiedBI> last;
   for (auto _ : st) {
-    last = std::make_unique<mbi::interp::ModifiedBI>(b.U, b.T);
+    last.reset();  // hand the previous factor back first (memory at 10K)
+    last = std::make_unique<mbi::interp::ModifiedBI>(b.U, b.T, o);
     benchmark::DoNotOptimize(last->beta());
   }
   st.counters["unknowns"] = last->unknowns();
+  st.counters["factor_nnz"] = static_cast<double>(last->factor_nonzeros());
+  st.counters["memory_mb"] = static_cast<double>(last->memory_bytes()) / 1e6;
+  st.counters["dense_operator"] = last->dense_operator() ? 1 : 0;
+  st.SetLabel(last->factorization());
   counters(st, b);
   solvers()[control] = std::move(last);
 }
@@ -80,19 +90,29 @@ void BM_ScaleSolve(benchmark::State& st) {
     benchmark::DoNotOptimize(M.data());
   }
   st.counters["dense_operator"] = s->dense_operator() ? 1 : 0;
+  st.counters["factor_nnz"] = static_cast<double>(s->factor_nonzeros());
+  st.SetLabel(s->factorization());
   counters(st, b);
   if (control >= 10000) s.reset();  // hand the 10K factor's memory back
 }
 
-// One registration per size: the large precomputes run exactly once (Iterations(1)), the small
-// ones long enough to average.
+// One registration per size and factorization: the large precomputes run exactly once
+// (Iterations(1)), the small ones long enough to average. Eigen's SimplicialLLT at 10K takes
+// about 100 s: it runs only with MBI_BENCH_EIGEN_10K=1. The solve runs on the last precompute of
+// its size (CHOLMOD's when the build has it, as Factorization::Automatic picks).
 [[maybe_unused]] const bool registered = [] {
+  const bool eigen_10k = std::getenv("MBI_BENCH_EIGEN_10K") != nullptr;
   for (int c : {35, 100, 450, 1300, 2000, 10000}) {
-    if (mbi::bench::quick() && c > 450) continue;
-    auto* p = benchmark::RegisterBenchmark("BM_ScalePrecompute", BM_ScalePrecompute);
-    p->ArgName("control")->Arg(c)->Unit(benchmark::kMillisecond)->UseRealTime();
-    if (c >= 2000) p->Iterations(1);
-    else p->MinTime(mbi::bench::min_time(0.3));
+    if (mbi::bench::quick() && c > 1300) continue;
+    for (int cholmod : {0, 1}) {
+      if (cholmod && !mbi::interp::cholmod_available()) continue;
+      if (!cholmod && c >= 10000 && !eigen_10k && mbi::interp::cholmod_available()) continue;
+      if (!cholmod && c >= 1300 && mbi::bench::quick()) continue;
+      auto* p = benchmark::RegisterBenchmark("BM_ScalePrecompute", BM_ScalePrecompute);
+      p->ArgNames({"control", "cholmod"})->Args({c, cholmod})->Unit(benchmark::kMillisecond)->UseRealTime();
+      if (c >= 2000) p->Iterations(1);
+      else p->MinTime(mbi::bench::min_time(0.3));
+    }
     benchmark::RegisterBenchmark("BM_ScaleSolve", BM_ScaleSolve)
         ->ArgName("control")->Arg(c)->Unit(benchmark::kMicrosecond)->UseRealTime()
         ->MinTime(mbi::bench::min_time(0.3));

@@ -7,10 +7,14 @@
 // twisted and bent. Every benchmark sets bytes_per_second from the bytes it must read and write
 // (STREAM convention: each byte read or written once, write-allocate traffic not counted):
 //
-//   BM_Eval (our kernel)   per point: element id 4 B + 4 barycentric coordinates 4 x 8 B (the
-//                          Embedding stores doubles) + position out 3 s (s = 4 float, 8 double);
-//                          with normals also rest normal in 3 s + normal out 3 s; per call the
-//                          Bezier points (m x 10 x 3 doubles) and, with normals, the basis
+//   BM_Eval (our kernel)   float: the compact kernel interp::FastEvaluator, per point the packed
+//                          record 16 B (element id 4 B + 3 float coordinates) + position out
+//                          3 x 4 B = 28 B; with normals also rest normal in 3 x 4 B + normal out
+//                          3 x 4 B (52 B); per call the Bezier points (m x 10 x 3 doubles).
+//                          double: interp::evaluate<double> (the exact path), per point element
+//                          id 4 B + 4 barycentric coordinates 4 x 8 B (the Embedding's doubles) +
+//                          position out 3 x 8 B; with normals also rest normal in + normal out
+//                          3 x 8 B each; per call the Bezier points and, with normals, the basis
 //                          gradients (m x 4 x 3 doubles).
 //   BM_PeerEigenSparse     per point: 4 values 4 x 8 B + 4 column indices 4 x 4 B + row start
 //                          4 B + output 3 x 8 B; per call the n x 3 control positions.
@@ -38,23 +42,35 @@ using mbi::interp::BezierPoints;
 int all_threads() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
 
 /// Bytes one evaluation must read and write (see the file comment).
-double eval_bytes(long long p, long long elements, int scalar_bytes, bool normals) {
-  const double per_point = 4 + 4 * 8 + 3 * scalar_bytes + (normals ? 6 * scalar_bytes : 0);
-  const double per_call = elements * 10 * 3 * 8.0 + (normals ? elements * 4 * 3 * 8.0 : 0.0);
+double eval_bytes(long long p, long long elements, bool dbl, bool normals) {
+  const double per_point = dbl ? 4 + 4 * 8 + 3 * 8 + (normals ? 6 * 8 : 0) : 16 + 12 + (normals ? 24 : 0);
+  const double per_call = elements * 10 * 3 * 8.0 + (dbl && normals ? elements * 4 * 3 * 8.0 : 0.0);
   return static_cast<double>(p) * per_point + per_call;
 }
 
-template <typename Scalar>
-void eval_loop(benchmark::State& st, const BezierPoints& B, const Cloud& c,
-               const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& normals_rest,
-               bool normals, int threads) {
-  Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic> pos, nout;
+void eval_loop_double(benchmark::State& st, const BezierPoints& B, const Cloud& c, bool normals, int threads) {
+  Eigen::MatrixXd pos, nout;
   for (auto _ : st) {
-    if (normals) mbi::interp::evaluate<Scalar>(B, c.emb, normals_rest, pos, nout, threads);
-    else mbi::interp::evaluate<Scalar>(B, c.emb, pos, threads);
+    if (normals) mbi::interp::evaluate<double>(B, c.emb, c.normals, pos, nout, threads);
+    else mbi::interp::evaluate<double>(B, c.emb, pos, threads);
     benchmark::DoNotOptimize(pos.data());
     benchmark::ClobberMemory();
   }
+}
+
+void eval_loop_float(benchmark::State& st, const BezierPoints& B, const Cloud& c, bool normals, int threads) {
+  mbi::interp::FastEvaluator fe(c.emb, threads);
+  if (normals) fe.set_rest_normals(c.normals);
+  mbi::interp::RowMatrixXf pos, nout;
+  if (normals) fe.evaluate(B, pos, nout);  // first call sizes the outputs
+  else fe.evaluate(B, pos);
+  for (auto _ : st) {
+    if (normals) fe.evaluate(B, pos, nout);
+    else fe.evaluate(B, pos);
+    benchmark::DoNotOptimize(pos.data());
+    benchmark::ClobberMemory();
+  }
+  st.counters["threads_used"] = fe.threads();
 }
 
 // Arguments: points, control (100 / 450), mbi (0 = BI, 1 = modified-BI), threads (0 = all),
@@ -69,9 +85,9 @@ void BM_Eval(benchmark::State& st) {
   const Cage& cage = mbi::bench::box_cage(control);
   const Cloud& c = mbi::bench::cloud(control, p);
   const BezierPoints& B = modified ? cage.bezier_mbi : cage.bezier_bi;
-  if (dbl) eval_loop<double>(st, B, c, c.normals, normals, threads);
-  else eval_loop<float>(st, B, c, c.normals_f, normals, threads);
-  const double bytes = eval_bytes(p, cage.T.rows(), dbl ? 8 : 4, normals);
+  if (dbl) eval_loop_double(st, B, c, normals, threads);
+  else eval_loop_float(st, B, c, normals, threads);
+  const double bytes = eval_bytes(p, cage.T.rows(), dbl, normals);
   st.counters["bytes_per_eval"] = bytes;
   st.counters["threads"] = threads > 0 ? threads : all_threads();
   st.counters["control"] = static_cast<double>(cage.U.rows());

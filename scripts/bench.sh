@@ -3,10 +3,12 @@
 #   bench/results/<date>-<host>.json   Google Benchmark JSON, with this machine and commit
 #   bench/results/<date>-<host>.md     the report (scripts/bench_report.py), with PNG plots beside it
 #
-#   bash scripts/bench.sh            full run (about 6 minutes on a 2-core machine, plus the build)
+#   bash scripts/bench.sh            full run (about 3 minutes on a 2-core machine, plus the build)
 #   bash scripts/bench.sh --quick    small sizes, short runs, no 10K precompute (under a minute);
 #                                    writes to build/bench-quick/ unless --out is given (CI)
 #   bash scripts/bench.sh --out DIR  write into DIR instead
+#   MBI_BENCH_BASELINE=OLD.json      an earlier run (e.g. before a change, same machine): the
+#                                    report's target table gets its figures as a 'before' column
 #
 # Installs missing Debian packages and builds mbi-bench with the release preset first (set
 # MBI_BENCH_NO_BUILD=1 to skip both). Uses the scanned models beside the clone (../shared/models)
@@ -21,7 +23,7 @@ while [ $# -gt 0 ]; do
   case "$1" in
     --quick) quick=1 ;;
     --out) out="$2"; shift ;;
-    -h|--help) sed -n '2,15p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
     *) echo "bench.sh: error: unknown option $1" >&2; exit 2 ;;
   esac
   shift
@@ -50,4 +52,6 @@ MBI_BENCH_QUICK=$quick build/release/mbi-bench \
   --benchmark_out="$json" --benchmark_out_format=json --benchmark_counters_tabular=false
 wall=$(( $(date +%s) - start ))
 echo "bench.sh: mbi-bench took ${wall} s"
-"$python" scripts/bench_report.py "$json" --machine --wall-s "$wall"
+baseline=()
+[ -n "${MBI_BENCH_BASELINE:-}" ] && baseline=(--baseline "$MBI_BENCH_BASELINE")
+"$python" scripts/bench_report.py "$json" --machine --wall-s "$wall" "${baseline[@]}"

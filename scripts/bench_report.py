@@ -154,7 +154,84 @@ def loglog_fit(xs, ys):
 
 
 # ------------------------------------------------------------------------------------ report
-def report(data, json_path, wall_s):
+def targets(R, nthreads):
+    """Rows [name, measured, goal, met, how] of the speed issue's targets, from one run."""
+    ev = lambda **kv: R.find("BM_Eval", **kv)
+    P = 1000000
+    triad1, triadN = R.find("BM_Triad", threads=1), R.find("BM_Triad", threads=0)
+    ours = ev(points=P, control=450, mbi=1, threads=0, double=0, normals=0)
+    ours1 = ev(points=P, control=450, mbi=1, threads=1, double=0, normals=0)
+    ours_bi = ev(points=P, control=450, mbi=0, threads=0, double=0, normals=0)
+    ours_n = ev(points=P, control=450, mbi=1, threads=0, double=0, normals=1)
+    vega = R.find("BM_PeerVegaLoop", points=P, control=450)
+    rows = []
+
+    def target(name, measured, goal, met, how):
+        rows.append([name, measured, goal, "n/a" if met is None else ("**yes**" if met else "**no**"), how])
+
+    if ours and vega:
+        r = ms(vega) / ms(ours)
+        target("(1) 1M points, float positions, all threads vs the peers' plain double BI loop (1 thread)",
+               (f"{r:.2f}x faster" if r >= 1 else f"{1 / r:.2f}x slower") + f" ({f_ms(ms(ours))} vs {f_ms(ms(vega))})", ">= 2x", r >= 2,
+               "BM_Eval modified-BI vs BM_PeerVegaLoop, 448 control vertices")
+    else:
+        target("(1) 1M float positions vs the plain double BI loop", "not measured", ">= 2x", None, "full run only")
+    if ours and triadN:
+        fr = gbs(ours) / gbs(triadN)
+        target("(1) bandwidth: fraction of the triad (all threads) for its bytes",
+               f"{100 * fr:.0f}% ({gbs(ours):.1f} of {gbs(triadN):.1f} GB/s, {ours['bytes_per_eval'] / P:.0f} B a point)",
+               ">= 70%", fr >= 0.7, "bytes counted as in 'What is counted'")
+    else:
+        target("(1) bandwidth: fraction of the triad", "not measured", ">= 70%", None, "full run only")
+    if ours and ours1 and triad1 and triadN:
+        s = ms(ours1) / ms(ours)
+        ts = gbs(triadN) / gbs(triad1)
+        target(f"(1) threads scale: 1 -> {nthreads} threads",
+               f"{s:.2f}x (triad: {ts:.2f}x)", f">= 80% of the triad's scaling ({0.8 * ts:.2f}x)",
+               s >= 0.8 * ts, "our reading of 'threads scale': memory-bound work cannot beat the triad")
+    else:
+        target("(1) threads scale", "not measured", "", None, "full run only")
+    if ours and ours_bi:
+        r = ms(ours) / ms(ours_bi)
+        target("(1) modified-BI / BI through the same kernel", f"{r:.2f}x", "<= 1.3x", r <= 1.3,
+               "1M float positions, all threads")
+    else:
+        target("(1) modified-BI / BI", "not measured", "<= 1.3x", None, "full run only")
+    if ours and ours_n:
+        r = ms(ours_n) / ms(ours)
+        target("(1) positions + normals / positions alone", f"{r:.2f}x", "<= 2x", r <= 2,
+               "1M float, modified-BI, all threads")
+    else:
+        target("(1) positions + normals / positions", "not measured", "<= 2x", None, "full run only")
+    for c, goal in ((450, 0.1), (1300, 2.0), (10000, 30.0)):
+        b = R.find("BM_ScaleSolve", control=c)
+        v = ms(b) if b else None
+        how = "BM_ScaleSolve, box cage" + (f": {b.get('label')}" if b and b.get("label") else "")
+        if b and "dense_operator" in b:
+            how += ", dense operator" if b["dense_operator"] else ", sparse sweeps"
+        target(f"(2) per-frame solve at ~{c:,} control vertices", f_ms(v), f"<= {f_ms(goal)}",
+               None if v is None else v <= goal, how)
+    for c, goal in ((1300, 150.0), (10000, 5000.0)):
+        b = R.find("BM_ScalePrecompute", control=c, cholmod=1) or R.find("BM_ScalePrecompute", control=c)
+        v = ms(b) if b else None
+        mem = f", {b['memory_mb']:,.0f} MB kept" if b and "memory_mb" in b else ""
+        target(f"(3) precompute at ~{c:,} control vertices", (f_ms(v) + mem) if v else "not measured",
+               f"<= {f_ms(goal)}", None if v is None else v <= goal,
+               "BM_ScalePrecompute: assembly + " + (b.get("label") or "Eigen SimplicialLLT" if b else "?"))
+    b = R.find("BM_Embed", points=P, tets=5000)
+    target("(4) embedding 1M points into 5,082 tetrahedra", f_ms(ms(b)) if b else "not measured", "< 1 s",
+           None if not b else ms(b) < 1000, "BM_Embed")
+    for mesh, (vtets, vms) in VEGA_STEP.items():
+        b = R.find("BM_SimStep", mesh=mesh, solver=2, tol=8)
+        goal = vms / 5
+        target(f"(5) simulator step at ~{vtets:,} tetrahedra",
+               f_ms(ms(b)) + f" ({vms / ms(b):.1f}x VegaFEM's {vms} ms)" if b else "not measured",
+               f"<= {goal:.2f} ms (5x faster)", None if not b else ms(b) <= goal,
+               "default solver at this size (PCG, tol 1e-8, as LinearSolver::Auto picks)")
+    return rows
+
+
+def report(data, json_path, wall_s, baseline=None, baseline_path=None):
     R = Results(data)
     ctx = data["context"]
     facts = ctx.get("mbi", {})
@@ -198,77 +275,21 @@ def report(data, json_path, wall_s):
 
     # ------------------------------------------------------------------ targets
     ev = lambda **kv: R.find("BM_Eval", **kv)
-    P = 1000000
-    ours = ev(points=P, control=450, mbi=1, threads=0, double=0, normals=0)
-    ours1 = ev(points=P, control=450, mbi=1, threads=1, double=0, normals=0)
-    ours_bi = ev(points=P, control=450, mbi=0, threads=0, double=0, normals=0)
-    ours_n = ev(points=P, control=450, mbi=1, threads=0, double=0, normals=1)
-    vega = R.find("BM_PeerVegaLoop", points=P, control=450)
-    rows = []
-
-    def target(name, measured, goal, met, how):
-        rows.append([name, measured, goal, "n/a" if met is None else ("**yes**" if met else "**no**"), how])
-
-    if ours and vega:
-        r = ms(vega) / ms(ours)
-        target("(1) 1M points, float positions, all threads vs the peers' plain double BI loop (1 thread)",
-               (f"{r:.2f}x faster" if r >= 1 else f"{1 / r:.2f}x slower") + f" ({f_ms(ms(ours))} vs {f_ms(ms(vega))})", ">= 2x", r >= 2,
-               "BM_Eval modified-BI vs BM_PeerVegaLoop, 448 control vertices")
-    else:
-        target("(1) 1M float positions vs the plain double BI loop", "not measured", ">= 2x", None, "full run only")
-    if ours and triadN:
-        fr = gbs(ours) / gbs(triadN)
-        target("(1) bandwidth: fraction of the triad (all threads) for its bytes",
-               f"{100 * fr:.0f}% ({gbs(ours):.1f} of {gbs(triadN):.1f} GB/s)", ">= 70%", fr >= 0.7,
-               "bytes counted as in 'What is counted'")
-    else:
-        target("(1) bandwidth: fraction of the triad", "not measured", ">= 70%", None, "full run only")
-    if ours and ours1 and triad1 and triadN:
-        s = ms(ours1) / ms(ours)
-        ts = gbs(triadN) / gbs(triad1)
-        target(f"(1) threads scale: 1 -> {nthreads} threads",
-               f"{s:.2f}x (triad: {ts:.2f}x)", f">= 80% of the triad's scaling ({0.8 * ts:.2f}x)",
-               s >= 0.8 * ts, "our reading of 'threads scale': memory-bound work cannot beat the triad")
-    else:
-        target("(1) threads scale", "not measured", "", None, "full run only")
-    if ours and ours_bi:
-        r = ms(ours) / ms(ours_bi)
-        target("(1) modified-BI / BI through the same kernel", f"{r:.2f}x", "<= 1.3x", r <= 1.3,
-               "1M float positions, all threads")
-    else:
-        target("(1) modified-BI / BI", "not measured", "<= 1.3x", None, "full run only")
-    if ours and ours_n:
-        r = ms(ours_n) / ms(ours)
-        target("(1) positions + normals / positions alone", f"{r:.2f}x", "<= 2x", r <= 2,
-               "1M float, modified-BI, all threads")
-    else:
-        target("(1) positions + normals / positions", "not measured", "<= 2x", None, "full run only")
-    for c, goal in ((450, 0.1), (1300, 2.0), (10000, 30.0)):
-        b = R.find("BM_ScaleSolve", control=c)
-        v = ms(b) if b else None
-        target(f"(2) per-frame solve at {int(b['control']):,} control vertices" if b else f"(2) per-frame solve at ~{c}",
-               f_ms(v), f"<= {f_ms(goal)}", None if v is None else v <= goal, "BM_ScaleSolve, box cage")
-    for c, goal in ((1300, 150.0), (10000, 5000.0)):
-        b = R.find("BM_ScalePrecompute", control=c)
-        v = ms(b) if b else None
-        target(f"(3) precompute at {int(b['control']):,} control vertices" if b else f"(3) precompute at ~{c}",
-               f_ms(v), f"<= {f_ms(goal)}", None if v is None else v <= goal,
-               "BM_ScalePrecompute: assembly + Eigen SimplicialLLT")
-    b = R.find("BM_Embed", points=P, tets=5000)
-    target("(4) embedding 1M points into 5,082 tetrahedra", f_ms(ms(b)) if b else "not measured", "< 1 s",
-           None if not b else ms(b) < 1000, "BM_Embed")
-    for mesh, (vtets, vms) in VEGA_STEP.items():
-        b = R.find("BM_SimStep", mesh=mesh, solver=2, tol=8)
-        goal = vms / 5
-        target(f"(5) simulator step at {int(b['tets']):,} tetrahedra" if b else f"(5) simulator step at ~{vtets} tets",
-               f_ms(ms(b)) + f" ({vms / ms(b):.1f}x VegaFEM's {vms} ms)" if b else "not measured",
-               f"<= {goal:.2f} ms (5x faster)", None if not b else ms(b) <= goal,
-               "default solver at this size (PCG, tol 1e-8, as LinearSolver::Auto picks)")
+    rows = targets(R, nthreads)
+    if baseline is not None:
+        B = Results(baseline)
+        before = targets(B, nthreads)
+        bctx = baseline["context"].get("mbi", {})
+        rows = [r[:1] + [b[1]] + r[1:] for r, b in zip(rows, before)]
     w("## Targets of the speed issue")
     w("")
     w("Each measured in this run; ratios are between benchmarks of this same run.")
+    if baseline is not None:
+        w(f"'before' = the same rows from [{os.path.basename(baseline_path)}]({os.path.basename(baseline_path)}), "
+          f"commit `{bctx.get('commit', baseline['context'].get('mbi_commit', '?'))}`, same machine; its own ratios "
+          "come from its own run.")
     w("")
-    w(table(["target", "measured", "target", "met?", "how"], rows))
+    w(table(["target"] + (["before"] if baseline is not None else []) + ["measured", "target", "met?", "how"], rows))
     w("")
 
     # ------------------------------------------------------------------ table 1
@@ -397,23 +418,31 @@ def report(data, json_path, wall_s):
     w("")
     w(f"![scaling]({stem}-scaling.png)")
     w("")
-    pre = [(r["b"]["control"], ms(r["b"])) for r in R.all("BM_ScalePrecompute")]
+    # the precompute the solve runs on: CHOLMOD's when the run has it (Factorization::Automatic)
+    pre_all = R.all("BM_ScalePrecompute")
+    have_chol = any(r["kv"].get("cholmod") == 1 for r in pre_all)
+    pre = [(r["b"]["control"], ms(r["b"])) for r in pre_all if r["kv"].get("cholmod", 0) == (1 if have_chol else 0)]
     sol = [(r["b"]["control"], ms(r["b"]), r["b"].get("dense_operator")) for r in R.all("BM_ScaleSolve")]
     fp = loglog_fit([x for x, _ in pre], [y for _, y in pre])
     fs = loglog_fit([x for x, _, _ in sol], [y for _, y, _ in sol])
     sc = []
-    for (c, t) in pre:
-        s = next((x for x in sol if x[0] == c), None)
-        sc.append([f"{int(c):,}", f_ms(t), f_ms(s[1]) if s else "n/a",
-                   ("dense operator" if s[2] else "sparse triangular solves") if s else ""])
-    w(table(["control vertices", "precompute (assembly + factorisation)", "per-frame solve", "solve path"], sc))
+    for c in sorted({r["b"]["control"] for r in pre_all} | {x[0] for x in sol}):
+        e = next((r["b"] for r in pre_all if r["b"]["control"] == c and r["kv"].get("cholmod", 0) == 0), None)
+        ch = next((r["b"] for r in pre_all if r["b"]["control"] == c and r["kv"].get("cholmod") == 1), None)
+        s_ = next((x for x in sol if x[0] == c), None)
+        cell = lambda b: (f_ms(ms(b)) + (f" ({b['factor_nnz'] / 1e6:.2f}M nnz, {b['memory_mb']:,.0f} MB)" if "factor_nnz" in b else "")) if b else "n/a"
+        sc.append([f"{int(c):,}", cell(e), cell(ch), f_ms(s_[1]) if s_ else "n/a",
+                   ("dense operator" if s_[2] else "sparse sweeps") if s_ else ""])
+    w(table(["control vertices", "precompute, Eigen SimplicialLLT (factor nonzeros, memory kept)",
+             "precompute, CHOLMOD supernodal", "per-frame solve", "solve path"], sc))
     w("")
     if fp and fs:
         w(f"Fitted growth (least squares on log t against log n over all sizes): precompute ~ "
           f"n^{fp[0]:.2f}, solve ~ n^{fs[0]:.2f}. The solve path is the automatic one: below a "
           "threshold (interp/src/modified_bi.cpp) the precompute also forms the dense operator "
           "-H_mm^-1 H_mx, which is why it costs more at 448 vertices relative to its neighbours, "
-          "and the solve is one dense product.")
+          "and the solve is one dense product (threaded, AVX2); above it, the solve sweeps the "
+          "Cholesky factor once forward and once back for all 3 components together.")
         w("")
 
     # ------------------------------------------------------------------ embed, sim, frames
@@ -454,13 +483,16 @@ def report(data, json_path, wall_s):
     w("Bytes per evaluation, each read or written once (the STREAM convention: the triad counts "
       "24 B per element; write-allocate traffic is counted by neither):")
     w("")
-    w("- **our kernel** (`interp::evaluate`): per point the element id (4 B), 4 barycentric "
-      "coordinates (4 x 8 B: `Embedding` stores doubles) and the position written (3 x 4 B float, "
-      "3 x 8 B double): 48 B float, 60 B double; with normals also the rest normal read and the "
-      "normal written (2 x 3 x 4 B or 2 x 3 x 8 B): 72 B / 108 B. Per call the element Bezier points "
-      "(m x 10 x 3 doubles) and, with normals, the basis gradients (m x 4 x 3 doubles). Not counted: "
-      "the input check's pass over the element ids (4 B a point) and the per-call conversion of "
-      "the Bezier points to the kernel's precision.")
+    w("- **our kernel, float** (`interp::FastEvaluator`): per point the packed record (element id "
+      "4 B + 3 float barycentric coordinates 12 B) and the position written (3 x 4 B): 28 B; with "
+      "normals also the rest normal read and the normal written (2 x 3 x 4 B): 52 B. Per call the "
+      "element Bezier points (m x 10 x 3 doubles); not counted: the per-element float coefficients "
+      "written and read back once per call (m x 40 floats, m x 48 more with normals).")
+    w("- **our kernel, double** (`interp::evaluate<double>`, the exact path): per point the element "
+      "id (4 B), 4 barycentric coordinates (4 x 8 B: `Embedding` stores doubles) and the position "
+      "written (3 x 8 B): 60 B; with normals also the rest normal read and the normal written "
+      "(2 x 3 x 8 B): 108 B. Per call the Bezier points and, with normals, the basis gradients "
+      "(m x 4 x 3 doubles).")
     w("- **Eigen sparse**: per row 4 values (32 B), 4 column indices (16 B), the row start (4 B), "
       "the output row (24 B); per call X.")
     w("- **VegaFEM-style loop**: per point 4 indices (16 B), 4 weights (32 B), output (24 B); per call X.")
@@ -522,7 +554,11 @@ def plots(R, base):
     fig, ax = plt.subplots(figsize=(7, 4.5))
     for fam, label, color in (("BM_ScalePrecompute", "precompute (assembly + factorisation)", "C0"),
                               ("BM_ScaleSolve", "per-frame solve", "C1")):
-        pts = sorted((r["b"]["control"], ms(r["b"])) for r in R.all(fam))
+        rs = R.all(fam)
+        if fam == "BM_ScalePrecompute" and any(r["kv"].get("cholmod") == 1 for r in rs):
+            rs = [r for r in rs if r["kv"].get("cholmod") == 1]
+            label = "precompute (assembly + CHOLMOD factorisation)"
+        pts = sorted((r["b"]["control"], ms(r["b"])) for r in rs)
         if not pts:
             continue
         fit = loglog_fit([x for x, _ in pts], [y for _, y in pts])
@@ -548,6 +584,7 @@ def main():
     ap.add_argument("json")
     ap.add_argument("--machine", action="store_true", help="record this machine into the JSON first")
     ap.add_argument("--wall-s", type=float, default=None, help="wall time of the run, recorded with --machine")
+    ap.add_argument("--baseline", default=None, help="an earlier run's JSON: its target rows become a 'before' column")
     args = ap.parse_args()
     with open(args.json) as f:
         data = json.load(f)
@@ -560,7 +597,11 @@ def main():
             json.dump(data, f, indent=1)
         os.replace(args.json + ".tmp", args.json)
     base = os.path.splitext(args.json)[0]
-    md, R, _ = report(data, args.json, data["context"].get("mbi", {}).get("wall_s"))
+    baseline = None
+    if args.baseline:
+        with open(args.baseline) as f:
+            baseline = json.load(f)
+    md, R, _ = report(data, args.json, data["context"].get("mbi", {}).get("wall_s"), baseline, args.baseline)
     plots(R, base)
     with open(base + ".md.tmp", "w") as f:
         f.write(md)

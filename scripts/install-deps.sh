@@ -10,7 +10,11 @@ set -euo pipefail
 # (the one GL loader), EGL/GL headers, and Mesa's EGL and llvmpipe driver so that the GPU path runs
 # headless on machines without a GPU (CI); GLFW, Dear ImGui and Xvfb (with xauth, which
 # xvfb-run needs) for the viewer and its tests; matplotlib for the plots of the benchmark report
-# (scripts/bench.sh).
+# (scripts/bench.sh); SuiteSparse for CHOLMOD, the optional faster factorization of the
+# modified-BI precompute (interp builds without it: MBI_WITH_CHOLMOD=OFF), and OpenBLAS, which
+# CHOLMOD's supernodal factorization runs on (Debian's reference BLAS is several times slower;
+# the package takes over libblas.so.3 through update-alternatives); clang with its libFuzzer runtime for the fuzz targets of the readers
+# (scripts/fuzz.sh, docs/hardening.md).
 packages=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libtet1.5-dev libopenmesh-dev
@@ -19,6 +23,8 @@ packages=(
   libepoxy-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
   libglfw3-dev libimgui-dev libglx-mesa0 xvfb xauth
   python3-matplotlib
+  libsuitesparse-dev libopenblas0-pthread
+  clang libclang-rt-14-dev
 )
 
 missing=()

@@ -2,11 +2,17 @@
 #include <mbi/interp/modified_bi.hpp>
 
 #include "detail.hpp"
+#include "factor.hpp"
+#include "omp.hpp"
 
-#include <Eigen/SparseCholesky>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <numeric>
+
+#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+#include <immintrin.h>
+#endif
 
 namespace mbi::interp {
 
@@ -250,6 +256,71 @@ const std::vector<std::pair<int, int>>& bezier_edges(int d) {
   throw Error("bezier_edges: dimension must be 2 or 3, got " + std::to_string(d));
 }
 
+namespace {
+
+// sol (r x 3, row-major) = K (r x n, row-major) Xp (n x 4, row-major, column 3 unused), rows
+// [r0, r1). 4-wide FMA per K entry with the entry broadcast; 4 independent accumulators.
+void dense_rows_portable(const double* K, std::ptrdiff_t n, const double* Xp, double* sol,
+                         std::ptrdiff_t r0, std::ptrdiff_t r1) {
+  for (std::ptrdiff_t r = r0; r < r1; ++r) {
+    const double* k = K + r * n;
+    double a0 = 0, a1 = 0, a2 = 0;
+    for (std::ptrdiff_t j = 0; j < n; ++j) {
+      a0 += k[j] * Xp[4 * j];
+      a1 += k[j] * Xp[4 * j + 1];
+      a2 += k[j] * Xp[4 * j + 2];
+    }
+    sol[3 * r] = a0;
+    sol[3 * r + 1] = a1;
+    sol[3 * r + 2] = a2;
+  }
+}
+
+#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+__attribute__((target("avx2,fma"))) void dense_rows_avx2(const double* K, std::ptrdiff_t n,
+                                                         const double* Xp, double* sol,
+                                                         std::ptrdiff_t r0, std::ptrdiff_t r1) {
+  for (std::ptrdiff_t r = r0; r < r1; ++r) {
+    const double* k = K + r * n;
+    __m256d a0 = _mm256_setzero_pd(), a1 = a0, a2 = a0, a3 = a0;
+    std::ptrdiff_t j = 0;
+    for (; j + 4 <= n; j += 4) {
+      a0 = _mm256_fmadd_pd(_mm256_broadcast_sd(k + j), _mm256_loadu_pd(Xp + 4 * j), a0);
+      a1 = _mm256_fmadd_pd(_mm256_broadcast_sd(k + j + 1), _mm256_loadu_pd(Xp + 4 * j + 4), a1);
+      a2 = _mm256_fmadd_pd(_mm256_broadcast_sd(k + j + 2), _mm256_loadu_pd(Xp + 4 * j + 8), a2);
+      a3 = _mm256_fmadd_pd(_mm256_broadcast_sd(k + j + 3), _mm256_loadu_pd(Xp + 4 * j + 12), a3);
+    }
+    for (; j < n; ++j) a0 = _mm256_fmadd_pd(_mm256_broadcast_sd(k + j), _mm256_loadu_pd(Xp + 4 * j), a0);
+    alignas(32) double t[4];
+    _mm256_store_pd(t, _mm256_add_pd(_mm256_add_pd(a0, a1), _mm256_add_pd(a2, a3)));
+    sol[3 * r] = t[0];
+    sol[3 * r + 1] = t[1];
+    sol[3 * r + 2] = t[2];
+  }
+}
+
+bool have_avx2() {
+  static const bool ok = [] {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  }();
+  return ok;
+}
+#define MBI_DENSE_X86 1
+#endif
+
+void dense_rows(const double* K, std::ptrdiff_t n, const double* Xp, double* sol, std::ptrdiff_t r0,
+                std::ptrdiff_t r1) {
+#ifdef MBI_DENSE_X86
+  if (have_avx2()) return dense_rows_avx2(K, n, Xp, sol, r0, r1);
+#endif
+  dense_rows_portable(K, n, Xp, sol, r0, r1);
+}
+
+}  // namespace
+
+bool cholmod_available() { return detail::cholmod_available(); }
+
 struct ModifiedBI::Impl {
   int d = 3, n = 0, m = 0;
   Eigen::MatrixXd U;
@@ -261,22 +332,50 @@ struct ModifiedBI::Impl {
   int n_red = 0;
   int null_dim = 0;
   SpMat Hmm_vibr_red, Hmm_disc_red, Hmx_red;  // restricted blocks (Hmx_red unweighted)
-  Eigen::SimplicialLLT<SpMat> llt;
+  detail::CholeskyFactor F;
   bool dense = false;
-  Eigen::MatrixXd K;  // dense operator -H^-1 H_mx (n_red x n)
+  // dense operator -H^-1 H_mx, row-major (n_red x n): row a holds reduced unknown a's weights
+  std::vector<double> K;
+
+  bool use_cholmod() const {
+    switch (opt.factorization) {
+      case Factorization::Eigen: return false;
+      case Factorization::Cholmod: return true;
+      case Factorization::Automatic: break;
+    }
+    return detail::cholmod_available();
+  }
+
+  // sol (n_red x d, row-major) for the right-hand sides X (n x d) by the factor.
+  void sparse_solve(const Eigen::Ref<const Eigen::MatrixXd>& X, std::vector<double>& sol) const {
+    const Eigen::MatrixXd rhs = -beta * (Hmx_red * X);
+    sol.resize(static_cast<size_t>(n_red) * d);
+    for (int a = 0; a < n_red; ++a)
+      for (int c = 0; c < d; ++c) sol[static_cast<size_t>(a) * d + c] = rhs(a, c);
+    std::vector<double> work(sol.size());
+    F.solve(sol.data(), d, work.data());
+  }
 
   void factor() {
     if (n_red == 0) return;
     const SpMat A = alpha * Hmm_vibr_red + beta * Hmm_disc_red;
-    llt.factorize(A);
-    if (llt.info() != Eigen::Success)
-      throw Error("ModifiedBI: Cholesky factorisation failed (alpha = " + std::to_string(alpha) +
-                  ", beta = " + std::to_string(beta) + "): the reduced system is not positive definite");
-    if (dense) {
-      const Eigen::MatrixXd rhs = -beta * Eigen::MatrixXd(Hmx_red);
-      K = llt.solve(rhs);
-    } else {
-      K.resize(0, 0);
+    F = detail::cholesky(A, use_cholmod(), "ModifiedBI");
+    K.clear();
+    if (!dense) return;
+    // K = -beta A^-1 H_mx, 8 columns (vertices) per pass over the factor
+    K.assign(static_cast<size_t>(n_red) * n, 0.0);
+    constexpr int W = 8;
+    std::vector<double> B(static_cast<size_t>(n_red) * W), work(B.size());
+    for (int j0 = 0; j0 < n; j0 += W) {
+      const int w = std::min(W, n - j0);
+      std::fill(B.begin(), B.end(), 0.0);
+      // column j of H_mx = column j of Hmx_red (CSC): scatter its entries
+      for (int c = 0; c < w; ++c)
+        for (SpMat::InnerIterator it(Hmx_red, j0 + c); it; ++it)
+          B[static_cast<size_t>(it.row()) * w + c] = -beta * it.value();
+      F.solve(B.data(), w, work.data());
+      for (int a = 0; a < n_red; ++a)
+        for (int c = 0; c < w; ++c) K[static_cast<size_t>(a) * n + j0 + c] = B[static_cast<size_t>(a) * w + c];
     }
   }
 };
@@ -340,10 +439,9 @@ ModifiedBI::ModifiedBI(const Eigen::Ref<const Eigen::MatrixXd>& U,
   if (I.dense && static_cast<long long>(I.n_red) * n > (1LL << 28))
     throw Error("ModifiedBI: the dense operator would need " + std::to_string(I.n_red) + " x " +
                 std::to_string(n) + " doubles; use SolvePath::Sparse or Automatic");
-  if (I.n_red > 0) {
-    const SpMat A = I.alpha * I.Hmm_vibr_red + I.beta * I.Hmm_disc_red;
-    I.llt.analyzePattern(A);
-  }
+  if (options.factorization == Factorization::Cholmod && !detail::cholmod_available())
+    throw Error("ModifiedBI: Factorization::Cholmod asked for, but this build has no CHOLMOD "
+                "(configure with MBI_WITH_CHOLMOD=ON and libsuitesparse-dev)");
   I.factor();
 }
 
@@ -367,6 +465,18 @@ bool ModifiedBI::pin_boundary() const { return impl_->opt.pin_boundary; }
 int ModifiedBI::null_space_dim() const { return impl_->null_dim; }
 int ModifiedBI::unknowns() const { return impl_->n_red; }
 bool ModifiedBI::dense_operator() const { return impl_->dense; }
+std::string ModifiedBI::factorization() const { return impl_->F.method; }
+long long ModifiedBI::factor_nonzeros() const { return impl_->F.nonzeros(); }
+long long ModifiedBI::memory_bytes() const {
+  const Impl& I = *impl_;
+  auto sp = [](const SpMat& A) {
+    return static_cast<long long>(A.nonZeros()) * (sizeof(double) + sizeof(int)) +
+           static_cast<long long>(A.outerSize() + 1) * sizeof(int);
+  };
+  return static_cast<long long>(I.F.bytes()) + static_cast<long long>(I.K.size() * sizeof(double)) +
+         sp(I.H.vibr_mm) + sp(I.H.disc_mm) + sp(I.H.disc_mx) + sp(I.H.disc_xx) + sp(I.Hmm_vibr_red) +
+         sp(I.Hmm_disc_red) + sp(I.Hmx_red);
+}
 const SpMat& ModifiedBI::vibr_hessian_mm() const { return impl_->H.vibr_mm; }
 const SpMat& ModifiedBI::disc_hessian_mm() const { return impl_->H.disc_mm; }
 const SpMat& ModifiedBI::disc_hessian_mx() const { return impl_->H.disc_mx; }
@@ -383,19 +493,30 @@ VertexMatrices ModifiedBI::solve(const Eigen::Ref<const Eigen::MatrixXd>& X) con
   detail::check_finite("ModifiedBI::solve", "control vertex", X);
   VertexMatrices M = VertexMatrices::Zero(static_cast<Eigen::Index>(d) * n, d);
   if (I.n_red == 0) return M;
-  Eigen::MatrixXd sol;  // n_red x d, column c = reduced m of component c
+  std::vector<double> sol;  // n_red x d row-major: row a = reduced m of every component
   if (I.dense) {
-    sol.noalias() = I.K * X;
+    std::vector<double> Xp(static_cast<size_t>(n) * 4, 0.0), s3(static_cast<size_t>(I.n_red) * 3);
+    for (int j = 0; j < n; ++j)
+      for (int c = 0; c < d; ++c) Xp[4 * static_cast<size_t>(j) + c] = X(j, c);
+    const std::ptrdiff_t rows = I.n_red;
+    const int nt = detail::omp_threads(rows * n, 1 << 17);
+    MBI_INTERP_OMP("omp parallel num_threads(nt) if (nt > 1)")
+    {
+      int t = 0, T = 1;
+      detail::omp_team(t, T);
+      dense_rows(I.K.data(), n, Xp.data(), s3.data(), rows * t / T, rows * (t + 1) / T);
+    }
+    sol.resize(static_cast<size_t>(I.n_red) * d);
+    for (int a = 0; a < I.n_red; ++a)
+      for (int c = 0; c < d; ++c) sol[static_cast<size_t>(a) * d + c] = s3[static_cast<size_t>(a) * 3 + c];
   } else {
-    Eigen::MatrixXd rhs = I.Hmx_red * X;
-    rhs *= -I.beta;
-    sol = I.llt.solve(rhs);
+    I.sparse_solve(X, sol);
   }
   for (int i = 0; i < n; ++i)
     for (int r = 0; r < d; ++r) {
       const int a = I.reduced[i * d + r];
       if (a < 0) continue;
-      for (int c = 0; c < d; ++c) M(i * d + c, r) = sol(a, c);
+      for (int c = 0; c < d; ++c) M(i * d + c, r) = sol[static_cast<size_t>(a) * d + c];
     }
   return M;
 }

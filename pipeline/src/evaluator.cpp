@@ -28,7 +28,12 @@ void CpuEvaluator::set_points(const PointSet& points) {
                 std::to_string(embedding->dim()));
   embedding_ = embedding;
   rest_normals_ = rest_normals;
-  rest_normals_f_ = rest_normals.cast<float>();
+  fast_.reset();
+  if (precision_ == Precision::Float) {
+    fast_ = std::make_unique<interp::FastEvaluator>(*embedding, threads_);
+    // normals need the embedding's basis gradients; without them evaluate(B, true) reports it
+    if (rest_normals.size() != 0 && embedding->gradients.rows() > 0) fast_->set_rest_normals(rest_normals);
+  }
 }
 
 void CpuEvaluator::evaluate(const interp::BezierPoints& B, bool normals) {
@@ -42,11 +47,11 @@ void CpuEvaluator::evaluate(const interp::BezierPoints& B, bool normals) {
     else
       interp::evaluate<double>(B, *embedding_, positions_, threads_);
   } else {
-    if (normals)
-      interp::evaluate<float>(B, *embedding_, rest_normals_f_, positions_f_, normals_f_, threads_);
-    else
-      interp::evaluate<float>(B, *embedding_, positions_f_, threads_);
-    if (!normals) normals_f_.resize(0, 0);
+    if (normals && !fast_->has_rest_normals())
+      throw Error("CpuEvaluator: normals need the embedding's basis gradients (filled by interp::embed())");
+    if (normals) fast_->evaluate(B, positions_f_, normals_f_);
+    else fast_->evaluate(B, positions_f_);
+    float_normals_ = normals;
     stale_ = true;
   }
   if (!normals && precision_ == Precision::Double) normals_.resize(0, 0);
@@ -58,7 +63,8 @@ void CpuEvaluator::evaluate(const interp::BezierPoints& B, bool normals) {
 const Eigen::MatrixXd& CpuEvaluator::positions() {
   if (stale_) {
     positions_ = positions_f_.cast<double>();
-    normals_ = normals_f_.cast<double>();
+    if (float_normals_) normals_ = normals_f_.cast<double>();
+    else normals_.resize(0, 0);
     stale_ = false;
   }
   return positions_;

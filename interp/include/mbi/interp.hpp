@@ -3,6 +3,7 @@
 #include <mbi/interp/control.hpp>
 #include <mbi/interp/embed.hpp>
 #include <mbi/interp/evaluate.hpp>
+#include <mbi/interp/fast_evaluate.hpp>
 #include <mbi/interp/mesh.hpp>
 #include <mbi/interp/metrics.hpp>
 #include <mbi/interp/modified_bi.hpp>

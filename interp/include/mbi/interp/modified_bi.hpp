@@ -11,6 +11,7 @@
 
 #include <Eigen/SparseCore>
 #include <memory>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -22,11 +23,21 @@ namespace mbi::interp {
 /// threshold) and the sparse path otherwise.
 enum class SolvePath { Automatic, Sparse, Dense };
 
+/// Which sparse Cholesky factorization the precompute runs (the result is the same up to
+/// round-off): Eigen's SimplicialLLT with AMD (always built), or CHOLMOD's supernodal
+/// factorization with the better of AMD and METIS orderings (when the build has CHOLMOD:
+/// cholmod_available()). Automatic = CHOLMOD when available.
+enum class Factorization { Automatic, Eigen, Cholmod };
+
+/// True when this build of interp has CHOLMOD (CMake MBI_WITH_CHOLMOD, libsuitesparse-dev).
+bool cholmod_available();
+
 struct Options {
   double alpha = 0.0;         ///< weight of E_vibr; 0 = default (0.1 in 3D, 0.2 in 2D); < 0 rejected
   double beta = 0.0;          ///< weight of E_disc; 0 = automatic (equal Frobenius norms, fact 7); < 0 rejected
   bool pin_boundary = false;  ///< M_i = 0 on boundary vertices (fact 9)
   SolvePath solve_path = SolvePath::Automatic;
+  Factorization factorization = Factorization::Automatic;  ///< Cholmod without CHOLMOD: Error
 };
 
 /// Default alpha for dimension d (0.1 in 3D, 0.2 in 2D).
@@ -49,8 +60,8 @@ class ModifiedBI {
   /// Precompute for rest mesh (U n x d, T m x (d+1)). Validates the mesh (throws Error, also for
   /// a mesh without interior faces). Automatic beta = ||H_vibr,mm||_F / ||H_disc,mm||_F over
   /// the full m-blocks (independent of alpha and of pin_boundary). Cost: dominated by the sparse
-  /// Cholesky factorisation (Eigen SimplicialLLT, AMD): ~0.1 s at 450 vertices, seconds at
-  /// several thousand vertices in 3D.
+  /// Cholesky factorisation (see Factorization; figures in docs/performance.md) and, on the
+  /// dense path, by the n solves that build the operator.
   ModifiedBI(const Eigen::Ref<const Eigen::MatrixXd>& U,
              const Eigen::Ref<const Eigen::MatrixXi>& T, const Options& options = {});
   ~ModifiedBI();
@@ -77,6 +88,12 @@ class ModifiedBI {
   int unknowns() const;
   /// True when solve() uses the dense operator -H_mm^-1 H_mx.
   bool dense_operator() const;
+  /// The factorization used: "Eigen SimplicialLLT (AMD)", "CHOLMOD supernodal (METIS)", ...
+  std::string factorization() const;
+  /// Entries of the Cholesky factor L, and the bytes the precompute keeps (factor, dense
+  /// operator, assembled blocks).
+  long long factor_nonzeros() const;
+  long long memory_bytes() const;
 
   /// M for deformed control positions X (n x d). Throws Error on a size mismatch or NaN.
   VertexMatrices solve(const Eigen::Ref<const Eigen::MatrixXd>& X) const;

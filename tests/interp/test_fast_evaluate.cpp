@@ -1,0 +1,141 @@
+// The compact float kernel (FastEvaluator) against the double kernel (interp::evaluate<double>).
+#include <catch2/catch.hpp>
+
+#include "test_support.hpp"
+
+#include <cfloat>
+
+using namespace mbi::interp;
+using namespace mbi::test;
+
+namespace {
+struct Setup {
+  Mesh M;
+  BezierPoints B, Bbi;
+  Embedding emb;
+  Eigen::MatrixXd normals;
+};
+
+Setup make(int d, int points, double lo, double hi, Eigen::RowVectorXd offset = {}) {
+  Setup s;
+  s.M = jittered_mesh(d, 51);
+  Eigen::MatrixXd X = smooth_deform(s.M.U, 0.5);
+  const ModifiedBI mbi(s.M.U, s.M.T);
+  s.B = mbi.bezier(X, mbi.solve(X));
+  if (offset.size() == d) {  // the model far from the origin: float keeps relative accuracy
+    X.rowwise() += offset;
+    s.B = mbi.bezier(X, mbi.solve(X));
+  }
+  s.Bbi = bezier_bi(X, s.M.T);
+  std::mt19937 rng(52);
+  std::uniform_real_distribution<double> uni(lo, hi);
+  Eigen::MatrixXd P(points, d);
+  for (int i = 0; i < points; ++i)
+    for (int c = 0; c < d; ++c) P(i, c) = uni(rng);
+  s.emb = embed(s.M.U, s.M.T, P);
+  s.normals = random_matrix(points, d, 53);
+  s.normals.rowwise().normalize();
+  return s;
+}
+
+// Float round-off bound for a position: 32 ulp of the largest control-point coordinate (the
+// coefficients are differences of control points and b is in [0, 1] inside an element).
+double position_tolerance(const BezierPoints& B) { return 32 * FLT_EPSILON * B.cwiseAbs().maxCoeff(); }
+}  // namespace
+
+TEST_CASE("FastEvaluator: float positions and normals agree with the double kernel to float round-off", "[fast_evaluate]") {
+  for (int d : {2, 3}) {
+    for (bool far : {false, true}) {
+      const Eigen::RowVectorXd offset = far ? Eigen::RowVectorXd::Constant(d, 1000.0) : Eigen::RowVectorXd();
+      // points inside and outside (extrapolated) the control mesh
+      const Setup s = make(d, 50001, -0.2, 1.2, offset);
+      REQUIRE(!s.emb.outside.empty());
+      for (const BezierPoints* B : {&s.B, &s.Bbi}) {
+        Eigen::MatrixXd pd, nd;
+        evaluate<double>(*B, s.emb, s.normals, pd, nd, 1);
+        FastEvaluator fe(s.emb);
+        fe.set_rest_normals(s.normals);
+        RowMatrixXf pf, nf;
+        fe.evaluate(*B, pf, nf);
+        REQUIRE(pf.rows() == pd.rows());
+        REQUIRE(pf.cols() == d);
+        const double tol = position_tolerance(*B);
+        CHECK((pf.cast<double>() - pd).cwiseAbs().maxCoeff() <= tol);
+        // unit normals: float accuracy of a normalised cof(J) n, away from singular J
+        double nerr = 0;
+        for (Eigen::Index i = 0; i < nd.rows(); ++i)
+          nerr = std::max(nerr, (nf.row(i).cast<double>() - nd.row(i)).norm());
+        CHECK(nerr < 2e-5);
+        // positions alone: the same values
+        RowMatrixXf p2;
+        fe.evaluate(*B, p2);
+        CHECK((p2 - pf).cwiseAbs().maxCoeff() == 0.0f);
+      }
+    }
+  }
+}
+
+TEST_CASE("FastEvaluator: thread counts, caller memory and repeated calls give identical results", "[fast_evaluate]") {
+  const Setup s = make(3, 200003, 0.0, 1.0);
+  FastEvaluator ref(s.emb, 1);
+  ref.set_rest_normals(s.normals);
+  RowMatrixXf p1, n1;
+  ref.evaluate(s.B, p1, n1);
+  for (int threads : {2, 3, 7}) {
+    FastEvaluator fe(s.emb, threads);
+    fe.set_rest_normals(s.normals);
+    RowMatrixXf p, n;
+    fe.evaluate(s.B, p, n);
+    CHECK((p - p1).cwiseAbs().maxCoeff() == 0.0f);
+    CHECK((n - n1).cwiseAbs().maxCoeff() == 0.0f);
+    // the same matrices again: no reallocation
+    const float* data = p.data();
+    fe.evaluate(s.B, p, n);
+    CHECK(p.data() == data);
+    // unaligned caller memory (offset by one float): plain stores, same values
+    std::vector<float> buf(3 * p1.rows() + 1), nbuf(3 * p1.rows() + 1);
+    fe.evaluate(s.B, buf.data() + 1, nbuf.data() + 1);
+    const Eigen::Map<const RowMatrixXf> pm(buf.data() + 1, p1.rows(), 3), nm(nbuf.data() + 1, p1.rows(), 3);
+    CHECK((pm - p1).cwiseAbs().maxCoeff() == 0.0f);
+    CHECK((nm - n1).cwiseAbs().maxCoeff() == 0.0f);
+  }
+  CHECK(ref.bytes_per_point(false) == 28);
+  CHECK(ref.bytes_per_point(true) == 52);
+}
+
+TEST_CASE("FastEvaluator: few points (tails shorter than a group of 4) and an empty embedding", "[fast_evaluate]") {
+  for (int p : {1, 2, 3, 5, 7}) {
+    const Setup s = make(3, p, 0.0, 1.0);
+    Eigen::MatrixXd pd, nd;
+    evaluate<double>(s.B, s.emb, s.normals, pd, nd, 1);
+    FastEvaluator fe(s.emb);
+    fe.set_rest_normals(s.normals);
+    RowMatrixXf pf, nf;
+    fe.evaluate(s.B, pf, nf);
+    CHECK((pf.cast<double>() - pd).cwiseAbs().maxCoeff() <= position_tolerance(s.B));
+  }
+  Embedding empty;
+  empty.bary.resize(0, 4);
+  FastEvaluator fe(empty);
+  RowMatrixXf pf;
+  const Setup s = make(3, 1, 0.0, 1.0);
+  fe.evaluate(s.B, pf);
+  CHECK(pf.rows() == 0);
+}
+
+TEST_CASE("FastEvaluator rejects inconsistent input", "[fast_evaluate]") {
+  const Setup s = make(3, 100, 0.0, 1.0);
+  FastEvaluator fe(s.emb);
+  RowMatrixXf p, n;
+  CHECK_THROWS_WITH(fe.evaluate(s.B.topRows(s.B.rows() - 10), p), Catch::Contains("Bezier points"));
+  CHECK_THROWS_WITH(fe.evaluate(s.B, p, n), Catch::Contains("no rest normals"));
+  CHECK_THROWS_WITH(fe.set_rest_normals(s.normals.topRows(10)), Catch::Contains("rest normals"));
+  Embedding nograd = s.emb;
+  nograd.gradients.resize(0, 0);
+  FastEvaluator fg(nograd);
+  CHECK_THROWS_WITH(fg.set_rest_normals(s.normals), Catch::Contains("gradients"));
+  Embedding bad = s.emb;
+  bad.element(3) = -1;
+  CHECK_THROWS_WITH(FastEvaluator(bad), Catch::Contains("point 3"));
+  CHECK_THROWS_AS(FastEvaluator(s.emb, -1), mbi::Error);
+}
