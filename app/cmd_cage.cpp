@@ -11,6 +11,7 @@
 #include <cctype>
 #include <cstdio>
 #include <filesystem>
+#include <stdexcept>
 
 namespace {
 
@@ -21,7 +22,7 @@ const mbi::cli::Registrar reg(
       struct Args {
         std::string dense, out, stats, vtk, mesher = "voxel";
         int vertices = 200;
-        bool force_3d = false;
+        bool force_3d = false, force = false;
       };
       auto a = std::make_shared<Args>();
       sub.add_option("dense", a->dense, "dense surface (.obj, .off, .ply, .stl)")->required();
@@ -37,28 +38,41 @@ const mbi::cli::Registrar reg(
                      "voxel: 6 Kuhn tetrahedra per envelope cell (default); tetgen: the "
                      "envelope's boundary tetrahedralised by TetGen (3D)")
           ->check(CLI::IsMember({"voxel", "tetgen"}));
+      sub.add_flag("--force", a->force,
+                   "overwrite existing outputs (BASE.node/.ele, --stats, --vtk); inputs never");
       return [a]() {
+        namespace fs = std::filesystem;
+        // BASE, without a .node/.ele/.face extension
+        fs::path base(a->out);
+        std::string ext = base.extension().string();
+        for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+        if (ext == ".node" || ext == ".ele" || ext == ".face") base.replace_extension();
+        fs::path node = base, ele = base;
+        node += ".node";
+        ele += ".ele";
+        // Every output checked and reserved before any work; all written at the end, or none.
+        mbi::io::OutputSet outputs({a->dense}, a->force);
+        const std::size_t i_node = outputs.add(node, "--out");
+        const std::size_t i_ele = outputs.add(ele, "--out", i_node);
+        const std::size_t i_stats = a->stats.empty() ? 0 : outputs.add(a->stats, "--stats");
+        const std::size_t i_vtk = a->vtk.empty() ? 0 : outputs.add(a->vtk, "--vtk");
         const mbi::io::SurfaceMesh dense = mbi::io::read_surface(a->dense);
         mbi::generate::CageOptions opt;
         opt.target_vertices = a->vertices;
         opt.force_3d = a->force_3d;
         opt.mesher = mbi::generate::parse_mesher(a->mesher);
+        if (opt.mesher == mbi::generate::Mesher::TetGen && !a->force_3d && dense.V.rows() > 0 &&
+            dense.V.cols() == 3 && dense.V.allFinite() &&
+            dense.V.col(2).maxCoeff() == dense.V.col(2).minCoeff() &&
+            // a single point is not flat but degenerate: make_cage says so
+            (dense.V.leftCols(2).colwise().maxCoeff() - dense.V.leftCols(2).colwise().minCoeff()).maxCoeff() > 0)
+          throw std::runtime_error(
+              a->dense + ": the model is flat (every z = " + std::to_string(dense.V(0, 2)) +
+              "), a 2D input; TetGen makes tetrahedra only: use the voxel mesher (the default) "
+              "for a 2D triangle cage, or --force-3d for tetrahedra");
         const mbi::generate::CageResult cage = mbi::generate::make_cage(dense.V, dense.F, opt);
-        mbi::io::write_tetgen(a->out, cage.U, cage.T);
-        // TetGen companions of BASE left from an earlier mesh would not match this one: they go
-        std::filesystem::path base(a->out);
-        std::string ext = base.extension().string();
-        for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-        if (ext == ".node" || ext == ".ele" || ext == ".face") base.replace_extension();
-        for (const char* companion : {".face", ".edge", ".neigh"}) {
-          std::filesystem::path p = base;
-          p += companion;
-          std::error_code ec;
-          if (std::filesystem::is_regular_file(p, ec) && std::filesystem::remove(p, ec))
-            std::fprintf(stderr, "mbi cage: note: removed %s (left from an earlier mesh)\n",
-                         p.string().c_str());
-        }
-        if (!a->vtk.empty()) mbi::io::write_vtk(a->vtk, cage.U, cage.T);
+        mbi::io::write_tetgen(outputs.staging(i_node), cage.U, cage.T);
+        if (!a->vtk.empty()) mbi::io::write_vtk(outputs.staging(i_vtk), cage.U, cage.T);
         nlohmann::json j;
         j["input"] = a->dense;
         j["dense_vertices"] = dense.V.rows();
@@ -74,7 +88,21 @@ const mbi::cli::Registrar reg(
         j["min_dihedral_deg"] = cage.min_dihedral_deg;
         j["outside_points"] = cage.outside_points;
         j["seconds"] = cage.seconds;
-        if (!a->stats.empty()) mbi::io::write_text_atomic(a->stats, j.dump(2) + "\n");
+        if (!a->stats.empty()) {
+          mbi::cli::check_finite(j, a->stats);
+          mbi::io::write_text_atomic(outputs.staging(i_stats), j.dump(2) + "\n");
+        }
+        (void)i_ele;
+        outputs.commit();
+        // TetGen companions of BASE left from an earlier mesh would not match this one: they go
+        for (const char* companion : {".face", ".edge", ".neigh"}) {
+          fs::path p = base;
+          p += companion;
+          std::error_code ec;
+          if (fs::is_regular_file(fs::symlink_status(p, ec)) && fs::remove(p, ec))
+            std::fprintf(stderr, "mbi cage: note: removed %s (left from an earlier mesh)\n",
+                         p.string().c_str());
+        }
         std::printf("%s (%s): %lld control vertices, %lld %s, min angle %.2f deg, %d outside, %.3f s\n",
                     a->out.c_str(), mbi::generate::mesher_name(cage.mesher),
                     static_cast<long long>(cage.U.rows()),

@@ -13,6 +13,7 @@
 #include <mbi/io/atomic_file.hpp>
 #include <mbi/io/io.hpp>
 #include <mbi/pipeline/frame_pipeline.hpp>
+#include <mbi/scenes/limits.hpp>
 #include <mbi/scenes/report.hpp>
 
 #include <chrono>
@@ -91,8 +92,8 @@ Problem load_files(const DeformArgs& a) {
          : dext == ".msh" ? io::read_gmsh_nodes(a.deformed)
          : dext == ".vtk" ? io::read_vtk_points(a.deformed)
                           : io::read_points(a.deformed);
-  if (d == 2 && pb.X.cols() == 3 && (dext == ".msh" || dext == ".vtk")) {
-    // a 2D mesh file stores z: it must be one plane, then it is dropped
+  if (d == 2 && pb.X.cols() == 3) {
+    // 2D positions stored with z (a .msh, a .vtk, meshio's 3-column text): one plane, dropped
     if (pb.X.rows() > 0 && (pb.X.col(2).array() != pb.X(0, 2)).any())
       throw std::runtime_error(a.deformed + ": the control mesh is 2D but these positions are not in one plane z = const");
     pb.X.conservativeResize(Eigen::NoChange, 2);
@@ -148,19 +149,35 @@ int run_deform(const DeformArgs& a) {
                                   {"--mesh", &a.mesh}, {"--out", &a.out}})
       if (v->empty()) throw std::runtime_error(std::string(flag) + " is required (or use --example)");
   }
+  // One overwrite rule for every command: existing outputs only with --force, inputs never (by
+  // file identity); every output checked and reserved before any work, all written at the end.
+  std::vector<fs::path> inputs;
+  if (!example) {
+    inputs = {a.control, a.deformed, a.mesh};
+    fs::path base(a.control);
+    const std::string ce = lower_ext(base);
+    if (ce == ".node" || ce == ".ele" || ce == ".face" || ce.empty()) {
+      if (!ce.empty()) base.replace_extension();
+      for (const char* e : {".node", ".ele"}) {
+        fs::path p = base;
+        p += e;
+        inputs.push_back(p);
+      }
+    }
+  }
+  io::OutputSet outputs(inputs, a.force);
+  const std::size_t i_out = a.out.empty() ? 0 : outputs.add(a.out, "--out");
+  const std::size_t i_stats = a.stats.empty() ? 0 : outputs.add(a.stats, "--stats");
   if (!a.out.empty() && !is_point_list(a.out) && !io::is_surface_file(a.out))
     throw std::runtime_error("--out " + a.out + ": unknown output format '" + lower_ext(a.out) +
                              "' (expected .obj, .ply, .off, .stl, .txt or .xyz)");
-  // the same rule as mbi run: an existing output is not replaced without --force
-  if (!a.force)
-    for (const std::string* o : {&a.out, &a.stats})
-      if (!o->empty() && fs::exists(*o))
-        throw std::runtime_error(*o + ": exists (use --force to overwrite)");
   if (a.alpha_given && !(a.alpha > 0) )
     throw std::runtime_error("--alpha must be > 0 (E_disc alone has extra null modes)");
 
   Problem pb = example ? load_example(a.example) : load_files(a);
   const int d = static_cast<int>(pb.U.cols());
+  // the same caps as a scene, before the embedding and the precompute allocate (docs/limits.md)
+  scenes::check_run_size(pb.control_name, pb.P.rows(), pb.U.rows(), pb.T.rows(), d);
   if (!pb.X.allFinite()) throw std::runtime_error(pb.deformed_name + ": non-finite position");
 
   // Embed
@@ -229,7 +246,7 @@ int run_deform(const DeformArgs& a) {
   if (!a.out.empty()) {
     Eigen::MatrixXd full(out.rows(), d + pb.P_extra.cols());
     full << out, pb.P_extra;
-    const fs::path op(a.out);
+    const fs::path op = outputs.staging(i_out);
     if (is_point_list(op)) {
       io::write_points(op, full);
     } else {
@@ -259,7 +276,7 @@ int run_deform(const DeformArgs& a) {
     j["outside_points"] = embedding.outside.size();
     j["max_outside_distance"] = embedding.max_outside_distance;
     j["null_space_dim"] = solver->null_space_dim();
-    j["disc"] = scenes::disc_json(table);
+    j["disc"] = scenes::disc_json(table, scenes::disc_roundoff(pb.U));
     if (!accuracy.empty()) {
       const char* keys[] = {"bi", "phong", "modified_bi"};
       for (size_t k = 0; k < accuracy.size(); ++k)
@@ -273,8 +290,10 @@ int run_deform(const DeformArgs& a) {
                        {"phong_precompute", pipe->phong_precompute_ms()},
                        {"solve", solve_ms},
                        {"evaluate", evaluate_ms}};
-    io::write_text_atomic(a.stats, j.dump(2) + "\n");
+    check_finite(j, a.stats);
+    io::write_text_atomic(outputs.staging(i_stats), j.dump(2) + "\n");
   }
+  outputs.commit();
 
   std::printf("control: %s: %d vertices, %d %s (%dD)\n", pb.control_name.c_str(),
               static_cast<int>(pb.U.rows()), static_cast<int>(pb.T.rows()),
@@ -285,7 +304,7 @@ int run_deform(const DeformArgs& a) {
               solver->alpha(), solver->beta(), a.pin_boundary ? ", boundary pinned" : "",
               solver->null_space_dim());
   std::printf("\nface discontinuity over %d interior faces (paper Table 2):\n%s", table.faces,
-              scenes::format_table(table).c_str());
+              scenes::format_table(table, scenes::disc_roundoff(pb.U)).c_str());
   if (!accuracy.empty())
     std::printf("\nerror against the closed-form deformation at the %d points (positions relative "
                 "to the model size %.4g, gradients relative to |F|):\n%s",

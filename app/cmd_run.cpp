@@ -17,11 +17,12 @@ namespace {
 struct RunArgs {
   std::string scene, out, mesh, method, gpu;
   int frames = 0;
-  bool force = false, quiet = false;
+  bool force = false, quiet = false, force_3d = false;
 };
 
 int run_run(const RunArgs& a) {
   const scenes::Scene sc = scenes::load_scene(a.scene);
+  scenes::output_folder(sc, a.out);  // a name that cannot be a folder fails here, before work
   scenes::RunOptions o;
   o.out_dir = a.out;
   o.frames = a.frames;
@@ -32,6 +33,7 @@ int run_run(const RunArgs& a) {
   if (a.gpu == "off") o.gpu = scenes::GpuUse::Off;
   o.warn = [](const std::string& s) { std::fprintf(stderr, "mbi run: %s\n", s.c_str()); };
   o.force = a.force;
+  o.force_3d = a.force_3d;
   const bool tty = isatty(fileno(stderr));
   const auto t0 = std::chrono::steady_clock::now();
   int last_pct = -1;
@@ -57,7 +59,7 @@ int run_run(const RunArgs& a) {
   std::printf("scene %s: %d frames, outputs in %s (evaluated on %s)\n", sc.name.c_str(), r.frames,
               r.out_dir.string().c_str(), r.evaluator.c_str());
   std::printf("face discontinuity at the last frame (%d interior faces):\n%s", r.last_table.faces,
-              scenes::format_table(r.last_table).c_str());
+              scenes::format_table(r.last_table, r.roundoff).c_str());
   if (r.failed) {
     std::fprintf(stderr, "mbi run: error: %s (outputs up to frame %d kept)\n", r.message.c_str(),
                  r.frames);
@@ -84,6 +86,8 @@ const Registrar reg{
           ->check(CLI::IsMember({"auto", "on", "off"}));
       sub.add_flag("--force", a->force, "overwrite a non-empty output folder");
       sub.add_flag("--quiet", a->quiet, "no progress output");
+      sub.add_flag("--force-3d", a->force_3d,
+                   "a flat model (every z equal) stays 3D (default: it runs in 2D)");
       return [a] { return run_run(*a); };
     }};
 

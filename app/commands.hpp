@@ -3,6 +3,10 @@
 // Registrar; main.cpp builds the CLI11 app from the registry. A subcommand reports bad input by
 // throwing any std::exception: main prints "mbi <sub>: error: <message>" on one line and exits 2.
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <stdexcept>
 
 #include <functional>
 #include <string>
@@ -21,6 +25,19 @@ struct Command {
 };
 
 std::vector<Command>& registry();
+
+/// Throws naming the key if `j` holds a number that is not finite (nlohmann writes those as
+/// null, silently): a result that overflows is an error, never a quiet null in a file.
+inline void check_finite(const nlohmann::json& j, const std::string& file, const std::string& key = "") {
+  if (j.is_number_float() && !std::isfinite(j.get<double>()))
+    throw std::runtime_error(file + ": " + (key.empty() ? "a value" : key) + " is not a finite number (" +
+                             std::to_string(j.get<double>()) + ")");
+  if (j.is_object())
+    for (auto it = j.begin(); it != j.end(); ++it)
+      check_finite(*it, file, key.empty() ? it.key() : key + "." + it.key());
+  if (j.is_array())
+    for (std::size_t i = 0; i < j.size(); ++i) check_finite(j[i], file, key + "[" + std::to_string(i) + "]");
+}
 
 struct Registrar {
   Registrar(std::string name, std::string description, Setup setup) {

@@ -3,8 +3,11 @@
 
 #include "detail.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
+#include <string>
 #include <limits>
 #include <vector>
 
@@ -111,19 +114,21 @@ Locator build_locator(const Eigen::Ref<const Eigen::MatrixXd>& U0,
   L.lo.head(d) = U0.colwise().minCoeff().transpose();
   hi.head(d) = U0.colwise().maxCoeff().transpose();
   const Vec3 ext = hi - L.lo;
+  // U is normalised by embed() (largest extent 1), so these sizes cannot under- or overflow; a
+  // flat axis counts as 1e-3 of the largest one for the cell size.
+  const double ext_max = ext.head(d).maxCoeff();
   double vol = 1;
-  for (int a = 0; a < d; ++a) vol *= std::max(ext(a), 1e-300);
-  // About one cell per element, at most 2^22 cells.
-  L.h = std::pow(vol / m, 1.0 / d);
-  for (;;) {
-    long long total = 1;
-    for (int a = 0; a < d; ++a) {
-      L.dims[a] = std::max(1, static_cast<int>(std::ceil(ext(a) / L.h)));
-      total *= L.dims[a];
-    }
-    if (total <= (1LL << 22)) break;
+  for (int a = 0; a < d; ++a) vol *= std::max(ext(a), 1e-3 * ext_max);
+  // About one cell per element, at most 2^22 cells (a bounded number of enlargements).
+  L.h = std::pow(vol / std::max(m, 1), 1.0 / d);
+  for (int grow = 0;; ++grow) {
+    double total = 1;
+    for (int a = 0; a < d; ++a) total *= std::max(1.0, std::ceil(ext(a) / L.h));
+    if (total <= static_cast<double>(1LL << 22) || grow > 200) break;
     L.h *= 1.5;
   }
+  for (int a = 0; a < d; ++a)
+    L.dims[a] = static_cast<int>(std::clamp(std::ceil(ext(a) / L.h), 1.0, static_cast<double>(1 << 22)));
   const long long cells = static_cast<long long>(L.dims[0]) * L.dims[1] * L.dims[2];
   std::vector<std::array<int, 6>> range(m);
   std::vector<int> count(static_cast<size_t>(cells) + 1, 0);
@@ -241,9 +246,21 @@ int locate(const Locator& L, const Vec3& p, std::vector<int>& stamp, int tag, do
     if (best >= 0 && best_d2 <= bound * bound) break;
     if (bound == std::numeric_limits<double>::infinity()) break;
   }
+  if (best < 0) return -1;  // no finite distance: embed() reports the point
   L.bary(best, p, b);
   distance = std::sqrt(best_d2);
   return best;
+}
+
+// Points farther than this from the control mesh's bounding box, in units of its largest
+// extent, are refused: extrapolation from there means nothing, and the nearest-element search
+// works with squared distances (kFarLimit^2 = 1e24 stays far from overflow).
+constexpr double kFarLimit = 1e12;
+
+std::string format_g(double x) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.6g", x);
+  return b;
 }
 
 }  // namespace
@@ -258,7 +275,27 @@ Embedding embed(const Eigen::Ref<const Eigen::MatrixXd>& U,
     throw Error("embed: points must be p x " + std::to_string(d) + " like the control mesh, got p x " +
                 std::to_string(P.cols()));
   detail::check_finite("embed", "point", P);
-  const Locator L = build_locator(U, T);
+  // Scale-free: the control mesh and the points are moved to the centre of the mesh's bounding
+  // box and scaled by its largest extent s (halves first: no overflow even at +-1e308). The
+  // coordinates are affine invariants; distances and gradients are mapped back below.
+  const Eigen::RowVectorXd lo = U.colwise().minCoeff(), hi = U.colwise().maxCoeff();
+  const Eigen::RowVectorXd center = 0.5 * lo + 0.5 * hi;
+  const double s = 2.0 * (0.5 * hi - 0.5 * lo).maxCoeff();
+  if (!(s > 0) || !std::isfinite(s))
+    throw Error("embed: the control mesh has no extent (every vertex at the same point)");
+  const Eigen::MatrixXd Un = (U.rowwise() - center) / s;
+  Eigen::MatrixXd Pn = (P.rowwise() - center) / s;
+  for (Eigen::Index i = 0; i < Pn.rows(); ++i) {
+    const double far = Pn.row(i).cwiseAbs().maxCoeff();
+    if (!(far <= kFarLimit)) {  // also NaN/inf from (p - centre) / s overflowing
+      std::string at;
+      for (int c = 0; c < d; ++c) at += (c ? ", " : "") + format_g(P(i, c));
+      throw Error("embed: point " + std::to_string(i) + " (" + at + ") lies more than " +
+                  format_g(kFarLimit) + " times the control mesh's size (" + format_g(s) +
+                  ") away from it: too far to extrapolate");
+    }
+  }
+  const Locator L = build_locator(Un, T);
   const int np = static_cast<int>(P.rows());
   const int m = static_cast<int>(T.rows());
 
@@ -272,25 +309,32 @@ Embedding embed(const Eigen::Ref<const Eigen::MatrixXd>& U,
     std::array<double, 4> bb{};
     for (long long i = b; i < e; ++i) {
       Vec3 p = Vec3::Zero();
-      p.head(d) = P.row(i).transpose();
+      p.head(d) = Pn.row(i).transpose();
       double dd = 0;
+      bb.fill(0.0);
       const int el = locate(L, p, stamp, static_cast<int>(i), bb.data(), dd);
       emb.element(i) = el;
       for (int k = 0; k <= d; ++k) emb.bary(i, k) = bb[k];
       dist(i) = dd;
     }
   });
-  for (int i = 0; i < np; ++i)
+  for (int i = 0; i < np; ++i) {
+    if (emb.element(i) < 0 || !emb.bary.row(i).allFinite())  // never index element -1
+      throw Error("embed: point " + std::to_string(i) + ": no element found (distance overflow)");
     if (dist(i) > 0 || emb.bary.row(i).minCoeff() < -kInsideTol) {
       emb.outside.push_back(i);
-      emb.max_outside_distance = std::max(emb.max_outside_distance, dist(i));
+      emb.max_outside_distance = std::max(emb.max_outside_distance, dist(i) * s);
     }
+  }
   emb.gradients.resize(static_cast<Eigen::Index>(m) * (d + 1), d);
   for (int e = 0; e < m; ++e) {
-    const Eigen::Matrix3d& inv = L.inv[e];
+    const Eigen::Matrix3d inv = L.inv[e] / s;  // gradients in the input's units
     for (int k = 0; k < d; ++k) emb.gradients.row(e * (d + 1) + k + 1) = inv.row(k).head(d);
     emb.gradients.row(e * (d + 1)) = -inv.topLeftCorner(d, d).colwise().sum();
   }
+  if (!emb.gradients.allFinite())
+    throw Error("embed: the control mesh is too small (size " + format_g(s) +
+                "): its basis gradients overflow");
   return emb;
 }
 

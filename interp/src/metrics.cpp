@@ -7,7 +7,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <string>
 
 namespace mbi::interp {
 namespace {
@@ -24,6 +26,25 @@ void check_xm(const char* who, const Eigen::Ref<const Eigen::MatrixXd>& U,
   if (M.rows() != n * d || M.cols() != d)
     throw Error(std::string(who) + ": M must be " + std::to_string(n * d) + " x " + std::to_string(d) +
                 ", got " + std::to_string(M.rows()) + " x " + std::to_string(M.cols()));
+}
+std::string magnitude(const Eigen::Ref<const Eigen::MatrixXd>& A) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.3g", A.size() ? A.cwiseAbs().maxCoeff() : 0.0);
+  return b;
+}
+
+// Every energy and summary finite, or OverflowError naming the cause.
+void check_finite_table(const DiscontinuityTable& t, const Eigen::Ref<const Eigen::MatrixXd>& X,
+                        const VertexMatrices& M) {
+  bool ok = std::isfinite(t.e_vibr) && std::isfinite(t.e_disc) && std::isfinite(t.e_total);
+  for (const Summary* s : {&t.bi, &t.modified_bi})
+    ok = ok && std::isfinite(s->mean) && std::isfinite(s->std) && std::isfinite(s->max);
+  if (t.phong) ok = ok && std::isfinite(t.phong->mean) && std::isfinite(t.phong->std) &&
+                    std::isfinite(t.phong->max);
+  if (!ok)
+    throw OverflowError("discontinuity_table: the energies overflow a double (control positions up "
+                        "to " + magnitude(X) + ", matrices M up to " + magnitude(M) +
+                        "; the energies grow with their square)");
 }
 }  // namespace
 
@@ -75,9 +96,13 @@ Eigen::VectorXd face_discontinuity(const Eigen::Ref<const Eigen::MatrixXd>& U,
 Summary summarize(const Eigen::Ref<const Eigen::VectorXd>& values) {
   Summary s;
   if (values.size() == 0) return s;
-  s.mean = values.mean();
+  // overflow-safe for finite values: the mean of v/n, the deviation scaled by its largest term
+  const double n = static_cast<double>(values.size());
+  s.mean = (values.array() / n).sum();
   s.max = values.maxCoeff();
-  s.std = std::sqrt((values.array() - s.mean).square().mean());
+  const double big = (values.array() - s.mean).abs().maxCoeff();
+  s.std = big > 0 ? big * std::sqrt((((values.array() - s.mean) / big).square() / n).sum()) : 0.0;
+  if (!std::isfinite(big)) s.std = big;
   return s;
 }
 
@@ -99,6 +124,7 @@ DiscontinuityTable discontinuity_table(const ModifiedBI& solver,
   t.e_vibr = vibration_energy(U, T, M);
   t.e_disc = mb.sum();
   t.e_total = solver.alpha() * t.e_vibr + solver.beta() * t.e_disc;
+  check_finite_table(t, X, M);
   return t;
 }
 
@@ -112,6 +138,7 @@ DiscontinuityTable discontinuity_table(const ModifiedBI& solver,
   t.phong_ratio.mean = ratio_of(t.bi.mean, ph.mean);
   t.phong_ratio.std = ratio_of(t.bi.std, ph.std);
   t.phong_ratio.max = ratio_of(t.bi.max, ph.max);
+  check_finite_table(t, X, M_phong);
   return t;
 }
 

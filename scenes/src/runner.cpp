@@ -5,6 +5,7 @@
 #include <mbi/interp.hpp>
 #include <mbi/io/atomic_file.hpp>
 #include <mbi/raster/raster.hpp>
+#include <mbi/scenes/limits.hpp>
 #include <mbi/scenes/report.hpp>
 #include <mbi/scenes/runner.hpp>
 #include <mbi/sim/simulator.hpp>
@@ -54,7 +55,7 @@ std::string format_num(double x) {
 
 }  // namespace
 
-SceneModels load_models(const Scene& sc, const fs::path& mesh_override) {
+SceneModels load_models(const Scene& sc, const fs::path& mesh_override, bool force_3d) {
   SceneModels m;
   const std::string where = sc.file.string();
   // ------------------------------------------------------------------ dense
@@ -93,13 +94,33 @@ SceneModels load_models(const Scene& sc, const fs::path& mesh_override) {
   if (m.dense.V.rows() == 0) throw SceneError(m.dense_name + ": the dense model has no vertices");
 
   // ------------------------------------------------------------------ control
+  std::optional<io::ControlMesh> from_file;
+  if (!sc.control.path.empty()) from_file = io::read_control_mesh(resolve(sc, sc.control.path));
+  // a flat 3-coordinate model is 2D (as in mbi cage and mbi deform) unless --force-3d or a 3D
+  // control mesh file says otherwise
+  const bool flat = m.dense.V.cols() == 3 && m.dense.V.allFinite() &&
+                    m.dense.V.col(2).maxCoeff() == m.dense.V.col(2).minCoeff() &&
+                    // a single point is not flat but degenerate (make_cage says so)
+                    (m.dense.V.leftCols(2).colwise().maxCoeff() - m.dense.V.leftCols(2).colwise().minCoeff()).maxCoeff() > 0;
+  if (flat && !force_3d && !(from_file && from_file->dim() == 3)) {
+    if (sc.control.builtin == ControlBuiltin::Box && sc.control.path.empty())
+      throw SceneError(m.dense_name + ": the model is flat (every z = " + format_num(m.dense.V(0, 2)) +
+                       "), a 2D input, but control.builtin = \"box\" is 3D: use \"grid-2d\" or "
+                       "generate_vertices, or --force-3d");
+    if (sc.control.path.empty() && sc.control.builtin == ControlBuiltin::None &&
+        sc.control.mesher == generate::Mesher::TetGen)
+      throw SceneError(m.dense_name + ": the model is flat (every z = " + format_num(m.dense.V(0, 2)) +
+                       "), a 2D input; control.mesher = \"tetgen\" makes tetrahedra only: use the "
+                       "voxel mesher for a 2D triangle cage, or --force-3d");
+    m.flat_z = m.dense.V(0, 2);
+    m.dense.V.conservativeResize(Eigen::NoChange, 2);
+    m.dense.N.resize(0, 0);
+  }
   const bool two_d = m.dense.V.cols() == 2;
-  if (!sc.control.path.empty()) {
-    const fs::path p = resolve(sc, sc.control.path);
-    const io::ControlMesh cm = io::read_control_mesh(p);
-    m.U = cm.U;
-    m.T = cm.T;
-    m.control_name = p.string();
+  if (from_file) {
+    m.U = from_file->U;
+    m.T = from_file->T;
+    m.control_name = resolve(sc, sc.control.path).string();
   } else if (sc.control.builtin == ControlBuiltin::PaperBar) {
     generate::paper_bar_control(m.U, m.T);
     m.control_name = "built-in paper bar control (35 vertices)";
@@ -119,7 +140,17 @@ SceneModels load_models(const Scene& sc, const fs::path& mesh_override) {
     generate::CageOptions co;
     co.target_vertices = sc.control.generate_vertices;
     co.mesher = sc.control.mesher;
-    const generate::CageResult cage = generate::make_cage(m.dense.V, m.dense.F, co);
+    co.force_3d = force_3d;
+    Eigen::MatrixXd V3 = Eigen::MatrixXd::Zero(m.dense.V.rows(), 3);  // a 2D model: z = 0
+    V3.leftCols(m.dense.V.cols()) = m.dense.V;
+    generate::CageResult cage;
+    try {
+      cage = generate::make_cage(V3, m.dense.F, co);
+    } catch (const generate::CageError& e) {  // the scene key that asked for it, without "make_cage: "
+      const std::string w = e.what(), who = "make_cage: ";
+      throw SceneError(where + ": control.generate_vertices = " + std::to_string(co.target_vertices) +
+                       ": " + (w.rfind(who, 0) == 0 ? w.substr(who.size()) : w));
+    }
     m.U = cage.U;
     m.T = cage.T;
     m.generate_seconds = cage.seconds;
@@ -130,6 +161,8 @@ SceneModels load_models(const Scene& sc, const fs::path& mesh_override) {
   if (m.U.cols() != m.dense.V.cols())
     throw SceneError(where + ": the control mesh is " + std::to_string(m.U.cols()) +
                      "D but the dense model is " + std::to_string(m.dense.V.cols()) + "D");
+  // before the embedding, the assembly and the factorisation allocate anything
+  check_run_size(where, m.dense.V.rows(), m.U.rows(), m.T.rows(), static_cast<int>(m.U.cols()));
   return m;
 }
 
@@ -187,7 +220,13 @@ std::unique_ptr<pipeline::Driver> simulation_driver(const Scene& sc, const Scene
       (m.dense.V.rowwise() - want).rowwise().squaredNorm().minCoeff(&best);
       q = m.dense.V.row(best);
     }
-    const interp::Embedding e = interp::embed(m.U, m.T, q);
+    interp::Embedding e;
+    try {
+      e = interp::embed(m.U, m.T, q);
+    } catch (const interp::Error& err) {
+      throw SceneError(sc.file.string() + ": pokes: point (" + format_num(ps.point.x()) + ", " +
+                       format_num(ps.point.y()) + ", " + format_num(ps.point.z()) + "): " + err.what());
+    }
     if (!e.outside.empty())
       throw SceneError(sc.file.string() + ": pokes: point (" + format_num(ps.point.x()) + ", " +
                        format_num(ps.point.y()) + ", " + format_num(ps.point.z()) +
@@ -196,7 +235,9 @@ std::unique_ptr<pipeline::Driver> simulation_driver(const Scene& sc, const Scene
     if (ps.force) {
       driver->add_scripted_force(ps.first, ps.last, e.element(0), bary, *ps.force);
     } else {
-      const Eigen::Vector3d target = ps.target_relative ? Eigen::Vector3d(*ps.target + q.row(0).transpose())
+      const double size = ps.offset_in_sizes ? (m.dense.V.colwise().maxCoeff() - m.dense.V.colwise().minCoeff()).norm()
+                                             : 1.0;
+      const Eigen::Vector3d target = ps.target_relative ? Eigen::Vector3d(size * *ps.target + q.row(0).transpose())
                                                         : *ps.target;
       driver->add_scripted_spring(ps.first, ps.last, e.element(0), bary, target, ps.stiffness);
     }
@@ -376,8 +417,8 @@ class Outputs {
       if (dense.cols() == 3) {
         io::write_frame(dir_ / "mesh", f, ext, m_.dense, dense, enc,
                         normals ? *normals : Eigen::MatrixXd());
-      } else {  // 2D: z = 0
-        Eigen::MatrixXd V3 = Eigen::MatrixXd::Zero(dense.rows(), 3);
+      } else {  // 2D: z = 0, or the plane of a flat model
+        Eigen::MatrixXd V3 = Eigen::MatrixXd::Constant(dense.rows(), 3, m_.flat_z.value_or(0.0));
         V3.leftCols(dense.cols()) = dense;
         io::write_frame(dir_ / "mesh", f, ext, m_.dense, V3, enc);
       }
@@ -414,14 +455,107 @@ class Outputs {
 namespace {
 // Removes the files of an earlier run (only names that run_scene writes) from `dir`, so that
 // --force does not leave its extra frames beside the new ones.
+// Also the temporaries a killed run left there (".mbi-tmp.<pid>.*" of a process that is gone).
+// A symbolic link under one of these names is removed itself, never followed.
 void clear_outputs(const fs::path& dir) {
   static const std::regex ours(R"((mesh_[0-9]+\.(obj|ply)|control_[0-9]+\.vtk|frame_[0-9]+\.png|dense\.pc2|metrics\.json))");
   std::vector<fs::path> old;
   for (const auto& e : fs::directory_iterator(dir))
-    if (e.is_regular_file() && std::regex_match(e.path().filename().string(), ours)) old.push_back(e.path());
+    if ((e.is_symlink() || e.is_regular_file()) && std::regex_match(e.path().filename().string(), ours))
+      old.push_back(e.path());
   for (const auto& p : old) fs::remove(p);
+  io::remove_stale_temporaries(dir);
 }
 }  // namespace
+
+namespace {
+
+const std::regex& output_names() {
+  static const std::regex ours(R"((mesh_[0-9]+\.(obj|ply)|control_[0-9]+\.vtk|frame_[0-9]+\.png|dense\.pc2|metrics\.json))");
+  return ours;
+}
+
+// The scene's inputs that are files (what --force must never remove or replace).
+std::vector<fs::path> input_files(const Scene& sc, const RunOptions& opt) {
+  std::vector<fs::path> in{sc.file};
+  if (!opt.mesh.empty()) in.push_back(opt.mesh);
+  if (!sc.dense.path.empty()) in.push_back(resolve(sc, sc.dense.path));
+  if (!sc.dense.image.empty()) in.push_back(resolve(sc, sc.dense.image));
+  if (!sc.control.path.empty()) {
+    fs::path c = resolve(sc, sc.control.path);
+    in.push_back(c);
+    fs::path base = c;
+    base.replace_extension();
+    for (const char* e : {".node", ".ele"}) {
+      fs::path p = base;
+      p += e;
+      in.push_back(p);
+    }
+  }
+  return in;
+}
+
+// An input in the output folder under one of the run's output names would be replaced (or, with
+// --force, removed): refused, whatever its spelling (file identity).
+void check_inputs_outside(const Scene& sc, const RunOptions& opt, const fs::path& dir) {
+  const auto dir_id = io::file_id(dir);
+  if (!dir_id) return;
+  for (const fs::path& in : input_files(sc, opt)) {
+    const auto id = io::file_id(in);
+    if (!id) continue;
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(dir, ec)) {
+      if (!std::regex_match(e.path().filename().string(), output_names())) continue;
+      if (io::file_id(e.path()) == id)
+        throw SceneError(in.string() + ": is an input and also " + e.path().string() +
+                         ", a file this run writes; an input is never overwritten, not even with --force");
+    }
+  }
+}
+
+// Pictures that could not be written fail at load, not after frame 0: 2D panels are the image's
+// size x 1.5 each, side by side with 8-pixel gaps; io::Image holds at most 16384 x 16384.
+void check_picture_size(const Scene& sc, const SceneModels& m) {
+  if (!sc.output.image || !m.image || m.dim() != 2) return;
+  const long long panels = (sc.interpolation.method == pipeline::Method::Phong ? 3 : 2) +
+                           (sc.mode == Mode::Drag && sc.interpolation.compare_pinned &&
+                                    !sc.interpolation.pin_boundary
+                                ? 1
+                                : 0);
+  const long long ow = static_cast<long long>(m.image->width) * 3 / 2;
+  const long long oh = static_cast<long long>(m.image->height) * 3 / 2;
+  const long long w = panels * ow + 8 * (panels - 1);
+  if (w > 16384 || oh > 16384)
+    throw SceneError(m.dense_name + ": a " + std::to_string(m.image->width) + " x " +
+                     std::to_string(m.image->height) + " image makes " + std::to_string(w) + " x " +
+                     std::to_string(oh) + " pictures (" + std::to_string(panels) +
+                     " panels at 1.5 times its size), more than 16384 pixels a side; use a smaller "
+                     "image or output.image = false");
+}
+
+}  // namespace
+
+fs::path output_folder(const Scene& sc, const fs::path& out_dir) {
+  if (!out_dir.empty()) return out_dir;
+  // The scene's name, verbatim, as one path component under out/: a downloaded scene never
+  // writes outside it.
+  const std::string& n = sc.name;
+  const bool bad = n.empty() || n == "." || n == ".." || n.front() == '.' ||
+                   n.find_first_of("/\\") != std::string::npos ||
+                   std::any_of(n.begin(), n.end(), [](char c) {
+                     return static_cast<unsigned char>(c) < 0x20 || c == 0x7f;
+                   }) ||
+                   n.size() > 200;
+  if (bad) {
+    std::string shown;
+    for (char c : n) shown += static_cast<unsigned char>(c) < 0x20 || c == 0x7f ? '?' : c;
+    throw SceneError(sc.file.string() + ": name = \"" + shown +
+                     "\" cannot name an output folder: it must be one file name (no '/', '\\', "
+                     "control characters, leading '.', at most 200 bytes); give --out DIR to "
+                     "choose the folder");
+  }
+  return fs::path("out") / n;
+}
 
 RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
   Scene sc = sc_in;
@@ -438,19 +572,41 @@ RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
   };
 
   RunResult res;
-  res.out_dir = opt.out_dir.empty() ? fs::path("out") / sc.name : opt.out_dir;
-  if (fs::exists(res.out_dir)) {
-    if (!fs::is_directory(res.out_dir))
-      throw SceneError(res.out_dir.string() + ": exists and is not a folder");
-    if (!fs::is_empty(res.out_dir) && !opt.force)
-      throw SceneError(res.out_dir.string() + ": exists and is not empty (use --force to overwrite)");
+  res.out_dir = output_folder(sc, opt.out_dir);
+  {
+    std::error_code ec;
+    const auto st = fs::symlink_status(res.out_dir, ec);
+    if (opt.out_dir.empty() && fs::is_symlink(st))
+      throw SceneError(res.out_dir.string() +
+                       ": is a symbolic link; a scene's default output folder is never reached "
+                       "through one (give --out to choose a folder)");
+    if (fs::exists(st) || fs::is_symlink(st)) {
+      if (!fs::is_directory(res.out_dir, ec))
+        throw SceneError(res.out_dir.string() + ": exists and is not a folder");
+      if (!fs::is_empty(res.out_dir, ec) && !opt.force)
+        throw SceneError(res.out_dir.string() + ": exists and is not empty (use --force to overwrite)");
+      check_inputs_outside(sc, opt, res.out_dir);
+    } else {
+      // the folder will be made: its parent must be a folder (or be makeable)
+      for (fs::path p = res.out_dir.parent_path(); !p.empty(); p = p.parent_path()) {
+        const auto ps = fs::status(p, ec);
+        if (fs::exists(ps)) {
+          if (!fs::is_directory(ps))
+            throw SceneError(res.out_dir.string() + ": cannot make this folder: " + p.string() +
+                             " is not a folder");
+          break;
+        }
+        if (p == p.parent_path()) break;
+      }
+    }
   }
 
   // ---------------------------------------------------------------- models, embedding, pipeline
   nlohmann::json metrics;
   auto t0 = Clock::now();
-  const SceneModels m = load_models(sc, opt.mesh);
+  const SceneModels m = load_models(sc, opt.mesh, opt.force_3d);
   const double load_ms = ms_since(t0);
+  check_picture_size(sc, m);
   const int d = m.dim();
 
   t0 = Clock::now();
@@ -533,79 +689,121 @@ RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
     return with_phong ? interp::discontinuity_table(solver, pipe.control_positions(), pipe.modified_bi_M(), pipe.phong_M())
                       : interp::discontinuity_table(solver, pipe.control_positions(), pipe.modified_bi_M());
   };
-  for (int f = 0; f <= frames; ++f) {
-    nlohmann::json fr;
-    fr["frame"] = f;
-    const pipeline::FrameResult r = pipe.step();
-    if (sim_driver && f > 0) {
-      fr["newton_iterations"] = sim_driver->last_step().newton_iterations;
-      fr["solver_iterations"] = sim_driver->last_step().solver_iterations;
-    }
-    if (!r.ok) {
+  const double roundoff = disc_roundoff(m.U);
+  // A failing step, or an error while writing a frame (a result that does not fit a file, a full
+  // disk), ends the run (exit 3): every output written so far is kept, and metrics.json tells
+  // how far the run got.
+  auto fail_run = [&](const std::string& what) {
+    if (!res.failed) {
       res.failed = true;
-      res.message = r.message;
-      break;
+      res.message = what;
     }
-    if (sim_driver) fr["time"] = sim_driver->simulator().time();
-    if (pinned && !pinned->step(false).ok) throw SceneError("the boundary-pinned comparison failed");
-    const pipeline::FrameTimings& tm = pipe.timings();
-    const bool write_now = out.due(f, frames);
-    std::vector<const Eigen::MatrixXd*> shown;
-    if (write_now && sc.output.image) {
-      // BI | modified-BI (BI | Phong | modified-BI for a Phong run)
-      std::vector<pipeline::Method> panels{pipeline::Method::BI, pipeline::Method::ModifiedBI};
-      if (pipe.method() == pipeline::Method::Phong) panels.insert(panels.begin() + 1, pipeline::Method::Phong);
-      if (d == 3) {  // drawn after the run, from the Bezier points
-        std::vector<interp::BezierPoints> B;
-        for (pipeline::Method k : panels) B.push_back(pipe.bezier_with(k));
-        pictures.add(f, pipe.control_positions(), std::move(B));
-      } else {  // the run's method is evaluated already, the others only here (| pinned)
-        others.resize(panels.size());
-        for (size_t k = 0; k < panels.size(); ++k) {
-          if (panels[k] == pipe.method()) {
-            shown.push_back(&pipe.positions());
-          } else {
-            pipe.evaluate_with(panels[k], others[k]);
-            shown.push_back(&others[k]);
-          }
-        }
-        if (pinned) shown.push_back(&pinned->positions());
+  };
+  for (int f = 0; f <= frames && !res.failed; ++f) {
+    try {
+      nlohmann::json fr;
+      fr["frame"] = f;
+      const pipeline::FrameResult r = pipe.step();
+      if (!r.ok) {
+        fail_run(r.message);
+        break;
       }
+      if (sim_driver) {
+        fr["time"] = sim_driver->simulator().time();
+        fr["newton_iterations"] = f > 0 ? sim_driver->last_step().newton_iterations : 0;
+        fr["solver_iterations"] = f > 0 ? sim_driver->last_step().solver_iterations : 0;
+      }
+      if (pinned && !pinned->step(false).ok) throw SceneError("the boundary-pinned comparison failed");
+      const pipeline::FrameTimings& tm = pipe.timings();
+      const bool write_now = out.due(f, frames);
+      std::vector<const Eigen::MatrixXd*> shown;
+      std::optional<std::vector<interp::BezierPoints>> picture;
+      if (write_now && sc.output.image) {
+        // BI | modified-BI (BI | Phong | modified-BI for a Phong run)
+        std::vector<pipeline::Method> panels{pipeline::Method::BI, pipeline::Method::ModifiedBI};
+        if (pipe.method() == pipeline::Method::Phong) panels.insert(panels.begin() + 1, pipeline::Method::Phong);
+        if (d == 3) {  // drawn after the run, from the Bezier points
+          picture.emplace();
+          for (pipeline::Method k : panels) picture->push_back(pipe.bezier_with(k));
+        } else {  // the run's method is evaluated already, the others only here (| pinned)
+          others.resize(panels.size());
+          for (size_t k = 0; k < panels.size(); ++k) {
+            if (panels[k] == pipe.method()) {
+              shown.push_back(&pipe.positions());
+            } else {
+              pipe.evaluate_with(panels[k], others[k]);
+              shown.push_back(&others[k]);
+            }
+          }
+          if (pinned) shown.push_back(&pinned->positions());
+        }
+      }
+      // metrics: BI against modified-BI (and Phong) at the same control positions
+      const bool last = f == frames;
+      fr["sim_ms"] = sim_driver && f > 0 ? sim_driver->last_step().total_ms : 0.0;
+      fr["drive_ms"] = tm.drive_ms;
+      fr["solve_ms"] = tm.solve_ms + (sim_driver ? 0.0 : tm.drive_ms);  // handles: the joint solve
+      fr["bezier_ms"] = tm.bezier_ms;
+      fr["interp_ms"] = tm.bezier_ms + tm.evaluate_ms;
+      fr["upload_ms"] = pipe.evaluator().timings().upload_ms;
+      fr["pass_ms"] = pipe.evaluator().timings().pass_ms;
+      // numbers stay numbers: positions or energies that overflow fail this step (exit 3, what
+      // was reached is kept), before anything of this frame is written
+      if (!pipe.positions().allFinite() || !pipe.control_positions().allFinite())
+        throw SceneError("the positions overflow (not finite)");
+      std::optional<interp::DiscontinuityTable> table;
+      if (sc.output.metrics || last) {
+        t0 = Clock::now();
+        try {
+          table = table_now();
+        } catch (const interp::OverflowError& e) {  // without the library function's name
+          const std::string w = e.what(), who = "discontinuity_table: ";
+          throw SceneError(w.rfind(who, 0) == 0 ? w.substr(who.size()) : w);
+        }
+        fr["disc"] = disc_json(*table, roundoff);  // throws on a non-finite value
+        if (!std::isfinite(table->e_vibr) || !std::isfinite(table->e_disc))
+          throw SceneError("E_vibr or E_disc is not finite");
+        fr["e_vibr"] = table->e_vibr;
+        fr["e_disc"] = table->e_disc;
+        fr["metrics_ms"] = ms_since(t0);
+      }
+      out.frame(f, pipe.control_positions(), pipe.positions(), shown, write_now,
+                write_now && pipe.options().normals ? &pipe.normals() : nullptr);
+      if (picture) pictures.add(f, pipe.control_positions(), std::move(*picture));
+      if (table) res.last_table = *table;
+      metrics["frames"].push_back(fr);
+      res.frames = f;
+      if (opt.progress) opt.progress(f, frames);
+    } catch (const std::exception& e) {
+      fail_run("frame " + std::to_string(f) + ": " + e.what());
     }
-    // metrics: BI against modified-BI (and Phong) at the same control positions
-    const bool last = f == frames;
-    fr["sim_ms"] = sim_driver && f > 0 ? sim_driver->last_step().total_ms : 0.0;
-    fr["drive_ms"] = tm.drive_ms;
-    fr["solve_ms"] = tm.solve_ms + (sim_driver ? 0.0 : tm.drive_ms);  // handles: the joint solve
-    fr["bezier_ms"] = tm.bezier_ms;
-    fr["interp_ms"] = tm.bezier_ms + tm.evaluate_ms;
-    fr["upload_ms"] = pipe.evaluator().timings().upload_ms;
-    fr["pass_ms"] = pipe.evaluator().timings().pass_ms;
-    if (sc.output.metrics || last) {
-      t0 = Clock::now();
-      const interp::DiscontinuityTable table = table_now();
-      res.last_table = table;
-      fr["disc"] = disc_json(table);
-      fr["e_vibr"] = table.e_vibr;
-      fr["e_disc"] = table.e_disc;
-      fr["metrics_ms"] = ms_since(t0);
-    }
-    out.frame(f, pipe.control_positions(), pipe.positions(), shown, write_now,
-              write_now && pipe.options().normals ? &pipe.normals() : nullptr);
-    metrics["frames"].push_back(fr);
-    res.frames = f;
-    if (opt.progress) opt.progress(f, frames);
   }
-  out.finish();
+  try {
+    out.finish();
+  } catch (const std::exception& e) {
+    fail_run(std::string("dense.pc2: ") + e.what());
+  }
   t0 = Clock::now();
-  pictures.write(pipe, gpu_eval, renderer.get());  // also after a failed step: what was reached
+  try {
+    pictures.write(pipe, gpu_eval, renderer.get());  // also after a failed step: what was reached
+  } catch (const std::exception& e) {
+    fail_run(std::string("pictures: ") + e.what());
+  }
   metrics["timings_ms"]["pictures"] = ms_since(t0);
-  if (res.failed && !sc.output.metrics && pipe.frame() >= 0)  // the table of the last good frame
-    res.last_table = table_now();
   metrics["frames_completed"] = res.frames;
   metrics["failure"] = res.failed ? nlohmann::json(res.message) : nlohmann::json(nullptr);
-  metrics["last_disc"] = disc_json(res.last_table);
-  if (sc.output.metrics) io::write_text_atomic(res.out_dir / "metrics.json", metrics.dump(1) + "\n");
+  metrics["last_disc"] = metrics["frames"].empty() ? nlohmann::json(nullptr)
+                                                    : metrics["frames"].back()["disc"];
+  if (metrics["last_disc"].is_null() && !metrics["frames"].empty())
+    metrics["last_disc"] = disc_json(res.last_table, roundoff);
+  if (sc.output.metrics) {
+    try {
+      io::write_text_atomic(res.out_dir / "metrics.json", metrics.dump(1) + "\n");
+    } catch (const std::exception& e) {
+      fail_run(std::string("metrics.json: ") + e.what());
+    }
+  }
+  res.roundoff = roundoff;
   return res;
 }
 

@@ -1,11 +1,17 @@
+#include <mbi/scenes/limits.hpp>
 #include <mbi/scenes/scene.hpp>
+
+#include <mbi/io/parse.hpp>
 
 #include <toml.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <set>
 #include <sstream>
+#include <vector>
 
 namespace mbi::scenes {
 namespace {
@@ -264,12 +270,133 @@ const char* gpu_name(GpuUse g) {
   return "";
 }
 
+namespace {
+
+// Refuses a TOML text whose arrays and inline tables nest deeper than kMaxSceneNesting, or
+// whose dotted keys (a.b.c = 1, [a.b.c]) have more parts than that: toml11 parses and
+// destroys nested values recursively, and 50,000 levels overflow the stack. Brackets, braces
+// and dots in strings (basic, literal, multi-line) and comments are not counted; table headers
+// ([a], [[a]]) count as the brackets they are, and close on their line.
+// Refuses what TOML forbids anywhere, before toml11 sees it: bytes that are not UTF-8 and
+// control characters other than tab, LF and CR LF (toml11 3.7 reads past its buffer on some
+// such input: found by fuzz_scene).
+void check_characters(std::string_view t, const std::string& fname) {
+  int line = 1;
+  for (std::size_t i = 0; i < t.size();) {
+    const auto c = static_cast<unsigned char>(t[i]);
+    auto refuse = [&](const std::string& what) {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "0x%02X", c);
+      throw SceneError(fname + ":" + std::to_string(line) + ": syntax error: " + what + " (byte " +
+                       hex + ")");
+    };
+    if (c == '\n') {
+      ++line;
+      ++i;
+    } else if (c == '\r') {
+      if (i + 1 >= t.size() || t[i + 1] != '\n') refuse("a CR not followed by LF");
+      ++i;
+    } else if (c < 0x20 || c == 0x7F) {
+      if (c != '\t') refuse("control character");
+      ++i;
+    } else if (c < 0x80) {
+      ++i;
+    } else {
+      // UTF-8: 2 to 4 bytes, no overlong forms, no surrogates, at most U+10FFFF
+      const int n = c >= 0xC2 && c <= 0xDF ? 2 : c >= 0xE0 && c <= 0xEF ? 3 : c >= 0xF0 && c <= 0xF4 ? 4 : 0;
+      if (n == 0 || i + n > t.size()) refuse("not UTF-8 text");
+      const auto c1 = static_cast<unsigned char>(t[i + 1]);
+      const unsigned char lo = c == 0xE0 ? 0xA0 : c == 0xF0 ? 0x90 : 0x80;
+      const unsigned char hi = c == 0xED ? 0x9F : c == 0xF4 ? 0x8F : 0xBF;
+      if (c1 < lo || c1 > hi) refuse("not UTF-8 text");
+      for (int k = 2; k < n; ++k)
+        if ((static_cast<unsigned char>(t[i + k]) & 0xC0) != 0x80) refuse("not UTF-8 text");
+      i += n;
+    }
+  }
+}
+
+void check_nesting(std::string_view t, const std::string& fname) {
+  int line = 1, dots = 0;
+  std::vector<char> open;  // the brackets open at this point: '[' or '{'
+  bool key = true;         // in a key: at a line start outside brackets, or after '{' / ','
+                           // in an inline table; until '='
+  std::size_t i = 0;
+  auto starts = [&](const char* s) { return t.compare(i, std::strlen(s), s) == 0; };
+  auto refuse = [&](const char* what) {
+    throw SceneError(fname + ":" + std::to_string(line) + ": " + what + " nest deeper than " +
+                     std::to_string(kMaxSceneNesting) + " levels");
+  };
+  auto start_key = [&] {
+    key = true;
+    dots = 0;
+  };
+  while (i < t.size()) {
+    const char ch = t[i];
+    if (ch == '\n') {
+      ++line;
+      ++i;
+      if (open.empty()) start_key();
+    } else if (ch == '#') {
+      while (i < t.size() && t[i] != '\n') ++i;
+    } else if (starts("\"\"\"") || starts("'''")) {
+      const std::string_view close = t.substr(i, 3);
+      const bool basic = ch == '"';
+      i += 3;
+      while (i < t.size() && t.compare(i, 3, close) != 0) {
+        if (t[i] == '\n') ++line;
+        i += basic && t[i] == '\\' && i + 1 < t.size() && t[i + 1] != '\n' ? 2 : 1;
+      }
+      i += 3;
+      while (i < t.size() && t[i] == ch) ++i;  // """a"""" : up to two quotes end the string
+    } else if (ch == '"' || ch == '\'') {
+      ++i;
+      while (i < t.size() && t[i] != ch && t[i] != '\n')
+        i += ch == '"' && t[i] == '\\' && i + 1 < t.size() && t[i + 1] != '\n' ? 2 : 1;
+      if (i < t.size() && t[i] == ch) ++i;
+    } else {
+      if (ch == '[' || ch == '{') {
+        open.push_back(ch);
+        if (static_cast<int>(open.size()) > kMaxSceneNesting) refuse("arrays and inline tables");
+        if (ch == '{') start_key();
+      } else if ((ch == ']' || ch == '}') && !open.empty()) {
+        open.pop_back();
+      } else if (ch == '=') {
+        key = false;
+      } else if (ch == ',' && !open.empty() && open.back() == '{') {
+        start_key();
+      } else if (ch == '.' && key && ++dots >= kMaxSceneNesting) {
+        refuse("dotted keys");
+      }
+      ++i;
+    }
+  }
+}
+
+}  // namespace
+
 Scene load_scene(const std::filesystem::path& file) {
+  std::error_code ec;
+  if (!std::filesystem::exists(file, ec)) throw SceneError(file.string() + ": no such scene file");
+  std::string text;
+  try {
+    text = io::read_bytes(file);  // regular files only: a FIFO or a device is refused, not read
+  } catch (const io::IoError& e) {
+    throw SceneError(e.what());
+  }
+  return parse_scene(text, file);
+}
+
+Scene parse_scene(std::string_view text, const std::filesystem::path& file) {
   const std::string fname = file.string();
-  if (!std::filesystem::is_regular_file(file)) throw SceneError(fname + ": no such scene file");
+  if (text.size() >= 3 && text.compare(0, 3, "\xEF\xBB\xBF") == 0) text.remove_prefix(3);  // BOM
+  check_characters(text, fname);
+  check_nesting(text, fname);
   toml_value root;
   try {
-    root = toml::parse(file);
+    // a final newline: toml11 reads past the end of some texts without one
+    std::istringstream in{std::string(text) + "\n"};
+    root = toml::parse(in, fname);
   } catch (const toml::exception& e) {
     throw SceneError(fname + ":" + std::to_string(e.location().line()) +
                      ": syntax error: " + first_line(e.what()));
@@ -306,7 +433,12 @@ Scene load_scene(const std::filesystem::path& file) {
                                   {{"paper-bar", ControlBuiltin::PaperBar},
                                    {"box", ControlBuiltin::Box},
                                    {"grid-2d", ControlBuiltin::Grid2D}});
-    sc.control.generate_vertices = t.integer("generate_vertices", 0, 4, 100000);
+    sc.control.generate_vertices = t.integer("generate_vertices", 0, 4, 1 << 30);
+    if (sc.control.generate_vertices > kMaxControlVertices)
+      t.fail("generate_vertices",
+             std::to_string(sc.control.generate_vertices) + " control vertices exceed the cap of " +
+                 std::to_string(kMaxControlVertices) +
+                 " (the precompute grows about as n^2.5; see docs/limits.md)");
     sc.control.mesher = t.choice("mesher", generate::Mesher::Voxel,
                                  {{"voxel", generate::Mesher::Voxel},
                                   {"tetgen", generate::Mesher::TetGen}});
@@ -320,14 +452,29 @@ Scene load_scene(const std::filesystem::path& file) {
       c.z() = 1;
     if (c.minCoeff() < 1 || c.maxCoeff() > 1000 || (c - c.array().round().matrix()).norm() > 0)
       t.fail("cells", "expected positive integers <= 1000");
+    if (t.has("cells")) {  // the box / grid it makes, counted in 64 bits before it is built
+      const bool flat = t.value().as_table().at("cells").as_array().size() == 2;
+      const auto nx = static_cast<long long>(c.x()), ny = static_cast<long long>(c.y()),
+                 nz = static_cast<long long>(c.z());
+      const long long verts = (nx + 1) * (ny + 1) * (flat ? 1 : nz + 1);
+      const long long elems = flat ? 2 * nx * ny : 6 * nx * ny * nz;
+      if (verts > kMaxControlVertices || elems > kMaxControlElements)
+        t.fail("cells", "makes " + std::to_string(verts) + " control vertices and " +
+                            std::to_string(elems) + (flat ? " triangles" : " tetrahedra") +
+                            ", over the cap of " + std::to_string(kMaxControlVertices) +
+                            " vertices and " + std::to_string(kMaxControlElements) +
+                            " elements (see docs/limits.md)");
+    }
     sc.control.cells = c.cast<int>();
     t.finish();
   }
   if (top.has("material")) {
     Table t = top.sub("material");
-    sc.material.young = t.number("young", sc.material.young, 0, HUGE_VAL, true);
+    // physical ranges (beyond them the stiffness and mass matrices lose their digits): the
+    // stiffest solid (diamond) is about 1.2e12 Pa, the densest element (osmium) 22,590 kg/m^3
+    sc.material.young = t.number("young", sc.material.young, 0, 1e13, true);
     sc.material.poisson = t.number("poisson", sc.material.poisson, -0.999, 0.499);
-    sc.material.density = t.number("density", sc.material.density, 0, HUGE_VAL, true);
+    sc.material.density = t.number("density", sc.material.density, 0, 1e5, true);
     t.finish();
   }
   if (top.has("simulation")) {
@@ -338,6 +485,7 @@ Scene load_scene(const std::filesystem::path& file) {
     s.frames = t.integer("frames", s.frames, 1, 1000000);
     s.newton_iterations = t.integer("newton_iterations", s.newton_iterations, 1, 100);
     s.gravity = t.vec("gravity", s.gravity);
+    if (s.gravity.norm() > 1e6) t.fail("gravity", "magnitude above 1e6 m/s^2");
     s.damping_mass = t.number("damping_mass", s.damping_mass, 0, 1e6);
     s.damping_stiffness = t.number("damping_stiffness", s.damping_stiffness, 0, 1e3);
     if (t.has("ground")) s.ground = t.number("ground", 0.0);
@@ -384,7 +532,13 @@ Scene load_scene(const std::filesystem::path& file) {
       p.target = t.vec("offset", Eigen::Vector3d::Zero());
       p.target_relative = true;
     }
-    p.stiffness = t.number("stiffness", 0.0, 0, HUGE_VAL);
+    if (t.has("offset_relative")) {
+      if (p.target) t.fail("offset_relative", "give one of target, offset or offset_relative");
+      p.target = t.vec("offset_relative", Eigen::Vector3d::Zero());
+      p.target_relative = true;
+      p.offset_in_sizes = true;
+    }
+    p.stiffness = t.number("stiffness", 0.0, 0, 1e15);
     if (p.force.has_value() == p.target.has_value())
       throw SceneError(t.where(t.value()) + ": " + t.key_name("") + ": give exactly one of force or target");
     if (p.target && p.stiffness <= 0) t.fail("stiffness", "a target poke needs stiffness > 0 (N/m)");

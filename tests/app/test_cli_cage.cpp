@@ -107,7 +107,10 @@ TEST_CASE("mbi cage writes a containing control mesh and its statistics", "[cli]
 
   // Same input, same files.
   const std::string node = slurp(base + ".node"), ele = slurp(base + ".ele");
-  REQUIRE(run("cage \"" + dense.string() + "\" --vertices 120 --out \"" + base + "\"", err) == 0);
+  // an existing output is refused without --force (and left as it was), replaced with it
+  REQUIRE(run("cage \"" + dense.string() + "\" --vertices 120 --out \"" + base + "\"", err) == 2);
+  REQUIRE(slurp(base + ".node") == node);
+  REQUIRE(run("cage \"" + dense.string() + "\" --vertices 120 --out \"" + base + "\" --force", err) == 0);
   REQUIRE(slurp(base + ".node") == node);
   REQUIRE(slurp(base + ".ele") == ele);
 }
@@ -136,7 +139,7 @@ TEST_CASE("mbi cage --mesher tetgen", "[cli][cage][tetgen]") {
   // Same input, same files.
   const std::string node = slurp(base + ".node"), ele = slurp(base + ".ele");
   REQUIRE(run("cage \"" + dense.string() + "\" --vertices 120 --mesher tetgen --out \"" + base +
-                  "\"",
+                  "\" --force",
               err) == 0);
   REQUIRE(slurp(base + ".node") == node);
   REQUIRE(slurp(base + ".ele") == ele);

@@ -289,7 +289,7 @@ TEST_CASE("deform refuses an existing output unless --force, as run does", "[cli
   std::ofstream(out) << "keep me\n";
   Result r = run_mbi(s.args(s.mesh, out), dir);
   CHECK(r.code == 2);
-  CHECK(r.err == "mbi deform: error: " + out.string() + ": exists (use --force to overwrite)\n");
+  CHECK(r.err == "mbi deform: error: --out " + out.string() + ": exists (use --force to overwrite)\n");
   CHECK(slurp(out) == "keep me\n");
   std::ofstream(dir / "stats.json") << "{}";
   r = run_mbi(s.args(s.mesh, dir / "new.obj") + " --stats " + q(dir / "stats.json"), dir);

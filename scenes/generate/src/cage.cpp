@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <limits>
 #include <stdexcept>
@@ -21,6 +22,12 @@ namespace mbi::generate {
 namespace {
 
 constexpr long long kMaxCells = 32LL * 1024 * 1024;
+// A model whose extent is below this fraction of its distance from the origin is refused: its
+// coordinates have too few significant digits left for a cage (1e-9: about 7 digits remain).
+constexpr double kMinRelativeExtent = 1e-9;
+
+CageResult make_cage_normalised(const Eigen::MatrixXd& P, const Eigen::MatrixXi& Fi,
+                                const CageOptions& options, int d);
 
 /// Occupied cells of a uniform grid (d = 2: nz = 1).
 struct Grid {
@@ -80,7 +87,7 @@ bool tri_box_overlap_2d(const std::array<Eigen::Vector2d, 3>& tri, const Eigen::
 /// Voxelises the surface for cell edges h (per axis). Returns false if the grid would be too
 /// large.
 bool voxelise(const Eigen::MatrixXd& P, const Eigen::MatrixXi& F, int d,
-              const std::array<double, 3>& h, Grid& g) {
+              const std::array<double, 3>& h, Grid& g, long long max_cells = kMaxCells) {
   g = Grid{};
   g.d = d;
   g.h = h;
@@ -91,12 +98,13 @@ bool voxelise(const Eigen::MatrixXd& P, const Eigen::MatrixXi& F, int d,
     const double ext = hi(c) - lo(c);
     const double hc = h[static_cast<std::size_t>(c)];
     const double nc = std::floor(ext / hc) + 1.0;
-    if (nc > 1e7) return false;
+    if (!(nc <= 1e7)) return false;  // also NaN (h underflowed to 0)
     g.n[static_cast<std::size_t>(c)] = static_cast<long long>(nc);
     g.origin[static_cast<std::size_t>(c)] = lo(c) - 0.5 * (nc * hc - ext);
     cells *= nc;
   }
-  if (cells > static_cast<long double>(kMaxCells)) return false;
+  // Estimated before allocating: about 10 bytes per cell (occupancy, outside flags, fill stack).
+  if (cells > static_cast<long double>(std::min(max_cells, kMaxCells))) return false;
   g.occ.assign(static_cast<std::size_t>(g.cells()), 0);
   auto cell_of = [&](double x, int c) {
     const auto i = static_cast<long long>(std::floor((x - g.origin[static_cast<std::size_t>(c)]) /
@@ -332,6 +340,30 @@ int envelope_boundary(const Grid& g, Eigen::MatrixXd* X, std::vector<std::array<
   return count;
 }
 
+/// Why TetGen must not see the envelope boundary X, B of grid g (empty: it may). The cage code
+/// works on coordinates normalised to a unit box (make_cage), so lattice points lie within a
+/// few cells of [-1, 1] and cells are at least 1e-8 wide: far inside the range where TetGen's
+/// exact predicates and its relative epsilon (1e-8) work.
+std::string tetgen_input_problem(const Eigen::MatrixXd& X, const std::vector<std::array<int, 3>>& B,
+                                 const Grid& g) {
+  if (X.rows() < 4 || B.size() < 4) return "fewer than 4 boundary points or facets";
+  if (!X.allFinite()) return "a non-finite boundary point";
+  if (X.cwiseAbs().maxCoeff() > 4.0) return "coordinates not normalised (largest " +
+                                            std::to_string(X.cwiseAbs().maxCoeff()) + ")";
+  for (int c = 0; c < 3; ++c)
+    if (!(g.h[static_cast<std::size_t>(c)] >= 1e-8)) return "a cell narrower than 1e-8 of the model";
+  for (const auto& t : B) {
+    for (int c = 0; c < 3; ++c)
+      if (t[static_cast<std::size_t>(c)] < 0 || t[static_cast<std::size_t>(c)] >= X.rows())
+        return "a facet index out of range";
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) return "a facet with a repeated corner";
+    const Eigen::Vector3d a = X.row(t[0]).transpose(), b = X.row(t[1]).transpose(),
+                          c = X.row(t[2]).transpose();
+    if (!((b - a).cross(c - a).norm() > 0)) return "a facet of zero area";
+  }
+  return {};
+}
+
 /// Tetrahedralises the envelope boundary of g with TetGen. Returns false (reason in `why`) if
 /// TetGen fails or the result does not keep the boundary vertices first and unchanged.
 bool tetgen_envelope(const Grid& g, const std::string& switches, Eigen::MatrixXd& U,
@@ -357,12 +389,29 @@ bool tetgen_envelope(const Grid& g, const std::string& switches, Eigen::MatrixXd
     f.polygonlist[0].vertexlist = new int[3];
     for (int c = 0; c < 3; ++c) f.polygonlist[0].vertexlist[c] = B[t][static_cast<std::size_t>(c)];
   }
+  // TetGen's fence: what reaches it is checked first (finite, normalised coordinates, distinct
+  // in-range facet corners, facets of non-zero area), so its internal assertions cannot fire on
+  // our input; and whatever it throws becomes a reason here.
+  const std::string bad = tetgen_input_problem(X, B, g);
+  if (!bad.empty()) {
+    why = "TetGen input refused: " + bad;
+    return false;
+  }
   std::vector<char> sw(switches.begin(), switches.end());
   sw.push_back('\0');
   try {
     tetrahedralize(sw.data(), &in, &out);
   } catch (int code) {
     why = "TetGen -" + switches + " failed with code " + std::to_string(code);
+    return false;
+  } catch (const std::bad_alloc&) {
+    why = "TetGen -" + switches + " ran out of memory";
+    return false;
+  } catch (const std::exception& e) {
+    why = "TetGen -" + switches + " failed: " + e.what();
+    return false;
+  } catch (...) {
+    why = "TetGen -" + switches + " failed with an unknown exception";
     return false;
   }
   if (out.numberofpoints < nb || out.numberoftetrahedra <= 0 || out.numberofcorners != 4) {
@@ -419,16 +468,44 @@ const std::vector<std::string>& tetgen_switch_ladder() {
 // Cell-size search shared by both meshers: bracket from h0 downwards by halving until eval(h)
 // (the vertex count at cell size h; every call is recorded by the caller) reaches the target,
 // bisect in log h, then scan `steps` sizes within a factor `spread` either side, because the
-// count is not monotone in h. The caller picks the best of what eval recorded.
+// count is not monotone in h. The caller picks the best of what eval recorded. The number of
+// evaluations is bounded (at most 60 + 8 + 30 + steps) and so is each one (eval returns INT_MAX for
+// a grid over the cell cap, without allocating it). Returns false, with the largest count seen
+// in `best_count`, when no cell size within the cap reaches the target: finer grids only add
+// empty cells (a few points, parts far apart, one stray vertex far away).
 template <typename Eval>
-void search_cell_size(Eval&& eval, double h0, int target, int steps, double spread) {
+bool search_cell_size(Eval&& eval, double h0, int target, int steps, double spread, int& best_count) {
   double h_hi = h0, h_lo = h0;
   int c_lo = eval(h_lo);
+  best_count = c_lo == std::numeric_limits<int>::max() ? 0 : c_lo;
   for (int it = 0; it < 60 && c_lo < target; ++it) {
     h_hi = h_lo;
     h_lo *= 0.5;
     c_lo = eval(h_lo);
+    if (c_lo == std::numeric_limits<int>::max()) {
+      // over the cap: the finest grids under it, between h_lo and h_hi (8 bisection steps), are
+      // the last chance to reach the target
+      bool reached = false;
+      for (int b = 0; b < 8 && !reached; ++b) {
+        const double h = std::sqrt(h_lo * h_hi);
+        const int c = eval(h);
+        if (c == std::numeric_limits<int>::max()) {
+          h_lo = h;
+        } else if (c >= target) {
+          h_lo = h;
+          c_lo = c;
+          reached = true;
+        } else {
+          h_hi = h;
+          best_count = std::max(best_count, c);
+        }
+      }
+      if (!reached) return false;
+      break;
+    }
+    best_count = std::max(best_count, c_lo);
   }
+  if (c_lo < target) return false;
   for (int it = 0; it < 30 && c_lo != target; ++it) {
     const double h = std::sqrt(h_lo * h_hi);
     const int c = eval(h);
@@ -440,12 +517,29 @@ void search_cell_size(Eval&& eval, double h0, int target, int steps, double spre
   }
   const double h_mid = std::sqrt(h_lo * h_hi);
   for (int s = 0; s < steps; ++s) eval(h_mid * std::pow(spread, -1.0 + 2.0 * (s + 0.5) / steps));
+  return true;
+}
+
+// Cell cap of one grid for a target vertex count: generous for thin and diagonal shapes (a
+// diagonal rod needs about 600 grid cells per cage vertex), bounded so that one evaluation
+// stays below about 0.3 s and 320 MB (kMaxCells).
+long long grid_cap(int target) {
+  return std::clamp<long long>(4096LL * target, 1LL << 20, kMaxCells);
+}
+
+[[noreturn]] void unreachable_target(const char* who, int target, int best, long long cap) {
+  throw CageError(std::string(who) + ": cannot reach " + std::to_string(target) +
+                  " control vertices: grids of up to " + std::to_string(cap) +
+                  " cells give at most " + std::to_string(best) +
+                  " (the model's bounding box is mostly empty: too few points, parts far apart or "
+                  "a stray vertex far away); ask for fewer vertices or clean the model");
 }
 
 CageResult make_cage_tetgen(const Eigen::MatrixXd& P, const Eigen::MatrixXi& Fi,
                             const CageOptions& options) {
   const int target = options.target_vertices;
-  const double scale = std::max((P.colwise().maxCoeff() - P.colwise().minCoeff()).maxCoeff(), 1e-300);
+  const double scale = (P.colwise().maxCoeff() - P.colwise().minCoeff()).maxCoeff();  // 1: normalised
+  const long long cap = grid_cap(target);
   struct Tried {
     double h;
     int count;  // boundary vertices
@@ -453,13 +547,15 @@ CageResult make_cage_tetgen(const Eigen::MatrixXd& P, const Eigen::MatrixXi& Fi,
   std::vector<Tried> tried;
   Grid g;
   auto eval = [&](double h) {
-    const int c = voxelise(P, Fi, 3, {h, h, h}, g) ? envelope_boundary(g, nullptr, nullptr)
-                                                  : std::numeric_limits<int>::max();
+    const int c = voxelise(P, Fi, 3, {h, h, h}, g, cap) ? envelope_boundary(g, nullptr, nullptr)
+                                                       : std::numeric_limits<int>::max();
     tried.push_back({h, c});
     return c;
   };
   // Search on the boundary vertex count (TetGen adds few vertices inside).
-  search_cell_size(eval, 1.01 * scale, target, options.search_steps, 1.5);
+  int best_count = 0;
+  if (!search_cell_size(eval, 1.01 * scale, target, options.search_steps, 1.5, best_count))
+    unreachable_target("make_cage", target, best_count, cap);
   std::stable_sort(tried.begin(), tried.end(), [](const Tried& a, const Tried& b) { return a.h > b.h; });
 
   // Run TetGen on the candidate whose boundary count plus the interior points seen so far is
@@ -487,7 +583,7 @@ CageResult make_cage_tetgen(const Eigen::MatrixXd& P, const Eigen::MatrixXi& Fi,
         done[k] = 1;
     done[pick] = 1;
     const double h = tried[pick].h;
-    if (!voxelise(P, Fi, 3, {h, h, h}, g)) continue;
+    if (!voxelise(P, Fi, 3, {h, h, h}, g, cap)) continue;
     for (const std::string& sw : ladder) {
       CageResult r;
       std::string why;
@@ -498,20 +594,20 @@ CageResult make_cage_tetgen(const Eigen::MatrixXd& P, const Eigen::MatrixXi& Fi,
       interior_est = static_cast<double>(r.U.rows()) / tried[pick].count - 1.0;
       r.min_dihedral_deg = min_dihedral_angle_deg(r.U, r.T);
       if (r.min_dihedral_deg < 5.0) {
-        last_why = "TetGen -" + sw + " at cell size " + std::to_string(h) +
+        last_why = "TetGen -" + sw + " at relative cell size " + std::to_string(h) +
                    ": min dihedral angle " + std::to_string(r.min_dihedral_deg) + " deg < 5";
         continue;
       }
       const long long dist = std::llabs(static_cast<long long>(r.U.rows()) - target);
       if (dist > 3LL * target / 10) {
-        last_why = "TetGen -" + sw + " at cell size " + std::to_string(h) + ": " +
+        last_why = "TetGen -" + sw + " at relative cell size " + std::to_string(h) + ": " +
                    std::to_string(r.U.rows()) + " vertices, not within 30% of the target";
         break;  // other switches add interior points too: try another cell size
       }
       const interp::Embedding emb = interp::embed(r.U, r.T, P);
       r.outside_points = static_cast<int>(emb.outside.size());
       if (r.outside_points != 0) {
-        last_why = "TetGen -" + sw + " at cell size " + std::to_string(h) + ": " +
+        last_why = "TetGen -" + sw + " at relative cell size " + std::to_string(h) + ": " +
                    std::to_string(r.outside_points) + " dense vertices outside";
         continue;
       }
@@ -606,16 +702,54 @@ CageResult make_cage(const Eigen::Ref<const Eigen::MatrixXd>& V,
     throw CageError("make_cage: target_vertices " +
                                 std::to_string(options.target_vertices) + " out of range [" +
                                 std::to_string(min_target) + ", 1000000]");
-  const Eigen::MatrixXd P = V.leftCols(d);
-  const Eigen::MatrixXi Fi = F;
+
+  // Scale-free: the cage is built for the model moved to the centre of its bounding box and
+  // scaled by its largest extent L (halves first: no overflow at +-1e308), then mapped back.
+  // Models of any size mesh alike; what the offset leaves no precision for is refused.
+  const Eigen::RowVector3d lo = V.colwise().minCoeff(), hi = V.colwise().maxCoeff();
+  const Eigen::RowVector3d center = 0.5 * lo + 0.5 * hi;
+  const Eigen::RowVector3d half = 0.5 * hi - 0.5 * lo;
+  const double L = 2.0 * half.maxCoeff();
+  auto fmt = [](double x) {
+    char b[40];
+    std::snprintf(b, sizeof b, "%.6g", x);
+    return std::string(b);
+  };
+  if (!(L > 0))
+    throw CageError("make_cage: degenerate model: all " + std::to_string(V.rows()) +
+                    " vertices are the same point (" + fmt(V(0, 0)) + ", " + fmt(V(0, 1)) + ", " +
+                    fmt(V(0, 2)) + "); a cage needs a model with an extent");
+  const double offset = std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
+  if (L < kMinRelativeExtent * offset)
+    throw CageError("make_cage: the model's extent " + fmt(L) + " is below the precision of its "
+                    "coordinates at offset " + fmt(offset) + " (at least " +
+                    fmt(kMinRelativeExtent) + " of the offset is needed); move it near the origin");
+  Eigen::MatrixXd Pn = (V.rowwise() - center) / L;
+  if (d == 2) Pn.col(2).setZero();
+  CageResult r = make_cage_normalised(Pn.leftCols(d), F, options, d);
+  // back to the model's units
+  r.U = (r.U * L).rowwise() + center.head(d);
+  r.cell_size *= L;
+  const interp::Embedding emb = interp::embed(r.U, r.T, V.leftCols(d));
+  r.outside_points = static_cast<int>(emb.outside.size());
+  if (r.outside_points != 0)
+    throw CageError("make_cage: " + std::to_string(r.outside_points) +
+                    " vertices fall outside the cage once it is moved back to the model's offset " +
+                    fmt(offset) + " (rounding); move the model near the origin");
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return r;
+}
+
+namespace {
+
+CageResult make_cage_normalised(const Eigen::MatrixXd& P, const Eigen::MatrixXi& Fi,
+                                const CageOptions& options, int d) {
+  const bool tetgen = options.mesher == Mesher::TetGen;
   const double ext = (P.colwise().maxCoeff() - P.colwise().minCoeff()).maxCoeff();
   const double scale = ext > 0 ? ext : 1.0;
   const int target = options.target_vertices;
-  if (tetgen) {
-    CageResult r = make_cage_tetgen(P, Fi, options);
-    r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    return r;
-  }
+  const long long cap = grid_cap(target);
+  if (tetgen) return make_cage_tetgen(P, Fi, options);
 
   const Eigen::VectorXd extent = P.colwise().maxCoeff() - P.colwise().minCoeff();
   struct Tried {
@@ -626,7 +760,7 @@ CageResult make_cage(const Eigen::Ref<const Eigen::MatrixXd>& V,
   std::vector<Tried> tried;
   Grid g;
   auto eval_h = [&](const std::array<double, 3>& h) {
-    const int c = voxelise(P, Fi, d, h, g) ? count_vertices(g) : std::numeric_limits<int>::max();
+    const int c = voxelise(P, Fi, d, h, g, cap) ? count_vertices(g) : std::numeric_limits<int>::max();
     double mn = h[0], mx = h[0];
     for (int a = 1; a < d; ++a) {
       mn = std::min(mn, h[static_cast<std::size_t>(a)]);
@@ -636,7 +770,9 @@ CageResult make_cage(const Eigen::Ref<const Eigen::MatrixXd>& V,
     return c;
   };
   auto eval = [&](double h) { return eval_h({h, h, h}); };
-  search_cell_size(eval, 1.01 * scale, target, options.search_steps, 1.2);
+  int best_count = 0;
+  if (!search_cell_size(eval, 1.01 * scale, target, options.search_steps, 1.2, best_count))
+    unreachable_target("make_cage", target, best_count, cap);
   // Coarse grids jump in large steps; cells with slightly different edges per axis (one cell
   // more or less along some axes, aspect ratio <= 1.6) fill the gaps between those steps.
   auto by_distance = [&](const Tried& a, const Tried& b) {
@@ -694,7 +830,7 @@ CageResult make_cage(const Eigen::Ref<const Eigen::MatrixXd>& V,
 
   CageResult res;
   for (std::size_t k = 0; k < tried.size() && k < 8; ++k) {
-    if (!voxelise(P, Fi, d, tried[k].h, g)) continue;
+    if (!voxelise(P, Fi, d, tried[k].h, g, cap)) continue;
     build_mesh(g, res.U, res.T);
     res.cell_size = *std::max_element(tried[k].h.begin(), tried[k].h.begin() + d);
     const interp::Embedding emb = interp::embed(res.U, res.T, P);
@@ -705,8 +841,9 @@ CageResult make_cage(const Eigen::Ref<const Eigen::MatrixXd>& V,
     throw CageError("make_cage: no cell size found whose cage contains every vertex (" +
                              std::to_string(res.outside_points) + " outside)");
   res.min_dihedral_deg = min_dihedral_angle_deg(res.U, res.T);
-  res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;
 }
+
+}  // namespace
 
 }  // namespace mbi::generate

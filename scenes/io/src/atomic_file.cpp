@@ -1,6 +1,8 @@
 #include <mbi/io/atomic_file.hpp>
 
 #include <fcntl.h>
+#include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -15,35 +17,46 @@ namespace {
   throw IoError(target.string() + ": " + what);
 }
 
-}  // namespace
+std::atomic<unsigned> counter{0};
 
-AtomicFile::AtomicFile(const std::filesystem::path& target) : target_(target) {
-  static std::atomic<unsigned> counter{0};
+// "<dir>/.mbi-tmp.<pid>.<n>-<random>.<name>", created exclusively (O_EXCL: never an existing
+// file, never through a symbolic link). Returns the open descriptor; throws naming `target`.
+int create_temporary(const std::filesystem::path& target, const std::string& name,
+                     std::filesystem::path& made) {
   if (target.filename().empty()) fail(target, "no file name to write");
   std::filesystem::path dir = target.parent_path();
   std::error_code ec;
-  if (!dir.empty() && !std::filesystem::is_directory(dir, ec)) fail(target, "folder does not exist");
+  if (!dir.empty() && !std::filesystem::is_directory(dir, ec)) {
+    if (std::filesystem::exists(dir, ec))
+      fail(target, "cannot write here: " + dir.string() + " is not a folder");
+    fail(target, "folder does not exist");
+  }
   if (dir.empty()) dir = ".";
   std::random_device rd;
-  for (int attempt = 0; attempt < 16 && !file_; ++attempt) {
-    // ".<name>.<pid>-<counter>-<random>.tmp": unique per process, call and attempt; O_EXCL
-    // guarantees that no existing file (a user's, or a symlink) is opened.
-    temporary_ = dir / ("." + target.filename().string() + "." + std::to_string(::getpid()) + "-" +
-                        std::to_string(counter++) + "-" + std::to_string(rd() % 1000000) + ".tmp");
-    const int fd = ::open(temporary_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-    if (fd < 0) {
-      if (errno == EEXIST) continue;
-      fail(target, std::string("cannot create a temporary file in its folder (") +
-                       std::strerror(errno) + ")");
-    }
-    file_ = ::fdopen(fd, "wb");
-    if (!file_) {
-      ::close(fd);
-      std::filesystem::remove(temporary_, ec);
-      fail(target, "cannot open a temporary file in its folder");
-    }
+  for (int attempt = 0; attempt < 16; ++attempt) {
+    made = dir / (std::string(kTemporaryPrefix) + std::to_string(::getpid()) + "." +
+                  std::to_string(counter++) + "-" + std::to_string(rd() % 1000000) + "." + name);
+    const int fd = ::open(made.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    if (fd >= 0) return fd;
+    if (errno == EEXIST) continue;
+    fail(target, std::string("cannot create a temporary file in its folder (") +
+                     std::strerror(errno) + ")");
   }
-  if (!file_) fail(target, "cannot find a free temporary file name in its folder");
+  fail(target, "cannot find a free temporary file name in its folder");
+}
+
+}  // namespace
+
+AtomicFile::AtomicFile(const std::filesystem::path& target) : target_(target) {
+  // ".mbi-tmp.<pid>.<n>-<random>.<name>.tmp": unique per process, call and attempt
+  const int fd = create_temporary(target, target.filename().string() + ".tmp", temporary_);
+  file_ = ::fdopen(fd, "wb");
+  if (!file_) {
+    ::close(fd);
+    std::error_code ec;
+    std::filesystem::remove(temporary_, ec);
+    fail(target, "cannot open a temporary file in its folder");
+  }
 }
 
 AtomicFile::~AtomicFile() {
@@ -86,6 +99,120 @@ void write_file_atomic(const std::filesystem::path& target,
 
 void write_text_atomic(const std::filesystem::path& target, const std::string& text) {
   write_file_atomic(target, [&](AtomicFile& f) { f.write(text); });
+}
+
+int remove_stale_temporaries(const std::filesystem::path& dir) {
+  std::error_code ec;
+  int removed = 0;
+  const std::string prefix = kTemporaryPrefix;
+  std::vector<std::filesystem::path> stale;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind(prefix, 0) != 0 || e.is_symlink(ec) || !e.is_regular_file(ec)) continue;
+    const std::size_t dot = name.find('.', prefix.size());
+    if (dot == std::string::npos) continue;
+    long pid = 0;
+    try {
+      pid = std::stol(name.substr(prefix.size(), dot - prefix.size()));
+    } catch (const std::exception&) {
+      continue;
+    }
+    if (pid <= 0) continue;
+    if (pid == ::getpid()) continue;                       // ours, in use
+    if (::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM) continue;  // still running
+    stale.push_back(e.path());
+  }
+  for (const auto& p : stale)
+    if (std::filesystem::remove(p, ec)) ++removed;
+  return removed;
+}
+
+std::optional<FileId> file_id(const std::filesystem::path& p) {
+  struct stat st {};
+  if (::stat(p.c_str(), &st) != 0) return std::nullopt;
+  return FileId{static_cast<unsigned long long>(st.st_dev), static_cast<unsigned long long>(st.st_ino)};
+}
+
+namespace {
+// The folder's identity and the file name: equal for two spellings of one (maybe absent) target.
+std::optional<std::pair<FileId, std::string>> where(const std::filesystem::path& p) {
+  std::filesystem::path dir = p.parent_path();
+  if (dir.empty()) dir = ".";
+  const auto id = file_id(dir);
+  if (!id) return std::nullopt;
+  return std::pair{*id, p.filename().string()};
+}
+}  // namespace
+
+OutputSet::~OutputSet() {
+  if (committed_) return;
+  std::error_code ec;
+  for (const Entry& e : entries_) std::filesystem::remove(e.staging, ec);
+}
+
+std::size_t OutputSet::add(const std::filesystem::path& target, const std::string& what,
+                           std::optional<std::size_t> stem_of) {
+  const std::string named = what.empty() ? target.string() : what + " " + target.string();
+  if (target.filename().empty() || target.filename() == "." || target.filename() == "..")
+    throw IoError(named + ": not a file name");
+  std::error_code ec;
+  const auto st = std::filesystem::symlink_status(target, ec);
+  const bool present = !ec && std::filesystem::exists(st);
+  // an input, whatever the spelling, hard link or symbolic link: never, even with --force
+  if (const auto id = file_id(target)) {
+    for (const auto& in : inputs_)
+      if (file_id(in) == id)
+        throw IoError(named + ": is an input (" + in.string() +
+                      "); an input is never overwritten, not even with --force");
+  }
+  // another output of this command
+  const auto here = where(target);
+  for (const Entry& e : entries_)
+    if (e.target == target || (here && where(e.target) == here) ||
+        (file_id(target) && file_id(target) == file_id(e.target)))
+      throw IoError(named + ": is also another output of this command (" + e.target.string() + ")");
+  if (present) {
+    if (std::filesystem::is_directory(target, ec)) throw IoError(named + ": is a folder");
+    if (!force_) throw IoError(named + ": exists (use --force to overwrite)");
+    if (!std::filesystem::is_regular_file(st) && !std::filesystem::is_symlink(st))
+      throw IoError(named + ": exists and is not a regular file");
+  }
+  Entry e;
+  e.target = target;
+  if (stem_of) {
+    e.staging = entries_.at(*stem_of).staging;
+    e.staging.replace_extension(target.extension());
+    const int fd = ::open(e.staging.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    if (fd < 0)
+      fail(target, std::string("cannot create a temporary file in its folder (") +
+                       std::strerror(errno) + ")");
+    ::close(fd);
+  } else {
+    try {
+      const int fd = create_temporary(target, target.filename().string(), e.staging);
+      ::close(fd);
+    } catch (const IoError& err) {
+      if (what.empty()) throw;
+      throw IoError(what + " " + err.what());
+    }
+  }
+  entries_.push_back(std::move(e));
+  return entries_.size() - 1;
+}
+
+void OutputSet::commit() {
+  if (committed_) throw IoError("outputs committed twice");
+  std::error_code ec;
+  for (const Entry& e : entries_)
+    if (!std::filesystem::is_regular_file(std::filesystem::symlink_status(e.staging, ec)))
+      throw IoError(e.target.string() + ": was not written");
+  // Renames within one folder: they do not fail for a checked target. The target's symbolic
+  // link, if any, is replaced, never followed.
+  for (const Entry& e : entries_) {
+    std::filesystem::rename(e.staging, e.target, ec);
+    if (ec) throw IoError(e.target.string() + ": cannot move the finished file into place: " + ec.message());
+  }
+  committed_ = true;
 }
 
 }  // namespace mbi::io

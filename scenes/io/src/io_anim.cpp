@@ -48,7 +48,7 @@ void put_le(AtomicFile& f, T x) {
   f.write(b, sizeof(T));
 }
 template <typename T>
-T get_le(const std::string& data, std::size_t at) {
+T get_le(std::string_view data, std::size_t at) {
   unsigned char b[sizeof(T)];
   std::memcpy(b, data.data() + at, sizeof(T));
   if constexpr (std::endian::native == std::endian::big)
@@ -107,8 +107,9 @@ void Pc2Writer::finish() {
   out_.reset();
 }
 
-PointCache read_pc2(const path& file) {
-  const std::string data = detail::slurp(file);
+PointCache read_pc2(const path& file) { return parse_pc2(detail::slurp(file), file); }
+
+PointCache parse_pc2(std::string_view data, const path& file) {
   if (data.size() < 32) fail(file, 0, "too short for a PC2 header (32 bytes)");
   if (std::memcmp(data.data(), kMagic, 12) != 0) fail(file, 0, "not a PC2 file (magic)");
   const auto version = get_le<std::int32_t>(data, 12);
@@ -116,6 +117,8 @@ PointCache read_pc2(const path& file) {
   const auto np = get_le<std::int32_t>(data, 16);
   const auto ns = get_le<std::int32_t>(data, 28);
   if (np < 0 || ns < 0) fail(file, 0, "negative numPoints or numSamples");
+  if (np == 0 && ns > 0)  // would loop over samples that take no bytes
+    fail(file, 0, "header says " + std::to_string(ns) + " samples of 0 points");
   const unsigned long long need = 32ull + 12ull * static_cast<unsigned long long>(np) *
                                               static_cast<unsigned long long>(ns);
   if (need != data.size())

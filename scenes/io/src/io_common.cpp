@@ -2,7 +2,14 @@
 
 #include <mbi/io/atomic_file.hpp>
 
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <limits>
 
 #include <atomic>
 #include <cctype>
@@ -20,18 +27,82 @@ void fail(const std::filesystem::path& file, int line, const std::string& what) 
   throw IoError(msg);
 }
 
+namespace {
+// What a file system object is, for messages: "a directory", "a FIFO (named pipe)", ...
+const char* kind_of(mode_t mode) {
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISFIFO(mode)) return "a FIFO (named pipe)";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a regular file";
+}
+}  // namespace
+
+void require_regular_file(const std::filesystem::path& file) {
+  struct stat st {};
+  if (::stat(file.c_str(), &st) != 0) {
+    const int err = errno;
+    fail(file, 0, std::string("cannot open for reading (") + std::strerror(err) + ")");
+  }
+  if (!S_ISREG(st.st_mode)) fail(file, 0, std::string("is ") + kind_of(st.st_mode) + ", not a regular file");
+}
+
 std::string slurp(const std::filesystem::path& file) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(file, ec)) fail(file, 0, "is a directory, not a file");
-  std::ifstream in(file, std::ios::binary);
-  if (!in) fail(file, 0, "cannot open for reading");
-  in.seekg(0, std::ios::end);
-  const std::streamoff size = in.tellg();
-  if (size < 0) fail(file, 0, "cannot determine the file size");
-  in.seekg(0, std::ios::beg);
+  // The type is checked before opening (a FIFO would block open() and read() forever, a device
+  // such as /dev/zero never ends), and again on the descriptor (the path may have changed).
+  require_regular_file(file);
+  struct stat st {};
+  const int fd = ::open(file.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
+    const int err = errno;
+    fail(file, 0, std::string("cannot open for reading (") + std::strerror(err) + ")");
+  }
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  if (::fstat(fd, &st) != 0) fail(file, 0, "cannot determine the file size");
+  if (!S_ISREG(st.st_mode)) fail(file, 0, std::string("is ") + kind_of(st.st_mode) + ", not a regular file");
+  const auto size = static_cast<std::uintmax_t>(st.st_size);
+  if (size > kMaxFileBytes)
+    fail(file, 0, "file of " + std::to_string(size) + " bytes is larger than the " +
+                      std::to_string(kMaxFileBytes) + " bytes a reader accepts");
   std::string data(static_cast<std::size_t>(size), '\0');
-  if (size > 0 && !in.read(data.data(), size)) fail(file, 0, "read error");
+  std::size_t got = 0;
+  while (got < data.size()) {
+    const ssize_t r = ::read(fd, data.data() + got, data.size() - got);
+    if (r < 0 && errno == EINTR) continue;
+    if (r < 0) {
+      const int err = errno;
+      fail(file, 0, std::string("read error (") + std::strerror(err) + ")");
+    }
+    if (r == 0) break;  // shrank while being read: what was there
+    got += static_cast<std::size_t>(r);
+  }
+  data.resize(got);
   return data;
+}
+
+std::string_view skip_bom(std::string_view data) {
+  if (data.size() >= 3 && static_cast<unsigned char>(data[0]) == 0xEF &&
+      static_cast<unsigned char>(data[1]) == 0xBB && static_cast<unsigned char>(data[2]) == 0xBF)
+    data.remove_prefix(3);
+  return data;
+}
+
+int LineCounter::line_of(std::size_t at) {
+  at = std::min(at, text_.size());
+  if (at < at_) {  // backwards (rare: error messages): count from the start
+    at_ = 0;
+    line_ = 1;
+  }
+  // line ends: LF, CR LF (one), lone CR
+  for (std::size_t i = at_; i < at; ++i)
+    if (text_[i] == '\n' || (text_[i] == '\r' && (i + 1 >= text_.size() || text_[i + 1] != '\n')))
+      ++line_;
+  at_ = at;
+  return static_cast<int>(std::min<long long>(line_, std::numeric_limits<int>::max()));
 }
 
 std::vector<Line> tokenize(std::string_view text, char comment, std::string_view extra_seps) {
@@ -39,8 +110,11 @@ std::vector<Line> tokenize(std::string_view text, char comment, std::string_view
   int number = 0;
   std::size_t pos = 0;
   while (pos < text.size()) {
-    std::size_t end = text.find('\n', pos);
+    // A line ends at LF, CR LF or a lone CR (old Mac files).
+    std::size_t end = text.find_first_of("\r\n", pos);
     if (end == std::string_view::npos) end = text.size();
+    const std::size_t next =
+        end + (end + 1 < text.size() && text[end] == '\r' && text[end + 1] == '\n' ? 2 : 1);
     ++number;
     std::string_view s = text.substr(pos, end - pos);
     if (comment != 0) {
@@ -61,7 +135,7 @@ std::vector<Line> tokenize(std::string_view text, char comment, std::string_view
       if (i > b) line.tok.push_back(s.substr(b, i - b));
     }
     if (!line.tok.empty()) lines.push_back(std::move(line));
-    pos = end + 1;
+    pos = next;
   }
   return lines;
 }
@@ -95,6 +169,25 @@ long long to_int(std::string_view s, const std::filesystem::path& file, int line
          field + ": " + std::to_string(x) + " out of range [" + std::to_string(lo) + ", " +
              std::to_string(hi) + "]");
   return x;
+}
+
+double to_coordinate(std::string_view s, const std::filesystem::path& file, int line,
+                     const std::string& field) {
+  const double x = to_double(s, file, line, field);
+  check_coordinate(x, file, line, field);
+  return x;
+}
+
+void check_coordinate(double x, const std::filesystem::path& file, int line,
+                      const std::string& field) {
+  if (!std::isfinite(x)) fail(file, line, field + ": non-finite coordinate");
+  if (std::abs(x) > kMaxCoordinate)
+  {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.6g", x);
+    fail(file, line, field + ": " + buf +
+                         " is larger in magnitude than 1e300, the largest coordinate accepted");
+  }
 }
 
 std::string fmt(double x) {
@@ -141,3 +234,7 @@ void check_indices(const Eigen::Ref<const Eigen::MatrixXi>& E, long long n,
 }
 
 }  // namespace mbi::io::detail
+
+namespace mbi::io {
+std::string read_bytes(const std::filesystem::path& file) { return detail::slurp(file); }
+}  // namespace mbi::io

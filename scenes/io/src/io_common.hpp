@@ -2,6 +2,7 @@
 // Internal helpers of the IO code: error messages, whole-file reading, line tokenising, number
 // parsing and atomic writing.
 #include <mbi/io/io.hpp>
+#include <mbi/io/parse.hpp>
 
 #include <cstdint>
 #include <cstdio>
@@ -15,8 +16,38 @@ namespace mbi::io::detail {
 /// Throws IoError "<file>:<line>: what" (line > 0) or "<file>: what".
 [[noreturn]] void fail(const std::filesystem::path& file, int line, const std::string& what);
 
-/// The whole file as bytes. Throws IoError if it cannot be opened or read.
+/// The whole file as bytes. Only regular files are read: a directory, a FIFO, a device
+/// (/dev/zero) or a socket is refused before it is opened (and the file is opened with
+/// O_NONBLOCK, so a FIFO swapped in between cannot block), as is a file larger than
+/// kMaxFileBytes. Throws IoError naming the file and what it is.
 std::string slurp(const std::filesystem::path& file);
+/// Throws IoError unless `file` is a regular file (naming what it is: a directory, a FIFO, ...).
+void require_regular_file(const std::filesystem::path& file);
+
+/// `data` without a leading UTF-8 byte-order mark (EF BB BF), if it has one.
+std::string_view skip_bom(std::string_view data);
+
+/// Parses a coordinate: a finite double of magnitude at most kMaxCoordinate; otherwise throws
+/// "<file>:<line>: <field>: ...".
+double to_coordinate(std::string_view s, const std::filesystem::path& file, int line,
+                     const std::string& field);
+/// Checks a coordinate read from binary data (finite, magnitude at most kMaxCoordinate).
+void check_coordinate(double x, const std::filesystem::path& file, int line,
+                      const std::string& field);
+
+/// Counts the newlines of a text incrementally: line_of(at) is the 1-based line of byte `at`,
+/// in amortised O(distance from the previous query), so that naming lines while parsing a
+/// large file does not cost O(size) per number.
+class LineCounter {
+ public:
+  explicit LineCounter(std::string_view text) : text_(text) {}
+  int line_of(std::size_t at);
+
+ private:
+  std::string_view text_;
+  std::size_t at_ = 0;
+  long long line_ = 1;
+};
 
 struct Line {
   int number = 0;                      ///< 1-based line number in the file

@@ -20,7 +20,7 @@ using detail::fail;
 using detail::Line;
 using std::filesystem::path;
 
-constexpr long long kMax = 2147483647LL;
+constexpr long long kMax = kMaxCount;
 
 path with_ext(const path& base, const char* ext) {
   path p = base;
@@ -43,9 +43,8 @@ struct NodeFile {
   long long base = 0;
 };
 
-NodeFile parse_node(const path& file) {
-  const std::string text = detail::slurp(file);
-  const auto lines = detail::tokenize(text);
+NodeFile node_file(std::string_view text, const path& file) {
+  const auto lines = detail::tokenize(detail::skip_bom(text));
   if (lines.empty()) fail(file, 0, "empty .node file");
   const Line& h = lines[0];
   if (h.tok.size() < 2) fail(file, h.number, "header: expected '<points> <dim> <attributes> <markers>'");
@@ -78,8 +77,8 @@ NodeFile parse_node(const path& file) {
     }
     for (long long c = 0; c < d; ++c)
       out.X(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(c)) =
-          detail::to_double(l.tok[static_cast<std::size_t>(1 + c)], file, l.number,
-                            field + " coordinate " + std::to_string(c));
+          detail::to_coordinate(l.tok[static_cast<std::size_t>(1 + c)], file, l.number,
+                                field + " coordinate " + std::to_string(c));
   }
   return out;
 }
@@ -114,18 +113,26 @@ void check_elements(const path& file, const std::vector<int>& line_of, const Eig
 
 }  // namespace
 
-Eigen::MatrixXd read_node(const path& file) { return parse_node(file).X; }
+Eigen::MatrixXd read_node(const path& file) { return node_file(detail::slurp(file), file).X; }
+
+Eigen::MatrixXd parse_node(std::string_view data, const path& file) {
+  return node_file(data, file).X;
+}
 
 ControlMesh read_tetgen(const path& p) {
+  const std::string node = detail::slurp(with_ext(p, ".node"));
+  return parse_tetgen(node, detail::slurp(with_ext(p, ".ele")), p);
+}
+
+ControlMesh parse_tetgen(std::string_view node_text, std::string_view ele_text, const path& p) {
   const path node = with_ext(p, ".node");
   const path ele = with_ext(p, ".ele");
-  NodeFile nf = parse_node(node);
+  NodeFile nf = node_file(node_text, node);
   ControlMesh m;
   m.U = std::move(nf.X);
   const long long n = m.U.rows();
   const int d = static_cast<int>(m.U.cols());
-  const std::string text = detail::slurp(ele);
-  const auto lines = detail::tokenize(text);
+  const auto lines = detail::tokenize(detail::skip_bom(ele_text));
   if (lines.empty()) fail(ele, 0, "empty .ele file");
   const Line& h = lines[0];
   if (h.tok.size() < 2) fail(ele, h.number, "header: expected '<elements> <nodes per element> <attributes>'");
@@ -213,16 +220,17 @@ namespace {
 // endianness, found from the int 1 after the format line). Messages name the line (ASCII) or
 // the byte offset (binary).
 struct MshCursor {
-  const std::string& d;
+  std::string_view d;
   const path& file;
   std::size_t pos = 0;
   std::size_t last = 0;  // where the last word / value began
   bool binary = false, swap = false;
+  detail::LineCounter lines{d};
 
-  int line_at(std::size_t at) const {
-    return binary && at > 0 ? 0 : 1 + static_cast<int>(std::count(d.begin(), d.begin() + static_cast<long>(std::min(at, d.size())), '\n'));
+  int line_at(std::size_t at) {
+    return binary && at > 0 ? 0 : lines.line_of(at);
   }
-  [[noreturn]] void fail_here(const std::string& what) const {
+  [[noreturn]] void fail_here(const std::string& what) {
     if (binary) fail(file, 0, what + " (byte " + std::to_string(last) + ")");
     fail(file, line_at(last), what);
   }
@@ -237,7 +245,7 @@ struct MshCursor {
     }
     last = pos;
     while (pos < d.size() && !std::isspace(static_cast<unsigned char>(d[pos]))) ++pos;
-    return std::string_view(d).substr(last, pos - last);
+    return d.substr(last, pos - last);
   }
   // After a section keyword of a binary file: exactly one newline, then binary data.
   void end_of_line() {
@@ -336,8 +344,8 @@ struct MshData {
   std::map<int, long long> count_of_type;
 };
 
-MshData parse_msh(const path& file) {
-  const std::string data = detail::slurp(file);
+MshData parse_msh(std::string_view bytes, const path& file) {
+  const std::string_view data = detail::skip_bom(bytes);
   MshCursor c{data, file};
   MshData out;
   std::string version;
@@ -350,7 +358,11 @@ MshData parse_msh(const path& file) {
   };
   auto node_xyz = [&](const std::string& field, int params) {
     std::array<double, 3> p{};
-    for (int k = 0; k < 3; ++k) p[static_cast<std::size_t>(k)] = c.real(field + " coordinate " + std::to_string(k));
+    for (int k = 0; k < 3; ++k) {
+      const double x = c.real(field + " coordinate " + std::to_string(k));
+      if (!(std::abs(x) <= kMaxCoordinate)) c.fail_here(field + ": coordinate larger in magnitude than 1e300, the largest accepted");
+      p[static_cast<std::size_t>(k)] = x;
+    }
     for (int k = 0; k < params; ++k) c.real(field + " parametric coordinate");  // -save_parametric
     return p;
   };
@@ -513,7 +525,7 @@ MshData parse_msh(const path& file) {
       // Any other section ($PhysicalNames, $Entities, $NodeData, ...): skipped to its $End line.
       const std::string end = "\n$End" + std::string(key.substr(1));
       const std::size_t at = data.find(end, c.pos);
-      if (at == std::string::npos) c.fail_here("section " + std::string(key) + " not closed");
+      if (at == std::string_view::npos) c.fail_here("section " + std::string(key) + " not closed");
       c.pos = at + end.size();
     } else {
       c.fail_here("unexpected '" + std::string(key.substr(0, 40)) + "' outside a section");
@@ -532,8 +544,10 @@ std::string found_list(const MshData& m) {
 
 }  // namespace
 
-ControlMesh read_gmsh(const path& file) {
-  const MshData msh = parse_msh(file);
+ControlMesh read_gmsh(const path& file) { return parse_gmsh(detail::slurp(file), file); }
+
+ControlMesh parse_gmsh(std::string_view data, const path& file) {
+  const MshData msh = parse_msh(data, file);
   const bool three_d = !msh.tets.empty();
   if (!three_d && msh.tris.empty())
     fail(file, 0, "no tetrahedra or triangles (found " + found_list(msh) + ")");
@@ -568,7 +582,11 @@ ControlMesh read_gmsh(const path& file) {
 }
 
 Eigen::MatrixXd read_gmsh_nodes(const path& file) {
-  const MshData msh = parse_msh(file);
+  return parse_gmsh_nodes(detail::slurp(file), file);
+}
+
+Eigen::MatrixXd parse_gmsh_nodes(std::string_view data, const path& file) {
+  const MshData msh = parse_msh(data, file);
   Eigen::MatrixXd X(static_cast<Eigen::Index>(msh.xyz.size()), 3);
   for (std::size_t v = 0; v < msh.xyz.size(); ++v)
     for (int c = 0; c < 3; ++c) X(static_cast<Eigen::Index>(v), c) = msh.xyz[v][static_cast<std::size_t>(c)];
@@ -609,13 +627,19 @@ std::size_t vtk_size(const std::string& type) {
   return 4;
 }
 
-VtkData parse_vtk(const path& file) {
-  const std::string data = detail::slurp(file);
+VtkData parse_vtk(std::string_view bytes, const path& file) {
+  const std::string_view data = detail::skip_bom(bytes);
   if (data.compare(0, 22, "# vtk DataFile Version") != 0)
     fail(file, 1, "not a legacy VTK file (expected '# vtk DataFile Version')");
-  std::size_t at = data.find('\n');
-  const std::size_t title_end = at == std::string::npos ? at : data.find('\n', at + 1);
-  if (title_end == std::string::npos) fail(file, 0, "file truncated: expected the title and ASCII/BINARY lines");
+  // the version line and the title: each ends at LF, CR LF or a lone CR
+  auto line_end = [&](std::size_t from) {
+    const std::size_t e = data.find_first_of("\r\n", from);
+    if (e == std::string_view::npos) return e;
+    return e + (data[e] == '\r' && e + 1 < data.size() && data[e + 1] == '\n' ? 1 : 0);
+  };
+  std::size_t at = line_end(0);
+  const std::size_t title_end = at == std::string_view::npos ? at : line_end(at + 1);
+  if (title_end == std::string_view::npos) fail(file, 0, "file truncated: expected the title and ASCII/BINARY lines");
   MshCursor c{data, file};
   c.pos = title_end + 1;
   const std::string_view enc = c.word("ASCII or BINARY");
@@ -657,6 +681,8 @@ VtkData parse_vtk(const path& file) {
         for (int k = 0; k < 3; ++k) {
           const double x = vtk_value(c, type, "point " + std::to_string(i) + " coordinate " + std::to_string(k));
           if (!std::isfinite(x)) c.fail_here("point " + std::to_string(i) + ": non-finite coordinate");
+          if (std::abs(x) > kMaxCoordinate)
+            c.fail_here("point " + std::to_string(i) + ": coordinate larger in magnitude than 1e300, the largest accepted");
           out.P(i, k) = x;
         }
       c.binary = false;
@@ -724,8 +750,10 @@ VtkData parse_vtk(const path& file) {
 
 }  // namespace
 
-ControlMesh read_vtk_mesh(const path& file) {
-  const VtkData v = parse_vtk(file);
+ControlMesh read_vtk_mesh(const path& file) { return parse_vtk_mesh(detail::slurp(file), file); }
+
+ControlMesh parse_vtk_mesh(std::string_view data, const path& file) {
+  const VtkData v = parse_vtk(data, file);
   // tetrahedra (10; quadratic 24 by its corners), else triangles (5; quadratic 22)
   long long tets = 0, tris = 0, higher = 0;
   std::map<int, long long> other;
@@ -762,7 +790,13 @@ ControlMesh read_vtk_mesh(const path& file) {
   return m;
 }
 
-Eigen::MatrixXd read_vtk_points(const path& file) { return parse_vtk(file).P; }
+Eigen::MatrixXd read_vtk_points(const path& file) {
+  return parse_vtk_points(detail::slurp(file), file);
+}
+
+Eigen::MatrixXd parse_vtk_points(std::string_view data, const path& file) {
+  return parse_vtk(data, file).P;
+}
 
 ControlMesh read_control_mesh(const path& file) {
   const std::string ext = detail::extension(file);

@@ -4,21 +4,28 @@
 namespace mbi::io {
 
 Eigen::MatrixXd read_points(const std::filesystem::path& file) {
-  const std::string text = detail::slurp(file);
-  const auto lines = detail::tokenize(text, '#', ",");
+  return parse_points(detail::slurp(file), file);
+}
+
+Eigen::MatrixXd parse_points(std::string_view data, const std::filesystem::path& file) {
+  const auto lines = detail::tokenize(detail::skip_bom(data), '#', ",");
   if (lines.empty()) return Eigen::MatrixXd(0, 0);
   const std::size_t d = lines[0].tok.size();
+  // Every line's count first: the matrix is allocated only for as many numbers as there are
+  // (a first line of a million numbers followed by short lines must not allocate lines x 1e6).
+  for (std::size_t i = 0; i < lines.size(); ++i)
+    if (lines[i].tok.size() != d)
+      detail::fail(file, lines[i].number, "point " + std::to_string(i) + ": " +
+                                              std::to_string(lines[i].tok.size()) +
+                                              " numbers, expected " + std::to_string(d) +
+                                              " as on the first line");
   Eigen::MatrixXd P(static_cast<Eigen::Index>(lines.size()), static_cast<Eigen::Index>(d));
   for (std::size_t i = 0; i < lines.size(); ++i) {
     const auto& l = lines[i];
     const std::string field = "point " + std::to_string(i);
-    if (l.tok.size() != d)
-      detail::fail(file, l.number, field + ": " + std::to_string(l.tok.size()) +
-                                       " numbers, expected " + std::to_string(d) +
-                                       " as on the first line");
     for (std::size_t c = 0; c < d; ++c)
       P(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(c)) =
-          detail::to_double(l.tok[c], file, l.number, field + " coordinate " + std::to_string(c));
+          detail::to_coordinate(l.tok[c], file, l.number, field + " coordinate " + std::to_string(c));
   }
   return P;
 }

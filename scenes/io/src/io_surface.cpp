@@ -101,23 +101,47 @@ void set_vertices(SurfaceMesh& m, const std::vector<std::array<double, 3>>& v) {
     for (int c = 0; c < 3; ++c) m.V(static_cast<Eigen::Index>(i), c) = v[i][c];
 }
 
+// v / |v| computed without overflow (v scaled by its largest component first); false when v
+// is zero or not finite.
+bool unit_vector(Eigen::RowVector3d& v) {
+  const double s = v.cwiseAbs().maxCoeff();
+  if (!(s > 0) || !std::isfinite(s)) return false;
+  v /= s;
+  v /= v.norm();
+  return true;
+}
+
 // Area-weighted vertex normals of the triangles F, written into the rows of N where `have` is
-// false; every row of N is then made unit length ((0, 0, 1) for a vertex without area).
+// false; every row of N is then made unit length ((0, 0, 1) for a vertex without area). Far-out
+// coordinates (up to the readers' 1e300) overflow the area weights: such a vertex gets the sum
+// of its faces' unit normals instead, so the normals are always finite.
 void complete_normals(SurfaceMesh& m, std::vector<char> have) {
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(m.V.rows(), 3);
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(m.V.rows(), 3), U = A;
   for (Eigen::Index f = 0; f < m.F.rows(); ++f) {
-    const Eigen::RowVector3d a = m.V.row(m.F(f, 0)), b = m.V.row(m.F(f, 1)), c = m.V.row(m.F(f, 2));
-    const Eigen::RowVector3d n = (b - a).cross(c - a);
-    for (int k = 0; k < 3; ++k) A.row(m.F(f, k)) += n;
+    // edges from halves: no overflow for coordinates below the largest double / 2
+    const Eigen::RowVector3d a = 0.5 * m.V.row(m.F(f, 0)), e1 = 0.5 * m.V.row(m.F(f, 1)) - a,
+                             e2 = 0.5 * m.V.row(m.F(f, 2)) - a;
+    const Eigen::RowVector3d n = 4.0 * e1.cross(e2);
+    const double s = std::max(e1.cwiseAbs().maxCoeff(), e2.cwiseAbs().maxCoeff());
+    Eigen::RowVector3d u = s > 0 ? Eigen::RowVector3d((e1 / s).cross(e2 / s)) : Eigen::RowVector3d::Zero();
+    if (!unit_vector(u)) u.setZero();
+    for (int k = 0; k < 3; ++k) {
+      A.row(m.F(f, k)) += n;
+      U.row(m.F(f, k)) += u;
+    }
   }
   for (Eigen::Index i = 0; i < m.N.rows(); ++i) {
-    double len = m.N.row(i).norm();
-    if (!have[static_cast<std::size_t>(i)] || !(len > 0)) {
-      m.N.row(i) = A.row(i);
-      len = m.N.row(i).norm();
+    Eigen::RowVector3d n = m.N.row(i);
+    if (have[static_cast<std::size_t>(i)] && unit_vector(n)) {
+      m.N.row(i) = n;
+      continue;
     }
-    if (len > 0) m.N.row(i) /= len;
-    else m.N.row(i) << 0, 0, 1;
+    n = A.row(i);
+    if (!unit_vector(n)) {
+      n = U.row(i);
+      if (!unit_vector(n)) n << 0, 0, 1;
+    }
+    m.N.row(i) = n;
   }
 }
 
@@ -140,8 +164,8 @@ long long obj_index(long long i, long long count, const path& file, int line,
   return i - 1;
 }
 
-SurfaceMesh read_obj(const path& file) {
-  const std::string text = detail::slurp(file);
+SurfaceMesh read_obj(std::string_view data, const path& file) {
+  const std::string_view text = detail::skip_bom(data);
   auto attr = std::make_shared<SurfaceAttributes>();
   attr->format = ".obj";
   std::vector<std::array<double, 3>> v, vn;
@@ -155,12 +179,12 @@ SurfaceMesh read_obj(const path& file) {
   int number = 0;
   std::size_t pos = 0;
   while (pos < text.size()) {
-    std::size_t end = text.find('\n', pos);
-    if (end == std::string::npos) end = text.size();
+    // A line ends at LF, CR LF or a lone CR.
+    std::size_t end = text.find_first_of("\r\n", pos);
+    if (end == std::string_view::npos) end = text.size();
     ++number;
     std::string_view raw(text.data() + pos, end - pos);
-    pos = end + 1;
-    while (!raw.empty() && raw.back() == '\r') raw.remove_suffix(1);
+    pos = end + (end + 1 < text.size() && text[end] == '\r' && text[end + 1] == '\n' ? 2 : 1);
     const auto tl = detail::tokenize(raw);
     if (tl.empty()) continue;  // blank line or comment
     const auto& tok = tl[0].tok;
@@ -169,9 +193,9 @@ SurfaceMesh read_obj(const path& file) {
                                                   ": expected 3 coordinates");
       std::array<double, 3> p{};
       for (int c = 0; c < 3; ++c)
-        p[c] = detail::to_double(tok[c + 1], file, number,
-                                 "vertex " + std::to_string(v.size()) + " coordinate " +
-                                     std::to_string(c));
+        p[c] = detail::to_coordinate(tok[c + 1], file, number,
+                                     "vertex " + std::to_string(v.size()) + " coordinate " +
+                                         std::to_string(c));
       std::string tail;
       if (tok.size() > 4) {  // w or vertex colours: kept as written
         tail.assign(tok[4].data(),
@@ -272,9 +296,8 @@ SurfaceMesh read_obj(const path& file) {
 }
 
 // ---------------------------------------------------------------------------------------- OFF
-SurfaceMesh read_off(const path& file) {
-  const std::string text = detail::slurp(file);
-  const auto lines = detail::tokenize(text);
+SurfaceMesh read_off(std::string_view data, const path& file) {
+  const auto lines = detail::tokenize(detail::skip_bom(data));
   if (lines.empty()) fail(file, 0, "empty file (expected an OFF header)");
   const auto& h = lines[0];
   const std::string_view magic = h.tok[0];
@@ -308,8 +331,8 @@ SurfaceMesh read_off(const path& file) {
     const std::string field = "vertex " + std::to_string(i);
     if (l.tok.size() < 3) fail(file, l.number, field + ": expected 3 coordinates");
     for (int c = 0; c < 3; ++c)
-      v[static_cast<std::size_t>(i)][c] =
-          detail::to_double(l.tok[c], file, l.number, field + " coordinate " + std::to_string(c));
+      v[static_cast<std::size_t>(i)][c] = detail::to_coordinate(
+          l.tok[c], file, l.number, field + " coordinate " + std::to_string(c));
   }
   m.polygons.reserve(static_cast<std::size_t>(nf));
   for (long long f = 0; f < nf; ++f, ++at) {
@@ -360,7 +383,7 @@ std::size_t ply_size(PlyType t) {
 }
 
 struct BinaryCursor {
-  const std::string& data;
+  std::string_view data;
   std::size_t pos;
   bool swap;
   const path& file;
@@ -386,15 +409,15 @@ struct BinaryCursor {
   }
 };
 
-SurfaceMesh read_ply(const path& file) {
-  const std::string data = detail::slurp(file);
+SurfaceMesh read_ply(std::string_view bytes, const path& file) {
+  const std::string_view data = detail::skip_bom(bytes);
   // Header: text lines up to "end_header".
   std::size_t body = std::string::npos;
   {
     std::size_t p = 0;
     while (p < data.size()) {
       std::size_t e = data.find('\n', p);
-      if (e == std::string::npos) break;
+      if (e == std::string_view::npos) break;
       std::string_view l(data.data() + p, e - p);
       while (!l.empty() && (l.back() == '\r' || l.back() == ' ')) l.remove_suffix(1);
       if (l == "end_header") {
@@ -405,7 +428,7 @@ SurfaceMesh read_ply(const path& file) {
     }
   }
   if (data.compare(0, 3, "ply") != 0) fail(file, 1, "not a PLY file (missing 'ply' magic)");
-  if (body == std::string::npos) fail(file, 0, "header: missing 'end_header'");
+  if (body == std::string_view::npos) fail(file, 0, "header: missing 'end_header'");
   const auto header = detail::tokenize(std::string_view(data.data(), body), 0);
   enum class Format { none, ascii, le, be } format = Format::none;
   auto attr = std::make_shared<SurfaceAttributes>();
@@ -491,7 +514,7 @@ SurfaceMesh read_ply(const path& file) {
   const std::size_t remaining = data.size() - body;
   std::vector<detail::Line> lines;
   if (format == Format::ascii) {
-    lines = detail::tokenize(std::string_view(data).substr(body), 0);
+    lines = detail::tokenize(data.substr(body), 0);
     long long total = 0;
     for (const auto& e : elements) total += e.count;
     if (total > static_cast<long long>(lines.size()))
@@ -500,9 +523,11 @@ SurfaceMesh read_ply(const path& file) {
   } else {
     long double need = 0;
     for (const auto& e : elements) {
+      // An element without properties takes no bytes, but its records are still looped over:
+      // count it as one byte each, so that a short file cannot declare 2^31 of them.
       std::size_t min = 0;
       for (const auto& p : e.props) min += p.list ? ply_size(p.count_type) : ply_size(p.type);
-      need += static_cast<long double>(e.count) * static_cast<long double>(min);
+      need += static_cast<long double>(e.count) * static_cast<long double>(std::max<std::size_t>(min, 1));
     }
     if (need > static_cast<long double>(remaining))
       fail(file, 0, "header: element counts need at least " +
@@ -587,7 +612,7 @@ SurfaceMesh read_ply(const path& file) {
         p = {scalars[static_cast<std::size_t>(px)], scalars[static_cast<std::size_t>(py)],
              scalars[static_cast<std::size_t>(pz)]};
         for (double c : p)
-          if (!std::isfinite(c)) fail(file, 0, field + ": non-finite coordinate");
+          detail::check_coordinate(c, file, format == Format::ascii ? header_lines + lines[line_at - 1].number : 0, field);
         if (normals)
           vnorm[static_cast<std::size_t>(i)] = {scalars[static_cast<std::size_t>(pnx)],
                                                 scalars[static_cast<std::size_t>(pny)],
@@ -630,8 +655,18 @@ struct Merger {
   }
 };
 
-SurfaceMesh read_stl(const path& file) {
-  const std::string data = detail::slurp(file);
+SurfaceMesh read_stl(std::string_view bytes, const path& file) {
+  // A binary STL is recognised by its size (84 + 50 per triangle); its 80-byte header may hold
+  // anything, so a byte-order mark is skipped only for ASCII.
+  std::string_view data = bytes;
+  if (data.size() >= 84) {
+    std::uint32_t n = 0;
+    std::memcpy(&n, data.data() + 80, 4);
+    if constexpr (std::endian::native == std::endian::big) n = __builtin_bswap32(n);
+    if (84 + 50ull * n != data.size()) data = detail::skip_bom(data);
+  } else {
+    data = detail::skip_bom(data);
+  }
   Merger merge;
   SurfaceMesh m;
   bool binary = false;
@@ -654,7 +689,7 @@ SurfaceMesh read_stl(const path& file) {
     std::uint32_t n = 0;
     std::memcpy(&n, data.data() + 80, 4);
     if constexpr (std::endian::native == std::endian::big) n = __builtin_bswap32(n);
-    attr->stl_header = data.substr(0, 80);
+    attr->stl_header = std::string(data.substr(0, 80));
     bool any_attribute = false;
     for (std::uint32_t t = 0; t < n; ++t) {
       std::uint16_t word = 0;
@@ -670,8 +705,7 @@ SurfaceMesh read_stl(const path& file) {
           std::memcpy(&bits, data.data() + 84 + 50ull * t + 12 + 12 * k + 4 * c, 4);
           if constexpr (std::endian::native == std::endian::big) bits = __builtin_bswap32(bits);
           p[c] = static_cast<double>(std::bit_cast<float>(bits));
-          if (!std::isfinite(p[c]))
-            fail(file, 0, "triangle " + std::to_string(t) + ": non-finite coordinate");
+          detail::check_coordinate(p[c], file, 0, "triangle " + std::to_string(t));
         }
         tri.push_back(merge.add(p));
       }
@@ -696,7 +730,7 @@ SurfaceMesh read_stl(const path& file) {
         if (l.tok.size() != 4) fail(file, l.number, field + ": expected 'vertex x y z'");
         if (facet_line == 0) fail(file, l.number, "vertex outside a facet");
         std::array<double, 3> p{};
-        for (int c = 0; c < 3; ++c) p[c] = detail::to_double(l.tok[c + 1], file, l.number, field);
+        for (int c = 0; c < 3; ++c) p[c] = detail::to_coordinate(l.tok[c + 1], file, l.number, field);
         tri.push_back(merge.add(p));
       } else if (l.tok[0] == "endfacet") {
         if (tri.size() != 3) fail(file, l.number, field + ": expected 3 vertices, found " +
@@ -909,13 +943,22 @@ bool is_surface_file(const path& file) {
   return ext == ".obj" || ext == ".off" || ext == ".ply" || ext == ".stl";
 }
 
+SurfaceMesh parse_surface(std::string_view data, const path& file) {
+  const std::string ext = detail::extension(file);
+  if (ext == ".obj") return read_obj(data, file);
+  if (ext == ".off") return read_off(data, file);
+  if (ext == ".ply") return read_ply(data, file);
+  if (ext == ".stl") return read_stl(data, file);
+  fail(file, 0, "unknown surface format '" + ext + "' (expected .obj, .off, .ply or .stl)");
+}
+
 SurfaceMesh read_surface(const path& file) {
   const std::string ext = detail::extension(file);
-  if (ext == ".obj") return read_obj(file);
-  if (ext == ".off") return read_off(file);
-  if (ext == ".ply") return read_ply(file);
-  if (ext == ".stl") return read_stl(file);
-  fail(file, 0, "unknown surface format '" + ext + "' (expected .obj, .off, .ply or .stl)");
+  std::error_code ec;  // what was given (a FIFO, a directory) is named before its extension
+  if (std::filesystem::exists(file, ec)) detail::require_regular_file(file);
+  if (!is_surface_file(file))
+    fail(file, 0, "unknown surface format '" + ext + "' (expected .obj, .off, .ply or .stl)");
+  return parse_surface(detail::slurp(file), file);
 }
 
 void write_surface(const path& file, const SurfaceMesh& mesh, Encoding encoding) {

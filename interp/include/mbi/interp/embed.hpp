@@ -21,8 +21,12 @@ struct Embedding {
 
 /// Locates every row of P (p x d) in the control mesh (U, T) with a uniform-grid acceleration
 /// structure (no loop over all elements per point). A point is inside an element when all its
-/// coordinates are >= -tol (tol = 1e-9). Throws Error on a non-finite point (naming it) or a
-/// dimension mismatch.
+/// coordinates are >= -tol (tol = 1e-9). Scale-free: the search runs on coordinates moved to
+/// the centre of U's bounding box and divided by its largest extent s, so meshes of any size
+/// (1e-100 to 1e100) at any offset embed alike; distances and gradients are in P's units.
+/// Throws Error on a non-finite point (naming it), on a point farther than 1e12 s from the
+/// mesh's bounding box (naming it: extrapolating from there means nothing), on a control mesh of
+/// zero extent or too small for its gradients to be finite, or on a dimension mismatch.
 Embedding embed(const Eigen::Ref<const Eigen::MatrixXd>& U,
                 const Eigen::Ref<const Eigen::MatrixXi>& T,
                 const Eigen::Ref<const Eigen::MatrixXd>& P);

@@ -20,6 +20,13 @@ Eigen::VectorXd face_discontinuity(const Eigen::Ref<const Eigen::MatrixXd>& U,
 
 Summary summarize(const Eigen::Ref<const Eigen::VectorXd>& values);
 
+/// A metric that does not fit in a double (e.g. energies of deformed positions near 1e300,
+/// which grow with their square). Thrown instead of returning inf or NaN.
+class OverflowError : public Error {
+ public:
+  using Error::Error;
+};
+
 struct DiscontinuityTable {
   Summary bi, modified_bi;
   Summary ratio;        ///< bi / modified_bi, field by field (inf when modified_bi is 0)
@@ -33,6 +40,8 @@ struct DiscontinuityTable {
 };
 
 /// Table 2 for one frame: BI (M = 0) against modified-BI with matrices M from solver.solve(X).
+/// Throws OverflowError when an energy, a summary or E_total is not finite (X or M too large);
+/// only the ratios may be inf (a zero denominator), never NaN.
 DiscontinuityTable discontinuity_table(const ModifiedBI& solver,
                                        const Eigen::Ref<const Eigen::MatrixXd>& X,
                                        const VertexMatrices& M);

@@ -31,12 +31,24 @@ struct SceneModels {
   std::optional<io::Image> image;  ///< 2D: the texture (pixels; dense V are pixel coordinates)
   std::string dense_name, control_name;
   double generate_seconds = 0;     ///< time spent generating the control mesh, s
+  /// A flat 3-coordinate dense model run in 2D: its plane z (written back in every mesh).
+  std::optional<double> flat_z;
   int dim() const { return static_cast<int>(U.cols()); }
 };
 
 /// Loads (or builds) the dense model and the control mesh of a scene. mesh_override replaces the
 /// scene's dense model. Throws SceneError / io::IoError naming the file.
-SceneModels load_models(const Scene& scene, const std::filesystem::path& mesh_override = {});
+///
+/// 2D as everywhere in mbi: a dense model with 3 coordinates all at one z is flat, and runs in
+/// 2D (z dropped, kept in flat_z) unless `force_3d`, or unless the control mesh is read from a
+/// 3D file (its dimension decides, as in mbi deform).
+SceneModels load_models(const Scene& scene, const std::filesystem::path& mesh_override = {},
+                        bool force_3d = false);
+
+/// The output folder of a run: `out_dir` when given, else "out/<scene name>". The name must be
+/// one safe file name (no '/', '\\', control characters, leading '.'); otherwise SceneError
+/// (a downloaded scene never writes outside out/).
+std::filesystem::path output_folder(const Scene& scene, const std::filesystem::path& out_dir);
 
 /// The frame pipeline of a scene: a SimulatorDriver (material, time stepping, constraints,
 /// scripted pokes) in simulate mode, a HandleDriver following the [[drags]] keyframes in drag
@@ -56,6 +68,7 @@ struct RunOptions {
   std::filesystem::path mesh;            ///< replaces the scene's dense model
   std::optional<pipeline::Method> method;  ///< replaces the scene's
   bool force = false;                    ///< overwrite a non-empty output folder
+  bool force_3d = false;                 ///< a flat dense model stays 3D (load_models)
   std::optional<GpuUse> gpu;             ///< replaces the scene's interpolation.gpu
   /// Progress callback (frame done, frames total); may be empty.
   std::function<void(int, int)> progress;
@@ -74,6 +87,7 @@ struct RunResult {
   mbi::interp::DiscontinuityTable last_table;  ///< of the last completed frame
   int outside_points = 0;
   std::string evaluator;  ///< what evaluated the dense points, e.g. "gpu (llvmpipe ...)"
+  double roundoff = 0;    ///< round-off level of the discontinuities (report.hpp disc_roundoff)
 };
 
 /// Runs a scene headless. Throws on bad input before anything is written (mbi::Error: SceneError,

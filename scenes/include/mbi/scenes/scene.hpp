@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace mbi::scenes {
@@ -111,6 +112,9 @@ struct PokeSpec {
   Eigen::Vector3d point = Eigen::Vector3d::Zero();
   bool relative = false;  ///< point holds the `at` fractions
   bool target_relative = false;  ///< target is an offset from the poked point (m)
+  /// `offset_relative`: the offset is in units of the dense model's size (its bounding-box
+  /// diagonal), so a scene pokes a 15 cm model and a 6 m one alike
+  bool offset_in_sizes = false;
   std::optional<Eigen::Vector3d> force;
   std::optional<Eigen::Vector3d> target;
   double stiffness = 0.0;
@@ -159,8 +163,17 @@ struct Scene {
   OutputSpec output;
 };
 
-/// Reads and checks a scene file. Throws SceneError naming file, line and key.
+/// Deepest nesting of arrays and inline tables a scene file may have (a scene needs 3), and the
+/// most parts a dotted key may have. Deeper files are refused, naming the line, before the TOML
+/// parser (recursive) runs.
+inline constexpr int kMaxSceneNesting = 16;
+
+/// Reads and checks a scene file (a regular file: a directory, FIFO or device is refused).
+/// Throws SceneError naming file, line and key.
 Scene load_scene(const std::filesystem::path& file);
+/// load_scene on the text of a scene; `file` names it in messages and is where relative paths
+/// of the scene start from. Nothing is read from disk.
+Scene parse_scene(std::string_view text, const std::filesystem::path& file);
 
 /// Nodes of U (n x d) selected by s (sorted, unique). Throws SceneError if an index is out of
 /// range or nothing is selected.

@@ -5,12 +5,19 @@
 // commit() renames it over the target. Destroyed without commit() (an exception, a failed
 // check), it removes the temporary file, so a failed write leaves neither a half-written target
 // nor a stray temporary behind.
+//
+// Temporary names start with kTemporaryPrefix (".mbi-tmp.") and carry the writer's process id:
+// "<folder>/.mbi-tmp.<pid>.<n>-<random>.<target name>". A process killed with SIGKILL can leave
+// one behind (never a partial file under a final name); remove_stale_temporaries() removes those
+// whose process is gone (mbi run --force does so in its folder).
 #include <mbi/io/io.hpp>
 
 #include <cstdio>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
+#include <vector>
 
 namespace mbi::io {
 
@@ -46,5 +53,59 @@ void write_file_atomic(const std::filesystem::path& target,
                        const std::function<void(AtomicFile&)>& body);
 /// Writes `text` to `target` atomically.
 void write_text_atomic(const std::filesystem::path& target, const std::string& text);
+
+/// The prefix of every temporary file name of mbi.
+inline constexpr const char* kTemporaryPrefix = ".mbi-tmp.";
+
+/// Removes the temporary files ("<dir>/.mbi-tmp.<pid>.*") whose writing process no longer runs
+/// (left by a killed process); returns how many were removed. Symbolic links are never followed.
+int remove_stale_temporaries(const std::filesystem::path& dir);
+
+/// The identity of an existing file (st_dev, st_ino after following symbolic links); nullopt
+/// when it does not exist. Two spellings, hard links or symbolic links of one file compare equal.
+struct FileId {
+  unsigned long long dev = 0, ino = 0;
+  bool operator==(const FileId&) const = default;
+};
+std::optional<FileId> file_id(const std::filesystem::path& p);
+
+/// The outputs of one command, written all or nothing. add() reserves, before any work, a
+/// staging file beside each target (created exclusively: this checks that the folder exists and
+/// is writable); the command writes each output to staging(i) with the usual writers; commit()
+/// renames every staging file over its target at the end. Destroyed without commit() (an error
+/// on the way), it removes every staging file, and no target has been created or replaced.
+///
+/// The overwrite rule of every mbi command: an existing target is refused unless `force`; a
+/// target that is one of the command's inputs (by file identity: other spellings, hard links and
+/// symbolic links included) or another output of the same command is refused even with `force`.
+class OutputSet {
+ public:
+  OutputSet(std::vector<std::filesystem::path> inputs, bool force)
+      : inputs_(std::move(inputs)), force_(force) {}
+  ~OutputSet();
+  OutputSet(const OutputSet&) = delete;
+  OutputSet& operator=(const OutputSet&) = delete;
+
+  /// Checks `target` against the rule above and reserves its staging file; returns its index.
+  /// `what` names the option in messages (e.g. "--stats"). Throws IoError.
+  /// `stem_of`: the staging name is that of output `stem_of` with target's extension (for
+  /// files written together from one base name, e.g. BASE.node and BASE.ele by write_tetgen).
+  std::size_t add(const std::filesystem::path& target, const std::string& what,
+                  std::optional<std::size_t> stem_of = std::nullopt);
+  /// Where to write output i (beside its target, same extension).
+  const std::filesystem::path& staging(std::size_t i) const { return entries_.at(i).staging; }
+  const std::filesystem::path& target(std::size_t i) const { return entries_.at(i).target; }
+  /// Renames every staging file over its target. Throws IoError if one is missing (not written).
+  void commit();
+
+ private:
+  struct Entry {
+    std::filesystem::path target, staging;
+  };
+  std::vector<std::filesystem::path> inputs_;
+  bool force_;
+  std::vector<Entry> entries_;
+  bool committed_ = false;
+};
 
 }  // namespace mbi::io

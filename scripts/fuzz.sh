@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# Runs the libFuzzer targets of the readers (tests/fuzz/, docs/hardening.md).
+#
+#   bash scripts/fuzz.sh [SECONDS] [TARGET...]
+#
+# SECONDS per target (default 30); TARGETs from: obj off ply stl points tetgen gmsh vtk pc2 png
+# scene (default: all). Configures and builds a separate clang build in build/fuzz
+# (-DMBI_FUZZ=ON: the readers only, with -fsanitize=fuzzer,address,undefined), then runs the
+# targets one after another. Each starts from its seeds (tests/fuzz/<target>/, read only) and
+# the inputs found by earlier runs (build/fuzz/corpus/<target>/, kept between runs). A crash,
+# leak, sanitizer report, timeout (10 s for one input) or out-of-memory (2 GB) stops that
+# target; its input is saved as build/fuzz/artifacts/<target>/crash-* (or leak-, timeout-,
+# oom-) and the script exits 1 after the other targets have run.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+secs=${1:-30}
+shift || true
+all=(obj off ply stl points tetgen gmsh vtk pc2 png scene)
+targets=("$@")
+[ ${#targets[@]} -gt 0 ] || targets=("${all[@]}")
+for t in "${targets[@]}"; do
+  [[ " ${all[*]} " == *" $t "* ]] || { echo "fuzz.sh: unknown target '$t' (known: ${all[*]})" >&2; exit 2; }
+done
+
+launcher=()
+if command -v ccache >/dev/null; then
+  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
+fi
+if [ ! -f build/fuzz/CMakeCache.txt ]; then
+  CC=clang CXX=clang++ cmake -S . -B build/fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DMBI_FUZZ=ON -DMBI_BUILD_TESTS=OFF -DMBI_BUILD_BENCH=OFF "${launcher[@]}" >/dev/null
+fi
+cmake --build build/fuzz -j "${MBI_JOBS:-$(nproc)}" --target "${targets[@]/#/fuzz_}"
+
+failed=()
+for t in "${targets[@]}"; do
+  corpus=build/fuzz/corpus/$t
+  artifacts=build/fuzz/artifacts/$t
+  mkdir -p "$corpus" "$artifacts"
+  echo "== fuzz_$t: ${secs} s"
+  log=build/fuzz/fuzz_$t.log
+  if ! build/fuzz/tests/fuzz/fuzz_$t -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 \
+       -print_final_stats=1 \
+       -artifact_prefix="$artifacts/" "$corpus" "tests/fuzz/$t" >"$log" 2>&1; then
+    failed+=("$t")
+    tail -n 40 "$log"
+    echo "fuzz_$t FAILED: input(s) in $artifacts/, log $log" >&2
+  else
+    grep -E "^stat::number_of_executed_units|^stat::new_units_added" "$log" | tr '\n' ' ' || true
+    echo
+  fi
+done
+if [ ${#failed[@]} -gt 0 ]; then
+  echo "fuzz.sh: failures in: ${failed[*]}" >&2
+  exit 1
+fi
+echo "fuzz.sh: ${#targets[@]} target(s), ${secs} s each, no failure"

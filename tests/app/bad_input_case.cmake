@@ -1,0 +1,89 @@
+# One case of the bad-input corpus (tests/data/bad/*.cases), run by CTest as
+#   cmake -DEXE=<mbi> -DBAD=<tests/data/bad> -DWORK=<fresh folder> -DEXIT=<code>
+#         -DOUTPUTS=none|any -DMESSAGE=<regex> -DARGS=<;-list> -P bad_input_case.cmake
+# Placeholders in ARGS: @BAD@ the corpus folder, @OUT@ an empty folder for this case,
+# @FIFO@ a named pipe made in @OUT@, @DIR@ an (empty) directory made in @OUT@, @FILE@ a
+# regular file made in @OUT@ (so @FILE@/x cannot be created).
+# Checks: the exit code, stderr matching MESSAGE, no crash (sanitizer reports fail the case), no
+# output left under @OUT@ when OUTPUTS is none, and every corpus file unchanged (inputs are
+# never modified).
+cmake_minimum_required(VERSION 3.25)
+foreach(v EXE BAD WORK EXIT OUTPUTS MESSAGE)
+  if(NOT DEFINED ${v})
+    message(FATAL_ERROR "bad_input_case.cmake: -D${v}= missing")
+  endif()
+endforeach()
+
+file(REMOVE_RECURSE "${WORK}")
+set(out "${WORK}/out")
+file(MAKE_DIRECTORY "${out}")
+set(setup_made "")
+set(args "")
+foreach(a IN LISTS ARGS)
+  if(a MATCHES "@FIFO@" AND NOT EXISTS "${out}/in.fifo")
+    execute_process(COMMAND mkfifo "${out}/in.fifo" RESULT_VARIABLE rv)
+    if(NOT rv EQUAL 0)
+      message(FATAL_ERROR "cannot make a FIFO")
+    endif()
+    list(APPEND setup_made "${out}/in.fifo")
+  endif()
+  if(a MATCHES "@DIR@" AND NOT EXISTS "${out}/a-dir")
+    file(MAKE_DIRECTORY "${out}/a-dir")
+    list(APPEND setup_made "${out}/a-dir")
+  endif()
+  if(a MATCHES "@FILE@" AND NOT EXISTS "${out}/a-file")
+    file(WRITE "${out}/a-file" "not a folder\n")
+    list(APPEND setup_made "${out}/a-file")
+  endif()
+  string(REPLACE "@BAD@" "${BAD}" a "${a}")
+  string(REPLACE "@FIFO@" "${out}/in.fifo" a "${a}")
+  string(REPLACE "@DIR@" "${out}/a-dir" a "${a}")
+  string(REPLACE "@FILE@" "${out}/a-file" a "${a}")
+  string(REPLACE "@OUT@" "${out}" a "${a}")
+  list(APPEND args "${a}")
+endforeach()
+
+# Fingerprint of the corpus before the run.
+file(GLOB_RECURSE corpus LIST_DIRECTORIES false "${BAD}/*")
+set(before "")
+foreach(f IN LISTS corpus)
+  file(SHA256 "${f}" h)
+  string(APPEND before "${f} ${h}\n")
+endforeach()
+
+execute_process(COMMAND "${EXE}" ${args}
+  WORKING_DIRECTORY "${WORK}"
+  RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr TIMEOUT 60)
+
+set(failures "")
+if(NOT code STREQUAL "${EXIT}")
+  string(APPEND failures "exit code '${code}', expected ${EXIT}\n")
+endif()
+if(NOT stderr MATCHES "${MESSAGE}")
+  string(APPEND failures "stderr does not match '${MESSAGE}'\n")
+endif()
+if(stderr MATCHES "AddressSanitizer|UndefinedBehaviorSanitizer|runtime error:|LeakSanitizer")
+  string(APPEND failures "sanitizer report\n")
+endif()
+if(OUTPUTS STREQUAL "none")
+  file(GLOB_RECURSE left LIST_DIRECTORIES true "${out}/*")
+  foreach(f IN LISTS left)
+    list(FIND setup_made "${f}" made)
+    if(made EQUAL -1)
+      string(APPEND failures "output left behind: ${f}\n")
+    endif()
+  endforeach()
+endif()
+set(after "")
+foreach(f IN LISTS corpus)
+  file(SHA256 "${f}" h)
+  string(APPEND after "${f} ${h}\n")
+endforeach()
+if(NOT before STREQUAL after)
+  string(APPEND failures "a corpus file was modified\n")
+endif()
+
+if(failures)
+  list(JOIN args " " shown)
+  message(FATAL_ERROR "mbi ${shown}\n${failures}--- stderr ---\n${stderr}--- stdout ---\n${stdout}")
+endif()

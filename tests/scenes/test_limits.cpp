@@ -1,0 +1,79 @@
+// Resource caps and physical ranges of scenes (issue 14): refused at load, quickly, with the
+// estimate and the key in the message; the memory estimate against the machine's memory.
+#include <mbi/scenes/limits.hpp>
+#include <mbi/scenes/scene.hpp>
+
+#include <catch2/catch.hpp>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace fs = std::filesystem;
+using namespace mbi::scenes;
+
+namespace {
+fs::path write_scene(const std::string& name, const std::string& text) {
+  const fs::path dir = fs::temp_directory_path() / "mbi_test_limits";
+  fs::create_directories(dir);
+  const fs::path p = dir / name;
+  std::ofstream(p) << text;
+  return p;
+}
+}  // namespace
+
+TEST_CASE("scenes over the control-mesh caps are refused at load within a second", "[limits]") {
+  const std::string head = "[dense]\nbuiltin = \"paper-bar\"\n[control]\n";
+  const std::vector<std::pair<std::string, std::string>> cases{
+      {"builtin = \"box\"\ncells = [1000, 1000, 1000]\n", "1003003001 control vertices and 6000000000 tetrahedra"},
+      {"builtin = \"box\"\ncells = [100, 100, 100]\n", "1030301 control vertices and 6000000 tetrahedra"},
+      {"generate_vertices = 100000\n", "100000 control vertices exceed the cap of 20000"},
+  };
+  for (const auto& [control, message] : cases) {
+    const fs::path p = write_scene("caps.toml", head + control);
+    const auto t0 = std::chrono::steady_clock::now();
+    CHECK_THROWS_WITH(load_scene(p), Catch::Contains(message) && Catch::Contains("control."));
+    CHECK(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < 1.0);
+  }
+  // at the cap: 27 x 27 x 26 cells is 28 * 28 * 27 = 21168 vertices (over); 26^3 cells fit
+  CHECK_THROWS_AS(load_scene(write_scene("c.toml", head + "builtin = \"box\"\ncells = [27, 27, 26]\n")), SceneError);
+  CHECK_NOTHROW(load_scene(write_scene("c.toml", head + "builtin = \"box\"\ncells = [26, 26, 26]\n")));
+  CHECK_NOTHROW(load_scene(write_scene("c.toml", head + "generate_vertices = 20000\n")));
+}
+
+TEST_CASE("scene values outside their physical range name the key", "[limits]") {
+  const std::string head = "[dense]\nbuiltin = \"paper-bar\"\n[control]\nbuiltin = \"paper-bar\"\n";
+  const std::vector<std::pair<std::string, std::string>> cases{
+      {"[material]\nyoung = -1\n", "material.young"},
+      {"[material]\nyoung = 1e300\n", "material.young"},
+      {"[material]\ndensity = -1000\n", "material.density"},
+      {"[material]\ndensity = 0\n", "material.density"},
+      {"[material]\npoisson = 0.5\n", "material.poisson"},
+      {"[simulation]\ndt = 0\n", "simulation.dt"},
+      {"[simulation]\ndt = -0.01\n", "simulation.dt"},
+      {"[simulation]\ngravity = [0, -1e300, 0]\n", "simulation.gravity"},
+      {"[[pokes]]\npoint = [0, 0, 0]\ntarget = [0, 0, 0]\nstiffness = 1e300\n", "pokes[0].stiffness"},
+  };
+  for (const auto& [text, key] : cases) {
+    INFO(text);
+    CHECK_THROWS_WITH(load_scene(write_scene("range.toml", head + text)), Catch::Contains(key));
+  }
+}
+
+TEST_CASE("run size: caps and the memory estimate against the machine", "[limits]") {
+  CHECK_NOTHROW(check_run_size("s", 250000, 450, 2000, 3));
+  CHECK_THROWS_WITH(check_run_size("s", 1000, 20001, 1000, 3), Catch::Contains("20001 vertices"));
+  CHECK_THROWS_WITH(check_run_size("s", 1000, 1000, 150001, 3), Catch::Contains("150001 tetrahedra"));
+  // a dense model of 1e12 vertices needs terabytes: refused with the estimate
+  const double have = physical_memory_bytes();
+  REQUIRE(have > 0);
+  CHECK_THROWS_WITH(check_run_size("s", 1000000000000LL, 450, 2000, 3),
+                    Catch::Contains("GiB of memory") && Catch::Contains("1000000000000 dense vertices"));
+  // the estimate grows with every size and counts in 64 bits
+  CHECK(estimate_run_bytes(2000000, 450, 2000, 3) > estimate_run_bytes(1000000, 450, 2000, 3));
+  CHECK(estimate_run_bytes(1000, 20000, 120000, 3) > estimate_run_bytes(1000, 10000, 60000, 3));
+  CHECK(estimate_run_bytes(3000000000LL, 10, 10, 3) > 3e9 * 8);
+}
