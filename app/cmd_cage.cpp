@@ -53,7 +53,7 @@ const mbi::cli::Registrar reg(
         // Every output checked and reserved before any work; all written at the end, or none.
         mbi::io::OutputSet outputs({a->dense}, a->force);
         const std::size_t i_node = outputs.add(node, "--out");
-        const std::size_t i_ele = outputs.add(ele, "--out", i_node);
+        outputs.add(ele, "--out", i_node);
         const std::size_t i_stats = a->stats.empty() ? 0 : outputs.add(a->stats, "--stats");
         const std::size_t i_vtk = a->vtk.empty() ? 0 : outputs.add(a->vtk, "--vtk");
         const mbi::io::SurfaceMesh dense = mbi::io::read_surface(a->dense);
@@ -92,14 +92,16 @@ const mbi::cli::Registrar reg(
           mbi::cli::check_finite(j, a->stats);
           mbi::io::write_text_atomic(outputs.staging(i_stats), j.dump(2) + "\n");
         }
-        (void)i_ele;
         outputs.commit();
         // TetGen companions of BASE left from an earlier mesh would not match this one: they go
         for (const char* companion : {".face", ".edge", ".neigh"}) {
           fs::path p = base;
           p += companion;
           std::error_code ec;
-          if (fs::is_regular_file(fs::symlink_status(p, ec)) && fs::remove(p, ec))
+          bool ours = false;  // --stats or --vtk may have been given that name: keep it
+          for (const std::string& o : {a->stats, a->vtk})
+            if (!o.empty() && fs::equivalent(p, o, ec)) ours = true;
+          if (!ours && fs::is_regular_file(fs::symlink_status(p, ec)) && fs::remove(p, ec))
             std::fprintf(stderr, "mbi cage: note: removed %s (left from an earlier mesh)\n",
                          p.string().c_str());
         }

@@ -10,7 +10,9 @@
 # the inputs found by earlier runs (build/fuzz/corpus/<target>/, kept between runs). A crash,
 # leak, sanitizer report, timeout (10 s for one input) or out-of-memory (2 GB) stops that
 # target; its input is saved as build/fuzz/artifacts/<target>/crash-* (or leak-, timeout-,
-# oom-) and the script exits 1 after the other targets have run.
+# oom-) and the script exits 1 after the other targets have run. MBI_FUZZ_SEED fixes
+# libFuzzer's random seed (CI: 1 unless set, so that a CI run explores the same way each time and
+# does not fail on a find of another day; runs by hand draw a new seed each time).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 secs=${1:-30}
@@ -32,6 +34,10 @@ if [ ! -f build/fuzz/CMakeCache.txt ]; then
 fi
 cmake --build build/fuzz -j "${MBI_JOBS:-$(nproc)}" --target "${targets[@]/#/fuzz_}"
 
+seed=()
+if [ -n "${MBI_FUZZ_SEED:-}" ]; then seed=(-seed="$MBI_FUZZ_SEED")
+elif [ -n "${CI:-}" ]; then seed=(-seed=1)
+fi
 failed=()
 for t in "${targets[@]}"; do
   corpus=build/fuzz/corpus/$t
@@ -40,7 +46,7 @@ for t in "${targets[@]}"; do
   echo "== fuzz_$t: ${secs} s"
   log=build/fuzz/fuzz_$t.log
   if ! build/fuzz/tests/fuzz/fuzz_$t -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 \
-       -print_final_stats=1 \
+       -print_final_stats=1 "${seed[@]}" \
        -artifact_prefix="$artifacts/" "$corpus" "tests/fuzz/$t" >"$log" 2>&1; then
     failed+=("$t")
     tail -n 40 "$log"

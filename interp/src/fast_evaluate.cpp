@@ -54,7 +54,7 @@ std::int32_t as_word(float f) {
 
 // [begin, end) of thread t of nt over p points, boundaries multiples of 4 points (so that each
 // thread's first output float is 16-byte aligned when the base is).
-void chunk(long long p, int t, int nt, long long& begin, long long& end) {
+[[maybe_unused]] void chunk(long long p, int t, int nt, long long& begin, long long& end) {
   const long long groups = (p + 3) / 4;
   begin = std::min(p, 4 * (groups * t / nt));
   end = std::min(p, 4 * (groups * (t + 1) / nt));
@@ -182,7 +182,7 @@ MBI_TARGET void eval_x86(const std::int32_t* rec, const float* coef, const float
   for (; p + 4 <= end; p += 4) {
     __m128 r[4], q[4];
     for (int k = 0; k < 4; ++k) {
-      const __m128i w = _mm_load_si128(reinterpret_cast<const __m128i*>(rec + 4 * (p + k)));
+      const __m128i w = _mm_loadu_si128(reinterpret_cast<const __m128i*>(rec + 4 * (p + k)));
       const long long e = _mm_cvtsi128_si32(w);
       const __m128 v = _mm_castsi128_ps(w);
       const __m128 b1 = _mm_shuffle_ps(v, v, 0x55), b2 = _mm_shuffle_ps(v, v, 0xAA),
@@ -218,7 +218,7 @@ MBI_TARGET void eval_x86(const std::int32_t* rec, const float* coef, const float
   }
   _mm_sfence();
   for (; p < end; ++p) {  // the last 1-3 points of the range: exact-size stores
-    const __m128i w = _mm_load_si128(reinterpret_cast<const __m128i*>(rec + 4 * p));
+    const __m128i w = _mm_loadu_si128(reinterpret_cast<const __m128i*>(rec + 4 * p));
     const long long e = _mm_cvtsi128_si32(w);
     const __m128 v = _mm_castsi128_ps(w);
     const __m128 b1 = _mm_shuffle_ps(v, v, 0x55), b2 = _mm_shuffle_ps(v, v, 0xAA),
@@ -326,7 +326,7 @@ void FastEvaluator::prepare(const BezierPoints& B, bool normals) {
     edge_of[edges[s].second][edges[s].first] = static_cast<int>(s);
   }
   const int m = m_;
-  MBI_OMP("omp parallel for schedule(static) if (m > 4096)")
+  MBI_OMP("omp parallel for schedule(static) num_threads(threads()) if (m > 4096)")
   for (int e = 0; e < m; ++e) {
     auto P = [&](int k, int c) { return B(static_cast<Eigen::Index>(e) * K + k, c); };
     auto Pe = [&](int i, int j, int c) { return P(d + 1 + edge_of[i][j], c); };

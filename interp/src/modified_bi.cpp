@@ -258,17 +258,17 @@ const std::vector<std::pair<int, int>>& bezier_edges(int d) {
 
 namespace {
 
-// sol (r x 3, row-major) = K (r x n, row-major) Xp (n x 4, row-major, column 3 unused), rows
-// [r0, r1). 4-wide FMA per K entry with the entry broadcast; 4 independent accumulators.
-void dense_rows_portable(const double* K, std::ptrdiff_t n, const double* Xp, double* sol,
-                         std::ptrdiff_t r0, std::ptrdiff_t r1) {
+// sol (r x 3, row-major) = K (r x n, row-major) X, X given by its 3 columns xs, ys, zs (each n
+// doubles; zs zero in 2D), rows [r0, r1).
+void dense_rows_portable(const double* K, std::ptrdiff_t n, const double* xs, const double* ys,
+                         const double* zs, double* sol, std::ptrdiff_t r0, std::ptrdiff_t r1) {
   for (std::ptrdiff_t r = r0; r < r1; ++r) {
     const double* k = K + r * n;
     double a0 = 0, a1 = 0, a2 = 0;
     for (std::ptrdiff_t j = 0; j < n; ++j) {
-      a0 += k[j] * Xp[4 * j];
-      a1 += k[j] * Xp[4 * j + 1];
-      a2 += k[j] * Xp[4 * j + 2];
+      a0 += k[j] * xs[j];
+      a1 += k[j] * ys[j];
+      a2 += k[j] * zs[j];
     }
     sol[3 * r] = a0;
     sol[3 * r + 1] = a1;
@@ -277,26 +277,41 @@ void dense_rows_portable(const double* K, std::ptrdiff_t n, const double* Xp, do
 }
 
 #if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+__attribute__((target("avx2,fma"))) inline double hsum(__m256d v) {
+  const __m128d s = _mm_add_pd(_mm256_castpd256_pd128(v), _mm256_extractf128_pd(v, 1));
+  return _mm_cvtsd_f64(_mm_add_sd(s, _mm_unpackhi_pd(s, s)));
+}
+
+// Two rows of K at a time, 4 vertices a step: each load of the 3 columns serves both rows, and
+// no lane is padding (3 FMAs per 4 entries of K, against one per entry with the entry broadcast).
 __attribute__((target("avx2,fma"))) void dense_rows_avx2(const double* K, std::ptrdiff_t n,
-                                                         const double* Xp, double* sol,
+                                                         const double* xs, const double* ys,
+                                                         const double* zs, double* sol,
                                                          std::ptrdiff_t r0, std::ptrdiff_t r1) {
-  for (std::ptrdiff_t r = r0; r < r1; ++r) {
-    const double* k = K + r * n;
-    __m256d a0 = _mm256_setzero_pd(), a1 = a0, a2 = a0, a3 = a0;
+  std::ptrdiff_t r = r0;
+  for (; r + 2 <= r1; r += 2) {
+    const double* k0 = K + r * n;
+    const double* k1 = k0 + n;
+    __m256d x0 = _mm256_setzero_pd(), y0 = x0, z0 = x0, x1 = x0, y1 = x0, z1 = x0;
     std::ptrdiff_t j = 0;
     for (; j + 4 <= n; j += 4) {
-      a0 = _mm256_fmadd_pd(_mm256_broadcast_sd(k + j), _mm256_loadu_pd(Xp + 4 * j), a0);
-      a1 = _mm256_fmadd_pd(_mm256_broadcast_sd(k + j + 1), _mm256_loadu_pd(Xp + 4 * j + 4), a1);
-      a2 = _mm256_fmadd_pd(_mm256_broadcast_sd(k + j + 2), _mm256_loadu_pd(Xp + 4 * j + 8), a2);
-      a3 = _mm256_fmadd_pd(_mm256_broadcast_sd(k + j + 3), _mm256_loadu_pd(Xp + 4 * j + 12), a3);
+      const __m256d vx = _mm256_loadu_pd(xs + j), vy = _mm256_loadu_pd(ys + j), vz = _mm256_loadu_pd(zs + j);
+      const __m256d a = _mm256_loadu_pd(k0 + j), b = _mm256_loadu_pd(k1 + j);
+      x0 = _mm256_fmadd_pd(a, vx, x0);
+      y0 = _mm256_fmadd_pd(a, vy, y0);
+      z0 = _mm256_fmadd_pd(a, vz, z0);
+      x1 = _mm256_fmadd_pd(b, vx, x1);
+      y1 = _mm256_fmadd_pd(b, vy, y1);
+      z1 = _mm256_fmadd_pd(b, vz, z1);
     }
-    for (; j < n; ++j) a0 = _mm256_fmadd_pd(_mm256_broadcast_sd(k + j), _mm256_loadu_pd(Xp + 4 * j), a0);
-    alignas(32) double t[4];
-    _mm256_store_pd(t, _mm256_add_pd(_mm256_add_pd(a0, a1), _mm256_add_pd(a2, a3)));
-    sol[3 * r] = t[0];
-    sol[3 * r + 1] = t[1];
-    sol[3 * r + 2] = t[2];
+    double s[6] = {hsum(x0), hsum(y0), hsum(z0), hsum(x1), hsum(y1), hsum(z1)};
+    for (; j < n; ++j) {
+      s[0] += k0[j] * xs[j], s[1] += k0[j] * ys[j], s[2] += k0[j] * zs[j];
+      s[3] += k1[j] * xs[j], s[4] += k1[j] * ys[j], s[5] += k1[j] * zs[j];
+    }
+    for (int c = 0; c < 6; ++c) sol[3 * r + c] = s[c];
   }
+  if (r < r1) dense_rows_portable(K, n, xs, ys, zs, sol, r, r1);
 }
 
 bool have_avx2() {
@@ -309,12 +324,12 @@ bool have_avx2() {
 #define MBI_DENSE_X86 1
 #endif
 
-void dense_rows(const double* K, std::ptrdiff_t n, const double* Xp, double* sol, std::ptrdiff_t r0,
-                std::ptrdiff_t r1) {
+void dense_rows(const double* K, std::ptrdiff_t n, const double* xs, const double* ys, const double* zs,
+                double* sol, std::ptrdiff_t r0, std::ptrdiff_t r1) {
 #ifdef MBI_DENSE_X86
-  if (have_avx2()) return dense_rows_avx2(K, n, Xp, sol, r0, r1);
+  if (have_avx2()) return dense_rows_avx2(K, n, xs, ys, zs, sol, r0, r1);
 #endif
-  dense_rows_portable(K, n, Xp, sol, r0, r1);
+  dense_rows_portable(K, n, xs, ys, zs, sol, r0, r1);
 }
 
 }  // namespace
@@ -352,31 +367,39 @@ struct ModifiedBI::Impl {
     sol.resize(static_cast<size_t>(n_red) * d);
     for (int a = 0; a < n_red; ++a)
       for (int c = 0; c < d; ++c) sol[static_cast<size_t>(a) * d + c] = rhs(a, c);
-    std::vector<double> work(sol.size());
-    F.solve(sol.data(), d, work.data());
+    F.solve(sol.data(), d);
   }
 
-  void factor() {
-    if (n_red == 0) return;
-    const SpMat A = alpha * Hmm_vibr_red + beta * Hmm_disc_red;
-    F = detail::cholesky(A, use_cholmod(), "ModifiedBI");
-    K.clear();
-    if (!dense) return;
-    // K = -beta A^-1 H_mx, 8 columns (vertices) per pass over the factor
-    K.assign(static_cast<size_t>(n_red) * n, 0.0);
-    constexpr int W = 8;
-    std::vector<double> B(static_cast<size_t>(n_red) * W), work(B.size());
-    for (int j0 = 0; j0 < n; j0 += W) {
-      const int w = std::min(W, n - j0);
-      std::fill(B.begin(), B.end(), 0.0);
-      // column j of H_mx = column j of Hmx_red (CSC): scatter its entries
-      for (int c = 0; c < w; ++c)
-        for (SpMat::InnerIterator it(Hmx_red, j0 + c); it; ++it)
-          B[static_cast<size_t>(it.row()) * w + c] = -beta * it.value();
-      F.solve(B.data(), w, work.data());
-      for (int a = 0; a < n_red; ++a)
-        for (int c = 0; c < w; ++c) K[static_cast<size_t>(a) * n + j0 + c] = B[static_cast<size_t>(a) * w + c];
+  // Factors for `a` and commits alpha, the factor and the dense operator only when all succeed
+  // (a failing set_alpha leaves the solver as it was).
+  void factor(double a) {
+    if (n_red == 0) {
+      alpha = a;
+      return;
     }
+    const SpMat A = a * Hmm_vibr_red + beta * Hmm_disc_red;
+    detail::CholeskyFactor Fa = detail::cholesky(A, use_cholmod(), "ModifiedBI");
+    std::vector<double> Ka;
+    if (dense) {
+      // K = -beta A^-1 H_mx, 8 columns (vertices) per pass over the factor
+      Ka.assign(static_cast<size_t>(n_red) * n, 0.0);
+      constexpr int W = 8;
+      std::vector<double> B(static_cast<size_t>(n_red) * W);
+      for (int j0 = 0; j0 < n; j0 += W) {
+        const int w = std::min(W, n - j0);
+        std::fill(B.begin(), B.end(), 0.0);
+        // column j of H_mx = column j of Hmx_red (CSC): scatter its entries
+        for (int c = 0; c < w; ++c)
+          for (SpMat::InnerIterator it(Hmx_red, j0 + c); it; ++it)
+            B[static_cast<size_t>(it.row()) * w + c] = -beta * it.value();
+        Fa.solve(B.data(), w);
+        for (int r = 0; r < n_red; ++r)
+          for (int c = 0; c < w; ++c) Ka[static_cast<size_t>(r) * n + j0 + c] = B[static_cast<size_t>(r) * w + c];
+      }
+    }
+    alpha = a;
+    F = std::move(Fa);
+    K = std::move(Ka);
   }
 };
 
@@ -442,7 +465,7 @@ ModifiedBI::ModifiedBI(const Eigen::Ref<const Eigen::MatrixXd>& U,
   if (options.factorization == Factorization::Cholmod && !detail::cholmod_available())
     throw Error("ModifiedBI: Factorization::Cholmod asked for, but this build has no CHOLMOD "
                 "(configure with MBI_WITH_CHOLMOD=ON and libsuitesparse-dev)");
-  I.factor();
+  I.factor(I.alpha);
 }
 
 ModifiedBI::~ModifiedBI() = default;
@@ -452,8 +475,7 @@ ModifiedBI& ModifiedBI::operator=(ModifiedBI&&) noexcept = default;
 void ModifiedBI::set_alpha(double alpha) {
   if (!(alpha > 0) || !std::isfinite(alpha))
     throw Error("ModifiedBI::set_alpha: alpha must be a finite number > 0, got " + std::to_string(alpha));
-  impl_->alpha = alpha;
-  impl_->factor();
+  impl_->factor(alpha);
 }
 
 int ModifiedBI::dim() const { return impl_->d; }
@@ -495,17 +517,22 @@ VertexMatrices ModifiedBI::solve(const Eigen::Ref<const Eigen::MatrixXd>& X) con
   if (I.n_red == 0) return M;
   std::vector<double> sol;  // n_red x d row-major: row a = reduced m of every component
   if (I.dense) {
-    std::vector<double> Xp(static_cast<size_t>(n) * 4, 0.0), s3(static_cast<size_t>(I.n_red) * 3);
-    for (int j = 0; j < n; ++j)
-      for (int c = 0; c < d; ++c) Xp[4 * static_cast<size_t>(j) + c] = X(j, c);
+    std::vector<double> cols(static_cast<size_t>(n) * 3, 0.0), s3(static_cast<size_t>(I.n_red) * 3);
+    for (int c = 0; c < d; ++c)
+      for (int j = 0; j < n; ++j) cols[static_cast<size_t>(c) * n + j] = X(j, c);
     const std::ptrdiff_t rows = I.n_red;
     const int nt = detail::omp_threads(rows * n, 1 << 17);
     MBI_INTERP_OMP("omp parallel num_threads(nt) if (nt > 1)")
     {
       int t = 0, T = 1;
       detail::omp_team(t, T);
-      dense_rows(I.K.data(), n, Xp.data(), s3.data(), rows * t / T, rows * (t + 1) / T);
+      // row ranges of even length: the kernel takes rows two at a time
+      const std::ptrdiff_t pairs = (rows + 1) / 2;
+      const std::ptrdiff_t a = std::min(rows, 2 * (pairs * t / T)), b = std::min(rows, 2 * (pairs * (t + 1) / T));
+      const double* c0 = cols.data();
+      dense_rows(I.K.data(), n, c0, c0 + n, c0 + 2 * static_cast<std::ptrdiff_t>(n), s3.data(), a, b);
     }
+    (void)nt;  // without OpenMP
     sol.resize(static_cast<size_t>(I.n_red) * d);
     for (int a = 0; a < I.n_red; ++a)
       for (int c = 0; c < d; ++c) sol[static_cast<size_t>(a) * d + c] = s3[static_cast<size_t>(a) * 3 + c];

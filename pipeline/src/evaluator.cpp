@@ -26,14 +26,20 @@ void CpuEvaluator::set_points(const PointSet& points) {
       (rest_normals.rows() != embedding->size() || rest_normals.cols() != embedding->dim()))
     throw Error("CpuEvaluator: rest normals must be " + std::to_string(embedding->size()) + " x " +
                 std::to_string(embedding->dim()));
+  // everything built before anything is replaced: a throw leaves the evaluator as it was
+  std::unique_ptr<interp::FastEvaluator> fast;
+  if (precision_ == Precision::Float) {
+    fast = std::make_unique<interp::FastEvaluator>(*embedding, threads_);
+    // normals need the embedding's basis gradients; without them evaluate(B, true) reports it
+    if (rest_normals.size() != 0 && embedding->gradients.rows() > 0) fast->set_rest_normals(rest_normals);
+  }
   embedding_ = embedding;
   rest_normals_ = rest_normals;
-  fast_.reset();
-  if (precision_ == Precision::Float) {
-    fast_ = std::make_unique<interp::FastEvaluator>(*embedding, threads_);
-    // normals need the embedding's basis gradients; without them evaluate(B, true) reports it
-    if (rest_normals.size() != 0 && embedding->gradients.rows() > 0) fast_->set_rest_normals(rest_normals);
-  }
+  fast_ = std::move(fast);
+  stale_ = false;
+  float_normals_ = false;
+  positions_.resize(0, 0);
+  normals_.resize(0, 0);
 }
 
 void CpuEvaluator::evaluate(const interp::BezierPoints& B, bool normals) {

@@ -409,7 +409,16 @@ class Outputs {
   void frame(int f, const Eigen::MatrixXd& Xc, const Eigen::MatrixXd& dense,
              const std::vector<const Eigen::MatrixXd*>& shown, bool write_now,
              const Eigen::MatrixXd* normals) {
-    if (pc2_) pc2_->append(dense);
+    if (pc2_) {
+      if (dense.cols() == 2 && m_.flat_z) {  // a flat model keeps its plane's z, as in its meshes
+        flat_.resize(dense.rows(), 3);
+        flat_.leftCols(2) = dense;
+        flat_.col(2).setConstant(*m_.flat_z);
+        pc2_->append(flat_);
+      } else {
+        pc2_->append(dense);
+      }
+    }
     if (!write_now) return;
     if (sc_.output.mesh_format != MeshFormat::None) {
       const std::string ext = std::string(".") + format_name(sc_.output.mesh_format);
@@ -448,6 +457,7 @@ class Outputs {
   const SceneModels& m_;
   fs::path dir_;
   std::unique_ptr<io::Pc2Writer> pc2_;
+  Eigen::MatrixXd flat_;  // a flat 2D model's positions with its z, for the point cache
 };
 
 }  // namespace
@@ -792,10 +802,19 @@ RunResult run_scene(const Scene& sc_in, const RunOptions& opt) {
   metrics["timings_ms"]["pictures"] = ms_since(t0);
   metrics["frames_completed"] = res.frames;
   metrics["failure"] = res.failed ? nlohmann::json(res.message) : nlohmann::json(nullptr);
-  metrics["last_disc"] = metrics["frames"].empty() ? nlohmann::json(nullptr)
-                                                    : metrics["frames"].back()["disc"];
-  if (metrics["last_disc"].is_null() && !metrics["frames"].empty())
-    metrics["last_disc"] = disc_json(res.last_table, roundoff);
+  // the table of the last good frame: computed above when metrics are written or the run reached
+  // its last frame; otherwise (a failed run without metrics) here, for the summary printed
+  if (res.failed && !sc.output.metrics && pipe.frame() >= 0) {
+    try {
+      res.last_table = table_now();
+    } catch (const std::exception&) {  // the failure is reported already
+    }
+  }
+  const nlohmann::json& frames_json = metrics["frames"];
+  const bool has_disc = !frames_json.empty() && frames_json.back().contains("disc");
+  metrics["last_disc"] = has_disc ? frames_json.back()["disc"]
+                         : frames_json.empty() ? nlohmann::json(nullptr)
+                                               : disc_json(res.last_table, roundoff);
   if (sc.output.metrics) {
     try {
       io::write_text_atomic(res.out_dir / "metrics.json", metrics.dump(1) + "\n");

@@ -196,6 +196,7 @@ std::size_t OutputSet::add(const std::filesystem::path& target, const std::strin
       throw IoError(what + " " + err.what());
     }
   }
+  e.reserved = file_id(e.staging);  // a writer replaces the file (a new inode) or fills it
   entries_.push_back(std::move(e));
   return entries_.size() - 1;
 }
@@ -203,11 +204,17 @@ std::size_t OutputSet::add(const std::filesystem::path& target, const std::strin
 void OutputSet::commit() {
   if (committed_) throw IoError("outputs committed twice");
   std::error_code ec;
-  for (const Entry& e : entries_)
-    if (!std::filesystem::is_regular_file(std::filesystem::symlink_status(e.staging, ec)))
-      throw IoError(e.target.string() + ": was not written");
-  // Renames within one folder: they do not fail for a checked target. The target's symbolic
-  // link, if any, is replaced, never followed.
+  for (const Entry& e : entries_) {
+    const bool file = std::filesystem::is_regular_file(std::filesystem::symlink_status(e.staging, ec));
+    // still the empty reservation: never written (committing it would replace the target by
+    // an empty file)
+    const bool untouched = file && file_id(e.staging) == e.reserved && std::filesystem::file_size(e.staging, ec) == 0;
+    if (!file || untouched) throw IoError(e.target.string() + ": was not written");
+  }
+  // Every output is complete before the first rename. Renames within one folder do not fail
+  // for a checked target (the folder was writable at add()); they run one after another, so only
+  // a change of the folders under our feet between two of them could leave some done. The
+  // target's symbolic link, if any, is replaced, never followed.
   for (const Entry& e : entries_) {
     std::filesystem::rename(e.staging, e.target, ec);
     if (ec) throw IoError(e.target.string() + ": cannot move the finished file into place: " + ec.message());

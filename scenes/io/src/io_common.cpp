@@ -115,7 +115,7 @@ std::vector<Line> tokenize(std::string_view text, char comment, std::string_view
     if (end == std::string_view::npos) end = text.size();
     const std::size_t next =
         end + (end + 1 < text.size() && text[end] == '\r' && text[end + 1] == '\n' ? 2 : 1);
-    ++number;
+    if (number < std::numeric_limits<int>::max()) ++number;  // saturates (files of > 2^31 lines)
     std::string_view s = text.substr(pos, end - pos);
     if (comment != 0) {
       const std::size_t c = s.find(comment);

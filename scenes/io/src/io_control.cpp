@@ -83,12 +83,16 @@ NodeFile node_file(std::string_view text, const path& file) {
   return out;
 }
 
-double simplex_measure(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T, Eigen::Index e,
-                       double& scale) {
+// Determinant of the element's edge vectors divided by its longest edge (scale-free: no
+// overflow or underflow for coordinates anywhere in the readers' range); 0 for a zero-length edge
+// set.
+double relative_measure(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T, Eigen::Index e) {
   const int d = static_cast<int>(U.cols());
   Eigen::MatrixXd E(d, d);
   for (int k = 0; k < d; ++k) E.col(k) = (U.row(T(e, k + 1)) - U.row(T(e, 0))).transpose();
-  scale = E.colwise().norm().maxCoeff();
+  const double h = E.cwiseAbs().maxCoeff();
+  if (!(h > 0) || !std::isfinite(h)) return 0.0;
+  E /= h;
   return E.determinant();
 }
 
@@ -103,9 +107,7 @@ void check_elements(const path& file, const std::vector<int>& line_of, const Eig
         if (T(e, a) == T(e, b))
           fail(file, ln, "element " + std::to_string(e) + ": vertex " +
                              std::to_string(T(e, a)) + " repeated");
-    double h = 0.0;
-    const double det = simplex_measure(U, T, e, h);
-    if (!(std::abs(det) > 1e-12 * std::pow(h, d)))
+    if (!(std::abs(relative_measure(U, T, e)) > 1e-12))
       fail(file, ln, "element " + std::to_string(e) + ": degenerate (zero " +
                          (d == 3 ? "volume" : "area") + ")");
   }

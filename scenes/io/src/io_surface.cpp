@@ -104,11 +104,12 @@ void set_vertices(SurfaceMesh& m, const std::vector<std::array<double, 3>>& v) {
 // v / |v| computed without overflow (v scaled by its largest component first); false when v
 // is zero or not finite.
 bool unit_vector(Eigen::RowVector3d& v) {
+  if (!v.allFinite()) return false;  // maxCoeff is undefined with a NaN
   const double s = v.cwiseAbs().maxCoeff();
-  if (!(s > 0) || !std::isfinite(s)) return false;
+  if (!(s > 0)) return false;
   v /= s;
   v /= v.norm();
-  return true;
+  return v.allFinite();
 }
 
 // Area-weighted vertex normals of the triangles F, written into the rows of N where `have` is
@@ -182,7 +183,7 @@ SurfaceMesh read_obj(std::string_view data, const path& file) {
     // A line ends at LF, CR LF or a lone CR.
     std::size_t end = text.find_first_of("\r\n", pos);
     if (end == std::string_view::npos) end = text.size();
-    ++number;
+    if (number < std::numeric_limits<int>::max()) ++number;  // saturates (files of > 2^31 lines)
     std::string_view raw(text.data() + pos, end - pos);
     pos = end + (end + 1 < text.size() && text[end] == '\r' && text[end + 1] == '\n' ? 2 : 1);
     const auto tl = detail::tokenize(raw);

@@ -138,7 +138,7 @@ TEST_CASE("mostly empty models are refused quickly: bounded cell-size search", "
       const auto t0 = std::chrono::steady_clock::now();
       CHECK_THROWS_WITH(make_cage(models[k].first, models[k].second, opt),
                         Catch::Contains("cannot reach 200 control vertices"));
-      CHECK(seconds_since(t0) < 5.0);  // was 96 s and 650 MB for two points
+      CHECK(seconds_since(t0) < 30.0);  // a hang guard (was 96 s and 650 MB for two points); about 1 s, more under ASan
     }
 }
 

@@ -3,6 +3,7 @@
 // regular files, header counts checked before looping, coordinate limits, and a replay of the
 // fuzz corpora (tests/fuzz/<target>/: seeds and every input a fuzzer crashed on) as regression
 // tests: each must give a result or an IoError naming the file, nothing else.
+#include <mbi/io/atomic_file.hpp>
 #include <mbi/io/io.hpp>
 #include <mbi/io/parse.hpp>
 
@@ -235,7 +236,7 @@ TEST_CASE("ASCII Gmsh: naming lines costs nothing (200,000 nodes parse in linear
   msh += "$EndNodes\n";
   const auto t0 = std::chrono::steady_clock::now();
   REQUIRE(parse_gmsh_nodes(msh, "big.msh").rows() == n);
-  REQUIRE(std::chrono::steady_clock::now() - t0 < std::chrono::seconds(10));  // ~0.1 s
+  REQUIRE(std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60));  // ~0.1 s; quadratic was minutes
 }
 
 TEST_CASE("coordinates: NaN, inf, out of range and above 1e300 refused with file and line",
@@ -283,19 +284,19 @@ TEST_CASE("inputs that are not regular files are refused, naming what they are, 
 TEST_CASE("PNG: only PNG reaches the decoder, sizes checked from the header", "[io][hardening]") {
   REQUIRE_THAT(error_of([] { parse_png("GIF89a....", "i.png"); }),
                Catch::Contains("i.png: not a PNG file (no PNG signature)"));
-  // a valid signature and IHDR claiming 100000 x 100000 pixels (the CRC is not checked by stb
-  // for IHDR sizes; the size is refused before any pixel is decoded)
+  // a valid signature and IHDR claiming 20000 x 8 pixels: a size stb_image itself accepts, so
+  // only our check refuses it (before any pixel is decoded; stb does not check the IHDR CRC)
   std::string png = "\x89PNG\r\n\x1a\n";
   auto be32 = [&](std::uint32_t x) {
     for (int s = 24; s >= 0; s -= 8) png += static_cast<char>((x >> s) & 0xff);
   };
   be32(13);
   png += "IHDR";
-  be32(100000), be32(100000);
+  be32(20000), be32(8);
   png += std::string("\x08\x02\x00\x00\x00", 5);
   be32(0);
   REQUIRE_THAT(error_of([&] { parse_png(png, "big.png"); }),
-               Catch::Contains("big.png: ") && (Catch::Contains("at most 16384 x 16384") || Catch::Contains("cannot read image")));
+               Catch::Contains("big.png: ") && Catch::Contains("at most 16384 x 16384"));
 }
 
 TEST_CASE("fuzz corpora replayed: every seed and every input a fuzzer found, result or IoError",
@@ -375,4 +376,32 @@ TEST_CASE("point lists: a long first line and many short ones allocate nothing l
   for (int i = 0; i < 200000; ++i) text += "1\n";
   REQUIRE_THAT(error_of([&] { parse_points(text, "p.txt"); }),
                Catch::StartsWith("p.txt:2: point 1: 1 numbers, expected 200000 as on the first line"));
+}
+
+TEST_CASE("OutputSet: an output reserved but never written is not committed over its target",
+          "[io][hardening]") {
+  TempDir t("outputset");
+  const fs::path a = t / "a.json", b = t / "b.json";
+  {
+    std::ofstream(b) << "the user's file\n";
+    OutputSet out({}, /*force=*/true);
+    const std::size_t ia = out.add(a, "--stats");
+    out.add(b, "--vtk");
+    write_text_atomic(out.staging(ia), "{}\n");
+    REQUIRE_THAT(error_of([&] { out.commit(); }), Catch::Contains("b.json: was not written"));
+  }
+  CHECK(!fs::exists(a));                          // nothing renamed into place
+  CHECK(read_text(b) == "the user's file\n");     // the target is untouched
+  std::size_t left = 0;                           // and no staging file stays behind
+  for (const auto& e : fs::directory_iterator(t.dir)) left += e.path().filename() != "b.json";
+  CHECK(left == 0);
+  {
+    OutputSet out({}, true);
+    const std::size_t ia = out.add(a, "--stats"), ib = out.add(b, "--vtk");
+    write_text_atomic(out.staging(ia), "{}\n");
+    write_text_atomic(out.staging(ib), "[]\n");
+    out.commit();
+  }
+  CHECK(read_text(a) == "{}\n");
+  CHECK(read_text(b) == "[]\n");
 }

@@ -101,6 +101,7 @@ class OutputSet {
  private:
   struct Entry {
     std::filesystem::path target, staging;
+    std::optional<FileId> reserved;  // the staging file as add() created it
   };
   std::vector<std::filesystem::path> inputs_;
   bool force_;
