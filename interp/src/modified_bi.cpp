@@ -41,105 +41,138 @@ Hessians assemble_fixed(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T) {
   const int n = static_cast<int>(U.rows());
   const int m = static_cast<int>(T.rows());
   auto u = [&](int i) -> VecD { return U.row(i).transpose(); };
+  // Basis gradients of every element (the face pass needs both sides').
   std::vector<Grad> A(m);
-  Triplets tv;
-  tv.reserve(static_cast<size_t>(m) * NV * NV);
+  std::vector<double> volume(m);
+  const int nt = omp_threads(m, 2048);
+  MBI_INTERP_OMP("omp parallel for num_threads(nt) if (nt > 1) schedule(static)")
   for (int e = 0; e < m; ++e) {
     Eigen::Matrix<double, D, D> E;
     for (int k = 0; k < D; ++k) E.col(k) = u(T(e, k + 1)) - u(T(e, 0));
-    const double det = E.determinant();
     const Eigen::Matrix<double, D, D> Einv = E.inverse();
     A[e].template bottomRows<D>() = Einv;
     A[e].row(0) = -Einv.colwise().sum();
-    const double vol = std::abs(det) / (D == 2 ? 2.0 : 6.0);
-    // vec(Hess x_c) = L m_local: Hess_pq = sum_k a_k[p] m_k[q] + m_k[p] a_k[q] (fact 2)
-    Eigen::Matrix<double, D * D, NV> L = Eigen::Matrix<double, D * D, NV>::Zero();
-    for (int k = 0; k <= D; ++k)
-      for (int p = 0; p < D; ++p)
-        for (int q = 0; q < D; ++q) {
-          L(p * D + q, k * D + q) += A[e](k, p);
-          L(p * D + q, k * D + p) += A[e](k, q);
-        }
-    const Eigen::Matrix<double, NV, NV> H = vol * (L.transpose() * L);
-    for (int k = 0; k <= D; ++k)
-      for (int r = 0; r < D; ++r)
-        for (int l = 0; l <= D; ++l)
-          for (int s = 0; s < D; ++s)
-            tv.emplace_back(T(e, k) * D + r, T(e, l) * D + s, H(k * D + r, l * D + s));
+    volume[e] = std::abs(E.determinant()) / (D == 2 ? 2.0 : 6.0);
   }
-
-  // E_disc: the jump of grad x_c across a face is linear; at a face vertex v the phi_v m_v terms
-  // of both sides cancel, leaving sum_k +-a_k (x_k + m_k . (u_v - u_k)) (fact 3).
+  (void)nt;
   const Eigen::MatrixXi F = interior_faces(T);
-  Triplets tmm, tmx, txx;
-  tmm.reserve(static_cast<size_t>(F.rows()) * XOFF * XOFF);
-  tmx.reserve(static_cast<size_t>(F.rows()) * XOFF * NL);
-  txx.reserve(static_cast<size_t>(F.rows()) * NL * NL);
-  std::array<Eigen::Matrix<double, D, NZ>, D> G;
-  std::array<int, NL> local{};
-  for (int f = 0; f < F.rows(); ++f) {
-    for (int j = 0; j < D; ++j) local[j] = F(f, j);
-    for (int s = 0; s < 2; ++s) {
-      const int e = F(f, D + s);
-      for (int k = 0; k <= D; ++k) {
-        bool on_face = false;
-        for (int j = 0; j < D; ++j) on_face = on_face || T(e, k) == F(f, j);
-        if (!on_face) local[D + s] = T(e, k);
-      }
+  const int nf = static_cast<int>(F.rows());
+
+  // Elements and interior faces in a fixed number of chunks, each assembled into its own
+  // matrices (in parallel), then summed in chunk order: the same sums whatever the thread count.
+  const int chunks = m >= 4096 ? 4 : 1;
+  struct Part {
+    SpMat vibr_mm, disc_mm, disc_mx, disc_xx;
+  };
+  std::vector<Part> parts(chunks);
+  const int ntc = omp_threads(chunks, 1);
+  MBI_INTERP_OMP("omp parallel for num_threads(ntc) if (ntc > 1) schedule(dynamic)")
+  for (int c = 0; c < chunks; ++c) {
+    const int e0 = static_cast<int>(static_cast<long long>(m) * c / chunks);
+    const int e1 = static_cast<int>(static_cast<long long>(m) * (c + 1) / chunks);
+    const int f0 = static_cast<int>(static_cast<long long>(nf) * c / chunks);
+    const int f1 = static_cast<int>(static_cast<long long>(nf) * (c + 1) / chunks);
+    Triplets tv;
+    tv.reserve(static_cast<size_t>(e1 - e0) * NV * NV);
+    for (int e = e0; e < e1; ++e) {
+      // vec(Hess x_c) = L m_local: Hess_pq = sum_k a_k[p] m_k[q] + m_k[p] a_k[q] (fact 2)
+      Eigen::Matrix<double, D * D, NV> L = Eigen::Matrix<double, D * D, NV>::Zero();
+      for (int k = 0; k <= D; ++k)
+        for (int p = 0; p < D; ++p)
+          for (int q = 0; q < D; ++q) {
+            L(p * D + q, k * D + q) += A[e](k, p);
+            L(p * D + q, k * D + p) += A[e](k, q);
+          }
+      const Eigen::Matrix<double, NV, NV> H = volume[e] * (L.transpose() * L);
+      for (int k = 0; k <= D; ++k)
+        for (int r = 0; r < D; ++r)
+          for (int l = 0; l <= D; ++l)
+            for (int s = 0; s < D; ++s)
+              tv.emplace_back(T(e, k) * D + r, T(e, l) * D + s, H(k * D + r, l * D + s));
     }
-    auto local_of = [&](int g) {
-      for (int j = 0; j < NL; ++j)
-        if (local[j] == g) return j;
-      return -1;
-    };
-    for (auto& g : G) g.setZero();
-    for (int s = 0; s < 2; ++s) {
-      const int e = F(f, D + s);
-      const double sgn = s == 0 ? 1.0 : -1.0;
-      for (int k = 0; k <= D; ++k) {
-        const int j = local_of(T(e, k));
-        const VecD a = sgn * A[e].row(k).transpose();
-        for (int v = 0; v < D; ++v) {
-          const VecD w = u(F(f, v)) - u(T(e, k));
-          G[v].col(XOFF + j) += a;
-          G[v].template block<D, D>(0, j * D) += a * w.transpose();
+    Part& P = parts[c];
+    P.vibr_mm.resize(D * n, D * n);
+    P.vibr_mm.setFromTriplets(tv.begin(), tv.end());
+    Triplets().swap(tv);
+
+    // E_disc: the jump of grad x_c across a face is linear; at a face vertex v the phi_v m_v
+    // terms of both sides cancel, leaving sum_k +-a_k (x_k + m_k . (u_v - u_k)) (fact 3).
+    Triplets tmm, tmx, txx;
+    tmm.reserve(static_cast<size_t>(f1 - f0) * XOFF * XOFF);
+    tmx.reserve(static_cast<size_t>(f1 - f0) * XOFF * NL);
+    txx.reserve(static_cast<size_t>(f1 - f0) * NL * NL);
+    std::array<Eigen::Matrix<double, D, NZ>, D> G;
+    std::array<int, NL> local{};
+    for (int f = f0; f < f1; ++f) {
+      for (int j = 0; j < D; ++j) local[j] = F(f, j);
+      for (int s = 0; s < 2; ++s) {
+        const int e = F(f, D + s);
+        for (int k = 0; k <= D; ++k) {
+          bool on_face = false;
+          for (int j = 0; j < D; ++j) on_face = on_face || T(e, k) == F(f, j);
+          if (!on_face) local[D + s] = T(e, k);
         }
       }
-    }
-    double area;
-    if constexpr (D == 2) {
-      area = (u(F(f, 1)) - u(F(f, 0))).norm();
-    } else {
-      area = 0.5 * (u(F(f, 1)) - u(F(f, 0))).cross(u(F(f, 2)) - u(F(f, 0))).norm();
-    }
-    // integral over a (D-1)-simplex of |g|^2, g linear: |F|/(D(D+1)) (sum |g_v|^2 + |sum g_v|^2)
-    Eigen::Matrix<double, D, NZ> Gs = Eigen::Matrix<double, D, NZ>::Zero();
-    Eigen::Matrix<double, NZ, NZ> H = Eigen::Matrix<double, NZ, NZ>::Zero();
-    for (int v = 0; v < D; ++v) {
-      Gs += G[v];
-      H.noalias() += G[v].transpose() * G[v];
-    }
-    H.noalias() += Gs.transpose() * Gs;
-    H *= area / (D * (D + 1));
-    auto global_m = [&](int a) { return local[a / D] * D + a % D; };
-    for (int a = 0; a < NZ; ++a)
-      for (int b = 0; b < NZ; ++b) {
-        const double h = H(a, b);
-        if (h == 0.0) continue;
-        if (a < XOFF && b < XOFF) tmm.emplace_back(global_m(a), global_m(b), h);
-        else if (a < XOFF) tmx.emplace_back(global_m(a), local[b - XOFF], h);
-        else if (b >= XOFF) txx.emplace_back(local[a - XOFF], local[b - XOFF], h);
+      auto local_of = [&](int g) {
+        for (int j = 0; j < NL; ++j)
+          if (local[j] == g) return j;
+        return -1;
+      };
+      for (auto& g : G) g.setZero();
+      for (int s = 0; s < 2; ++s) {
+        const int e = F(f, D + s);
+        const double sgn = s == 0 ? 1.0 : -1.0;
+        for (int k = 0; k <= D; ++k) {
+          const int j = local_of(T(e, k));
+          const VecD a = sgn * A[e].row(k).transpose();
+          for (int v = 0; v < D; ++v) {
+            const VecD w = u(F(f, v)) - u(T(e, k));
+            G[v].col(XOFF + j) += a;
+            G[v].template block<D, D>(0, j * D) += a * w.transpose();
+          }
+        }
       }
+      double area;
+      if constexpr (D == 2) {
+        area = (u(F(f, 1)) - u(F(f, 0))).norm();
+      } else {
+        area = 0.5 * (u(F(f, 1)) - u(F(f, 0))).cross(u(F(f, 2)) - u(F(f, 0))).norm();
+      }
+      // integral over a (D-1)-simplex of |g|^2, g linear: |F|/(D(D+1)) (sum |g_v|^2 + |sum g_v|^2)
+      Eigen::Matrix<double, D, NZ> Gs = Eigen::Matrix<double, D, NZ>::Zero();
+      Eigen::Matrix<double, NZ, NZ> H = Eigen::Matrix<double, NZ, NZ>::Zero();
+      for (int v = 0; v < D; ++v) {
+        Gs += G[v];
+        H.noalias() += G[v].transpose() * G[v];
+      }
+      H.noalias() += Gs.transpose() * Gs;
+      H *= area / (D * (D + 1));
+      auto global_m = [&](int a) { return local[a / D] * D + a % D; };
+      for (int a = 0; a < NZ; ++a)
+        for (int b = 0; b < NZ; ++b) {
+          const double h = H(a, b);
+          if (h == 0.0) continue;
+          if (a < XOFF && b < XOFF) tmm.emplace_back(global_m(a), global_m(b), h);
+          else if (a < XOFF) tmx.emplace_back(global_m(a), local[b - XOFF], h);
+          else if (b >= XOFF) txx.emplace_back(local[a - XOFF], local[b - XOFF], h);
+        }
+    }
+    P.disc_mm.resize(D * n, D * n);
+    P.disc_mm.setFromTriplets(tmm.begin(), tmm.end());
+    P.disc_mx.resize(D * n, n);
+    P.disc_mx.setFromTriplets(tmx.begin(), tmx.end());
+    P.disc_xx.resize(n, n);
+    P.disc_xx.setFromTriplets(txx.begin(), txx.end());
   }
-  Hessians Hs;
-  Hs.vibr_mm.resize(D * n, D * n);
-  Hs.vibr_mm.setFromTriplets(tv.begin(), tv.end());
-  Hs.disc_mm.resize(D * n, D * n);
-  Hs.disc_mm.setFromTriplets(tmm.begin(), tmm.end());
-  Hs.disc_mx.resize(D * n, n);
-  Hs.disc_mx.setFromTriplets(tmx.begin(), tmx.end());
-  Hs.disc_xx.resize(n, n);
-  Hs.disc_xx.setFromTriplets(txx.begin(), txx.end());
+  (void)ntc;
+  Hessians Hs = {std::move(parts[0].vibr_mm), std::move(parts[0].disc_mm), std::move(parts[0].disc_mx),
+                 std::move(parts[0].disc_xx)};
+  for (int c = 1; c < chunks; ++c) {
+    Hs.vibr_mm += parts[c].vibr_mm;
+    Hs.disc_mm += parts[c].disc_mm;
+    Hs.disc_mx += parts[c].disc_mx;
+    Hs.disc_xx += parts[c].disc_xx;
+  }
   return Hs;
 }
 
