@@ -35,10 +35,21 @@
 namespace mbi::interp {
 namespace {
 
-constexpr int kVec = 4;  // floats per coefficient vector (x, y, z, 0)
-
+// Per element, the position polynomial's terms (d floats each, packed) padded to whole cache
+// lines (3D: 10 x 3 = 30 floats in 32, 128 B: 2 lines, 64-byte aligned; the x86 kernel loads 4
+// floats at each term and ignores the 4th), and likewise the Jacobian's (3D: 12 x 3 in 48).
 constexpr int position_terms(int d) { return 1 + d * (d + 3) / 2; }  // 10 in 3D, 6 in 2D
 constexpr int jacobian_terms(int d) { return d * (d + 1); }          // 12 in 3D, 6 in 2D
+constexpr int coef_stride(int d) { return d == 3 ? 32 : 16; }
+constexpr int jac_stride(int d) { return d == 3 ? 48 : 16; }
+static_assert(position_terms(3) * 3 + 1 <= coef_stride(3) && jacobian_terms(3) * 3 + 1 <= jac_stride(3));
+static_assert(position_terms(2) * 2 <= coef_stride(2) && jacobian_terms(2) * 2 <= jac_stride(2));
+
+// the first 64-byte boundary in a buffer allocated with 16 floats to spare
+template <class T>
+T* align64(T* p) {
+  return reinterpret_cast<T*>((reinterpret_cast<std::uintptr_t>(p) + 63) & ~std::uintptr_t(63));
+}
 
 float as_float(std::int32_t w) {
   float f;
@@ -64,33 +75,33 @@ std::int32_t as_word(float f) {
 template <int D>
 void eval_scalar(const std::int32_t* rec, const float* coef, const float* jac, const float* nrest,
                  float* pos, float* nout, long long begin, long long end) {
-  constexpr int NC = position_terms(D), NJ = jacobian_terms(D);
+  constexpr int NC = coef_stride(D), NJ = jac_stride(D);
   for (long long p = begin; p < end; ++p) {
     const std::int32_t* r = rec + p * (D + 1);
     const long long e = r[0];
     float b[D + 1];
     for (int k = 1; k <= D; ++k) b[k] = as_float(r[k]);
-    const float* C = coef + e * NC * kVec;
+    const float* C = coef + e * NC;
     float x[D];
     for (int c = 0; c < D; ++c) x[c] = C[c];
     int s = 1;
     for (int k = 1; k <= D; ++k) {
       float t[D];
-      for (int c = 0; c < D; ++c) t[c] = C[s * kVec + c];
+      for (int c = 0; c < D; ++c) t[c] = C[s * D + c];
       ++s;
       for (int l = k; l <= D; ++l, ++s)
-        for (int c = 0; c < D; ++c) t[c] += b[l] * C[s * kVec + c];
+        for (int c = 0; c < D; ++c) t[c] += b[l] * C[s * D + c];
       for (int c = 0; c < D; ++c) x[c] += b[k] * t[c];
     }
     for (int c = 0; c < D; ++c) pos[p * D + c] = x[c];
     if (!nout) continue;
-    const float* G = jac + e * NJ * kVec;
+    const float* G = jac + e * NJ;
     float J[D][D];  // J[c][r]: component c of column r
     for (int rr = 0; rr < D; ++rr) {
-      const float* g = G + rr * (D + 1) * kVec;
+      const float* g = G + rr * (D + 1) * D;
       for (int c = 0; c < D; ++c) {
         float v = g[c];
-        for (int l = 1; l <= D; ++l) v += b[l] * g[l * kVec + c];
+        for (int l = 1; l <= D; ++l) v += b[l] * g[l * D + c];
         J[c][rr] = v;
       }
     }
@@ -123,16 +134,18 @@ void eval_scalar(const std::int32_t* rec, const float* coef, const float* jac, c
 // write-allocate reads).
 #define MBI_TARGET __attribute__((target("avx2,fma")))
 
+MBI_TARGET inline __m128 term(const float* C, int k) { return _mm_loadu_ps(C + 3 * k); }
+
 MBI_TARGET inline __m128 position3(const float* C, __m128 b1, __m128 b2, __m128 b3) {
-  __m128 t1 = _mm_fmadd_ps(_mm_load_ps(C + 2 * kVec), b1, _mm_load_ps(C + 1 * kVec));
-  __m128 t2 = _mm_fmadd_ps(_mm_load_ps(C + 6 * kVec), b2, _mm_load_ps(C + 5 * kVec));
-  const __m128 t3 = _mm_fmadd_ps(_mm_load_ps(C + 9 * kVec), b3, _mm_load_ps(C + 8 * kVec));
-  t1 = _mm_fmadd_ps(_mm_load_ps(C + 3 * kVec), b2, t1);
-  t2 = _mm_fmadd_ps(_mm_load_ps(C + 7 * kVec), b3, t2);
-  t1 = _mm_fmadd_ps(_mm_load_ps(C + 4 * kVec), b3, t1);
-  __m128 x = _mm_fmadd_ps(t1, b1, _mm_load_ps(C));
+  __m128 t1 = _mm_fmadd_ps(term(C, 2), b1, term(C, 1));
+  __m128 t2 = _mm_fmadd_ps(term(C, 6), b2, term(C, 5));
+  const __m128 t3 = _mm_fmadd_ps(term(C, 9), b3, term(C, 8));
+  t1 = _mm_fmadd_ps(term(C, 3), b2, t1);
+  t2 = _mm_fmadd_ps(term(C, 7), b3, t2);
+  t1 = _mm_fmadd_ps(term(C, 4), b3, t1);
+  __m128 x = _mm_fmadd_ps(t1, b1, term(C, 0));
   x = _mm_fmadd_ps(t2, b2, x);
-  return _mm_fmadd_ps(t3, b3, x);
+  return _mm_fmadd_ps(t3, b3, x);  // lane 3: not a coordinate (ignored by the stores)
 }
 
 #define MBI_YZX(v) _mm_shuffle_ps((v), (v), _MM_SHUFFLE(3, 0, 2, 1))
@@ -140,10 +153,10 @@ MBI_TARGET inline __m128 position3(const float* C, __m128 b1, __m128 b2, __m128 
 MBI_TARGET inline __m128 normal3(const float* G, __m128 b1, __m128 b2, __m128 b3, const float* n) {
   __m128 j[3];
   for (int r = 0; r < 3; ++r) {
-    const float* g = G + r * 4 * kVec;
-    __m128 v = _mm_fmadd_ps(_mm_load_ps(g + kVec), b1, _mm_load_ps(g));
-    v = _mm_fmadd_ps(_mm_load_ps(g + 2 * kVec), b2, v);
-    j[r] = _mm_fmadd_ps(_mm_load_ps(g + 3 * kVec), b3, v);
+    const float* g = G + r * 4 * 3;
+    __m128 v = _mm_fmadd_ps(term(g, 1), b1, term(g, 0));
+    v = _mm_fmadd_ps(term(g, 2), b2, v);
+    j[r] = _mm_fmadd_ps(term(g, 3), b3, v);
   }
   const __m128 n0 = _mm_set1_ps(n[0]), n1 = _mm_set1_ps(n[1]), n2 = _mm_set1_ps(n[2]);
   const __m128 y0 = MBI_YZX(j[0]), y1 = MBI_YZX(j[1]), y2 = MBI_YZX(j[2]);
@@ -151,7 +164,7 @@ MBI_TARGET inline __m128 normal3(const float* G, __m128 b1, __m128 b2, __m128 b3
   __m128 o = _mm_mul_ps(n0, _mm_fmsub_ps(j[1], y2, _mm_mul_ps(y1, j[2])));
   o = _mm_fmadd_ps(n1, _mm_fmsub_ps(j[2], y0, _mm_mul_ps(y2, j[0])), o);
   o = _mm_fmadd_ps(n2, _mm_fmsub_ps(j[0], y1, _mm_mul_ps(y0, j[1])), o);
-  o = MBI_YZX(o);  // lane 3 stays 0
+  o = _mm_blend_ps(MBI_YZX(o), _mm_setzero_ps(), 0x8);  // lane 3 (not a coordinate) to 0
   const __m128 sq = _mm_mul_ps(o, o);
   __m128 s = _mm_add_ps(sq, _mm_shuffle_ps(sq, sq, _MM_SHUFFLE(2, 3, 0, 1)));
   s = _mm_add_ps(s, _mm_shuffle_ps(s, s, _MM_SHUFFLE(1, 0, 3, 2)));
@@ -175,7 +188,7 @@ MBI_TARGET inline void pack4(__m128 r0, __m128 r1, __m128 r2, __m128 r3, __m128&
 template <bool Normals>
 MBI_TARGET void eval_x86(const std::int32_t* rec, const float* coef, const float* jac,
                          const float* nrest, float* pos, float* nout, long long begin, long long end) {
-  constexpr int NC = position_terms(3) * kVec, NJ = jacobian_terms(3) * kVec;
+  constexpr int NC = coef_stride(3), NJ = jac_stride(3);
   const bool aligned = (reinterpret_cast<std::uintptr_t>(pos + 3 * begin) % 16 == 0) &&
                        (!Normals || reinterpret_cast<std::uintptr_t>(nout + 3 * begin) % 16 == 0);
   long long p = begin;
@@ -315,9 +328,11 @@ void FastEvaluator::prepare(const BezierPoints& B, bool normals) {
                 std::to_string(d) + " with m >= " + std::to_string(m_) + ", got " +
                 std::to_string(B.rows()) + " x " + std::to_string(B.cols()));
   if (normals && !has_rest_normals()) throw Error("FastEvaluator: normals asked for, but no rest normals were set");
-  const int NC = position_terms(d), NJ = jacobian_terms(d);
-  coef_.resize(static_cast<size_t>(m_) * NC * kVec);
-  if (normals) jac_.resize(static_cast<size_t>(m_) * NJ * kVec);
+  const int NC = coef_stride(d), NJ = jac_stride(d);
+  coef_.resize(static_cast<size_t>(m_) * NC + 16);  // zeros: the padding stays 0
+  if (normals) jac_.resize(static_cast<size_t>(m_) * NJ + 16);
+  float* const coef = align64(coef_.data());
+  float* const jac = normals ? align64(jac_.data()) : nullptr;
   const auto& edges = bezier_edges(d);
   // local edge index of pair (i, j)
   int edge_of[4][4] = {};
@@ -331,8 +346,8 @@ void FastEvaluator::prepare(const BezierPoints& B, bool normals) {
     auto P = [&](int k, int c) { return B(static_cast<Eigen::Index>(e) * K + k, c); };
     auto Pe = [&](int i, int j, int c) { return P(d + 1 + edge_of[i][j], c); };
     double cl[4][3] = {}, cq[4][4][3] = {};  // c_k, c_kl (symmetric)
-    float* C = coef_.data() + static_cast<size_t>(e) * NC * kVec;
-    for (int c = 0; c < kVec; ++c) C[c] = c < d ? static_cast<float>(P(0, c)) : 0.0f;
+    float* C = coef + static_cast<size_t>(e) * NC;
+    for (int c = 0; c < d; ++c) C[c] = static_cast<float>(P(0, c));
     for (int k = 1; k <= d; ++k)
       for (int c = 0; c < d; ++c) {
         cl[k][c] = 2 * (Pe(0, k, c) - P(0, c));
@@ -342,28 +357,24 @@ void FastEvaluator::prepare(const BezierPoints& B, bool normals) {
       }
     int s = 1;
     for (int k = 1; k <= d; ++k) {
-      for (int c = 0; c < kVec; ++c) C[s * kVec + c] = c < d ? static_cast<float>(cl[k][c]) : 0.0f;
+      for (int c = 0; c < d; ++c) C[s * d + c] = static_cast<float>(cl[k][c]);
       ++s;
       for (int l = k; l <= d; ++l, ++s)
-        for (int c = 0; c < kVec; ++c) C[s * kVec + c] = c < d ? static_cast<float>(cq[k][l][c]) : 0.0f;
+        for (int c = 0; c < d; ++c) C[s * d + c] = static_cast<float>(cq[k][l][c]);
     }
     if (!normals) continue;
-    float* G = jac_.data() + static_cast<size_t>(e) * NJ * kVec;
+    float* G = jac + static_cast<size_t>(e) * NJ;
     const float* a = grads_.data() + static_cast<size_t>(e) * d * d;  // a[(k-1) d + r]
     for (int r = 0; r < d; ++r) {
-      float* g = G + r * (d + 1) * kVec;
-      for (int c = 0; c < kVec; ++c) {
-        if (c >= d) {
-          for (int l = 0; l <= d; ++l) g[l * kVec + c] = 0.0f;
-          continue;
-        }
+      float* g = G + r * (d + 1) * d;
+      for (int c = 0; c < d; ++c) {
         double j0 = 0;
         for (int k = 1; k <= d; ++k) j0 += a[(k - 1) * d + r] * cl[k][c];
         g[c] = static_cast<float>(j0);
         for (int l = 1; l <= d; ++l) {
           double v = 0;
           for (int k = 1; k <= d; ++k) v += a[(k - 1) * d + r] * (k == l ? 2.0 : 1.0) * cq[k][l][c];
-          g[l * kVec + c] = static_cast<float>(v);
+          g[l * d + c] = static_cast<float>(v);
         }
       }
     }
@@ -386,8 +397,8 @@ void FastEvaluator::evaluate(const BezierPoints& B, float* positions, float* nor
   prepare(B, with_normals);
   if (p_ == 0) return;
   const std::int32_t* rec = records_.data();
-  const float* coef = coef_.data();
-  const float* jac = with_normals ? jac_.data() : nullptr;
+  const float* coef = align64(coef_.data());
+  const float* jac = with_normals ? align64(jac_.data()) : nullptr;
   const float* nrest = with_normals ? normals_.data() : nullptr;
   const int d = d_;
   const long long p = p_;

@@ -62,8 +62,8 @@ class FastEvaluator {
   std::vector<std::int32_t> records_;  // p (d+1) words: element id, then d float bit patterns
   std::vector<float> grads_;           // m d d: rows 1..d of each element's basis gradients
   std::vector<float> normals_;         // p d (+ padding) rest normals
-  std::vector<float> coef_;            // m x (positions terms) x 4, rebuilt per call
-  std::vector<float> jac_;             // m x d (d+1) x 4, rebuilt per call with normals
+  std::vector<float> coef_;            // m x 32 (3D; 2D: 16): position terms, cache-line aligned, per call
+  std::vector<float> jac_;             // m x 48 (3D; 2D: 16): Jacobian terms, per call with normals
 };
 
 }  // namespace mbi::interp
