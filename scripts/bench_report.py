@@ -295,8 +295,10 @@ def report(data, json_path, wall_s, baseline=None, baseline_path=None):
     # ------------------------------------------------------------------ table 1
     w("## The paper's Table 1")
     w("")
-    w("Factorization = the whole `interp::ModifiedBI` constructor (assembly, beta, gauge, Eigen "
-      "SimplicialLLT); solve = all M_i for one pose; CPU interpolation = our kernel, float positions, "
+    w("Factorization = the whole `interp::ModifiedBI` constructor (assembly, beta, gauge, and the "
+      "factorization: CHOLMOD's supernodal Cholesky when the build has it, else Eigen's SimplicialLLT); "
+      "solve = all M_i for one pose; CPU interpolation = our kernel (`interp::FastEvaluator`, as the "
+      "pipeline's float CPU evaluator runs it), float positions, "
       f"all {nthreads} threads (1 thread in brackets); GPU interpolation = the transform-feedback evaluator, "
       "per-frame upload included, on the renderer above. The paper's figures (2008 hardware) are in "
       "the columns beside ours; our `large` shape stands for the paper's Bugman.")

@@ -56,7 +56,7 @@ __attribute__((always_inline)) inline Vec<S> load(const double* p) {
   return v;
 }
 template <int S>
-__attribute__((always_inline)) inline void store(double* p, Vec<S> v) {
+__attribute__((always_inline)) inline void store(double* p, const Vec<S>& v) {
   std::memcpy(p, &v, sizeof v);
 }
 
@@ -572,12 +572,20 @@ CholeskyFactor factor_with_cholmod(const Eigen::SparseMatrix<double>& A, const c
   cholmod_sparse As = Eigen::viewAsCholmod(Eigen::Ref<Eigen::SparseMatrix<double>>(Ac));
   As.stype = -1;  // symmetric: CHOLMOD reads the lower triangle
   cholmod_factor* L = cholmod_analyze(&As, &c);
-  bool ok = L != nullptr && c.status == CHOLMOD_OK;
-  if (ok) ok = cholmod_factorize(&As, L, &c) && c.status == CHOLMOD_OK && L->minor == L->n;
-  if (!ok || !L->is_super || L->itype != CHOLMOD_INT) {
+  const bool analyzed = L != nullptr && c.status >= CHOLMOD_OK;
+  const bool factored = analyzed && cholmod_factorize(&As, L, &c) && c.status >= CHOLMOD_OK;
+  std::string why;
+  if (!analyzed || !factored)  // an error of CHOLMOD's own (out of memory, too large, ...)
+    why = "CHOLMOD status " + std::to_string(c.status) +
+          (c.status == CHOLMOD_OUT_OF_MEMORY ? " (out of memory)" : c.status == CHOLMOD_TOO_LARGE ? " (too large)" : "");
+  else if (c.status == CHOLMOD_NOT_POSDEF || L->minor < L->n)
+    why = "the reduced system is not positive definite";
+  else if (!L->is_super || L->itype != CHOLMOD_INT)
+    why = "unexpected factor layout";
+  if (!why.empty()) {
     if (L) cholmod_free_factor(&L, &c);
     cholmod_finish(&c);
-    throw Error(std::string(who) + ": Cholesky factorisation (CHOLMOD) failed: the reduced system is not positive definite");
+    throw Error(std::string(who) + ": Cholesky factorisation (CHOLMOD) failed: " + why);
   }
   CholeskyFactor F;
   F.method = L->ordering == CHOLMOD_METIS ? "CHOLMOD supernodal (METIS)" : "CHOLMOD supernodal (AMD)";
