@@ -67,6 +67,8 @@ __attribute__((always_inline)) inline void store(double* p, const Vec<S>& v) {
 // each such row of X is loaded and stored once per panel, and the backward sums run in 4
 // independent accumulators. `rmap` is F.rows, or F.prow for a group of the threaded forward
 // sweep (the supernode's own columns come first in both).
+constexpr int kPanel = 4;  // columns of a panel (8 was slower at 1,331 vertices, 1.85 against 1.44 ms)
+
 template <int S, int W>
 __attribute__((always_inline)) inline void forward_panel(const double* L, std::ptrdiff_t nsrow, int j,
                                                          const int* r, double* X, double* Xs) {
@@ -118,7 +120,7 @@ __attribute__((always_inline)) inline void forward_super(const CholeskyFactor& F
   const double* L = F.vals.data() + F.valp[s];
   double* Xs = X + static_cast<std::ptrdiff_t>(k1) * S;
   int j = 0;
-  for (; j + 4 <= nscol; j += 4) forward_panel<S, 4>(L, nsrow, j, r, X, Xs);
+  for (; j + kPanel <= nscol; j += kPanel) forward_panel<S, kPanel>(L, nsrow, j, r, X, Xs);
   switch (nscol - j) {
     case 3: forward_panel<S, 3>(L, nsrow, j, r, X, Xs); break;
     case 2: forward_panel<S, 2>(L, nsrow, j, r, X, Xs); break;
@@ -134,14 +136,14 @@ __attribute__((always_inline)) inline void backward_super(const CholeskyFactor& 
   const int* r = F.rows.data() + F.rowp[s];
   const double* L = F.vals.data() + F.valp[s];
   double* Xs = X + static_cast<std::ptrdiff_t>(k1) * S;
-  const int full = nscol / 4 * 4;  // the same panels as forward_super, last first
+  const int full = nscol / kPanel * kPanel;  // the same panels as forward_super, last first
   switch (nscol - full) {
     case 3: backward_panel<S, 3>(L, nsrow, full, r, X, Xs); break;
     case 2: backward_panel<S, 2>(L, nsrow, full, r, X, Xs); break;
     case 1: backward_panel<S, 1>(L, nsrow, full, r, X, Xs); break;
     default: break;
   }
-  for (int j = full - 4; j >= 0; j -= 4) backward_panel<S, 4>(L, nsrow, j, r, X, Xs);
+  for (int j = full - kPanel; j >= 0; j -= kPanel) backward_panel<S, kPanel>(L, nsrow, j, r, X, Xs);
 }
 
 // A sweep over a list of supernodes (ascending; the backward sweep walks it from the end), or

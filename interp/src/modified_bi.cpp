@@ -380,6 +380,7 @@ struct ModifiedBI::Impl {
   int n_red = 0;
   int null_dim = 0;
   SpMat Hmm_vibr_red, Hmm_disc_red, Hmx_red;  // restricted blocks (Hmx_red unweighted)
+  Eigen::SparseMatrix<double, Eigen::RowMajor> rhs_op;  // -beta Hmx_red, by rows (sparse path)
   detail::CholeskyFactor F;
   bool dense = false;
   // dense operator -H^-1 H_mx, row-major (n_red x n): row a holds reduced unknown a's weights
@@ -396,10 +397,22 @@ struct ModifiedBI::Impl {
 
   // sol (n_red x d, row-major) for the right-hand sides X (n x d) by the factor.
   void sparse_solve(const Eigen::Ref<const Eigen::MatrixXd>& X, std::vector<double>& sol) const {
-    const Eigen::MatrixXd rhs = -beta * (Hmx_red * X);
+    // right-hand sides -beta H_mx X, row by row in parallel (rows of rhs_op: CSR)
     sol.resize(static_cast<size_t>(n_red) * d);
-    for (int a = 0; a < n_red; ++a)
-      for (int c = 0; c < d; ++c) sol[static_cast<size_t>(a) * d + c] = rhs(a, c);
+    const int* outer = rhs_op.outerIndexPtr();
+    const int* inner = rhs_op.innerIndexPtr();
+    const double* val = rhs_op.valuePtr();
+    const double* x = X.data();
+    const Eigen::Index ld = X.outerStride();
+    const int nt = detail::omp_threads(rhs_op.nonZeros(), 1 << 16);
+    MBI_INTERP_OMP("omp parallel for num_threads(nt) if (nt > 1) schedule(static)")
+    for (int a = 0; a < n_red; ++a) {
+      double acc[3] = {0.0, 0.0, 0.0};
+      for (int p = outer[a]; p < outer[a + 1]; ++p)
+        for (int c = 0; c < d; ++c) acc[c] += val[p] * x[inner[p] + c * ld];
+      for (int c = 0; c < d; ++c) sol[static_cast<size_t>(a) * d + c] = acc[c];
+    }
+    (void)nt;
     F.solve(sol.data(), d);
   }
 
@@ -492,6 +505,7 @@ ModifiedBI::ModifiedBI(const Eigen::Ref<const Eigen::MatrixXd>& U,
       I.dense = static_cast<long long>(I.n_red) * n <= kDenseOperatorMaxEntries;
       break;
   }
+  if (!I.dense) I.rhs_op = -I.beta * I.Hmx_red;
   if (I.dense && static_cast<long long>(I.n_red) * n > (1LL << 28))
     throw Error("ModifiedBI: the dense operator would need " + std::to_string(I.n_red) + " x " +
                 std::to_string(n) + " doubles; use SolvePath::Sparse or Automatic");
@@ -530,7 +544,9 @@ long long ModifiedBI::memory_bytes() const {
   };
   return static_cast<long long>(I.F.bytes()) + static_cast<long long>(I.K.size() * sizeof(double)) +
          sp(I.H.vibr_mm) + sp(I.H.disc_mm) + sp(I.H.disc_mx) + sp(I.H.disc_xx) + sp(I.Hmm_vibr_red) +
-         sp(I.Hmm_disc_red) + sp(I.Hmx_red);
+         sp(I.Hmm_disc_red) + sp(I.Hmx_red) +
+         static_cast<long long>(I.rhs_op.nonZeros()) * (sizeof(double) + sizeof(int)) +
+         static_cast<long long>(I.rhs_op.outerSize() + 1) * sizeof(int);
 }
 const SpMat& ModifiedBI::vibr_hessian_mm() const { return impl_->H.vibr_mm; }
 const SpMat& ModifiedBI::disc_hessian_mm() const { return impl_->H.disc_mm; }
