@@ -14,6 +14,8 @@
 // The coefficients are computed in double from B and rounded to float once per call.
 #include <mbi/interp/fast_evaluate.hpp>
 
+#include "cpu.hpp"
+
 #include "detail.hpp"
 
 #include <cmath>
@@ -246,13 +248,6 @@ MBI_TARGET void eval_x86(const std::int32_t* rec, const float* coef, const float
   }
 }
 
-bool have_fma() {
-  static const bool ok = [] {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  }();
-  return ok;
-}
 #endif
 
 }  // namespace
@@ -404,7 +399,7 @@ void FastEvaluator::evaluate(const BezierPoints& B, float* positions, float* nor
   const long long p = p_;
   auto run = [&](long long begin, long long end) {
 #ifdef MBI_FAST_X86
-    if (d == 3 && have_fma()) {
+    if (d == 3 && detail::have_avx2_fma()) {
       if (with_normals) eval_x86<true>(rec, coef, jac, nrest, positions, normals, begin, end);
       else eval_x86<false>(rec, coef, jac, nrest, positions, normals, begin, end);
       return;

@@ -3,6 +3,7 @@
 
 #include "detail.hpp"
 #include "factor.hpp"
+#include "cpu.hpp"
 #include "omp.hpp"
 
 #include <algorithm>
@@ -347,20 +348,13 @@ __attribute__((target("avx2,fma"))) void dense_rows_avx2(const double* K, std::p
   if (r < r1) dense_rows_portable(K, n, xs, ys, zs, sol, r, r1);
 }
 
-bool have_avx2() {
-  static const bool ok = [] {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  }();
-  return ok;
-}
 #define MBI_DENSE_X86 1
 #endif
 
 void dense_rows(const double* K, std::ptrdiff_t n, const double* xs, const double* ys, const double* zs,
                 double* sol, std::ptrdiff_t r0, std::ptrdiff_t r1) {
 #ifdef MBI_DENSE_X86
-  if (have_avx2()) return dense_rows_avx2(K, n, xs, ys, zs, sol, r0, r1);
+  if (detail::have_avx2_fma()) return dense_rows_avx2(K, n, xs, ys, zs, sol, r0, r1);
 #endif
   dense_rows_portable(K, n, xs, ys, zs, sol, r0, r1);
 }

@@ -4,6 +4,7 @@
 #include <mbi/gpu/renderer.hpp>
 #include <mbi/interp.hpp>
 #include <mbi/io/atomic_file.hpp>
+#include <mbi/io/parse.hpp>
 #include <mbi/raster/raster.hpp>
 #include <mbi/scenes/limits.hpp>
 #include <mbi/scenes/report.hpp>
@@ -535,11 +536,12 @@ void check_picture_size(const Scene& sc, const SceneModels& m) {
   const long long ow = static_cast<long long>(m.image->width) * 3 / 2;
   const long long oh = static_cast<long long>(m.image->height) * 3 / 2;
   const long long w = panels * ow + 8 * (panels - 1);
-  if (w > 16384 || oh > 16384)
+  if (w > io::kMaxImageSide || oh > io::kMaxImageSide)
     throw SceneError(m.dense_name + ": a " + std::to_string(m.image->width) + " x " +
                      std::to_string(m.image->height) + " image makes " + std::to_string(w) + " x " +
                      std::to_string(oh) + " pictures (" + std::to_string(panels) +
-                     " panels at 1.5 times its size), more than 16384 pixels a side; use a smaller "
+                     " panels at 1.5 times its size), more than " + std::to_string(io::kMaxImageSide) +
+                     " pixels a side; use a smaller "
                      "image or output.image = false");
 }
 

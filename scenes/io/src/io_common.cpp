@@ -145,7 +145,7 @@ double to_double(std::string_view s, const std::filesystem::path& file, int line
   double x = 0.0;
   const char* b = s.data();
   const char* e = s.data() + s.size();
-  if (!s.empty() && *b == '+') ++b;
+  if (s.size() > 1 && *b == '+' && b[1] != '-' && b[1] != '+') ++b;  // "+1", never "+-1"
   const auto r = std::from_chars(b, e, x);
   if (r.ec == std::errc::result_out_of_range)
     fail(file, line, field + ": number out of range '" + std::string(s) + "'");
@@ -160,7 +160,7 @@ long long to_int(std::string_view s, const std::filesystem::path& file, int line
   long long x = 0;
   const char* b = s.data();
   const char* e = s.data() + s.size();
-  if (!s.empty() && *b == '+') ++b;
+  if (s.size() > 1 && *b == '+' && b[1] != '-' && b[1] != '+') ++b;  // "+1", never "+-1"
   const auto r = std::from_chars(b, e, x);
   if (r.ec != std::errc() || r.ptr != e)
     fail(file, line, field + ": not an integer '" + std::string(s) + "'");

@@ -405,3 +405,13 @@ TEST_CASE("OutputSet: an output reserved but never written is not committed over
   CHECK(read_text(a) == "{}\n");
   CHECK(read_text(b) == "[]\n");
 }
+
+TEST_CASE("numbers: one leading '+' is a sign, '+-1' and '++1' are not numbers", "[io][hardening]") {
+  CHECK(parse_points("+1 -2 +3e0\n", "p.txt")(0, 0) == 1.0);
+  CHECK(parse_points("+1 -2 +3e0\n", "p.txt")(0, 2) == 3.0);
+  REQUIRE_THAT(error_of([] { parse_points("+-1 0 0\n", "p.txt"); }),
+               Catch::Contains("p.txt") && Catch::Contains("not a number '+-1'"));
+  REQUIRE_THAT(error_of([] { parse_points("++1 0 0\n", "p.txt"); }), Catch::Contains("not a number '++1'"));
+  REQUIRE_THAT(error_of([] { parse_surface("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 +-3\n", "m.obj"); }),
+               Catch::Contains("m.obj"));
+}
