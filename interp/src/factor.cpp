@@ -68,22 +68,6 @@ __attribute__((always_inline)) inline void store(double* p, const Vec<S>& v) {
 // each such row of X is loaded and stored once per panel, and the backward sums run in 4
 // independent accumulators. `rmap` is F.rows, or F.prow for a group of the threaded forward
 // sweep (the supernode's own columns come first in both).
-// One supernode: its columns, its rows (nscol of its own, then the rows below), their places in
-// X (rmap), its column-major block of L, and X's rows of its own columns.
-struct Supernode {
-  int nscol;
-  std::ptrdiff_t nsrow;
-  const int* r;
-  const double* L;
-  double* Xs;
-};
-template <int S>
-__attribute__((always_inline)) inline Supernode supernode(const CholeskyFactor& F, int s, double* X,
-                                                          const int* rmap) {
-  return {F.super[s + 1] - F.super[s], F.rowp[s + 1] - F.rowp[s], rmap + F.rowp[s],
-          F.vals.data() + F.valp[s], X + static_cast<std::ptrdiff_t>(F.super[s]) * S};
-}
-
 constexpr int kPanel = 4;  // columns of a panel (8 was slower at 1,331 vertices, 1.85 against 1.44 ms)
 
 template <int S, int W>
@@ -131,7 +115,11 @@ __attribute__((always_inline)) inline void backward_panel(const double* L, std::
 template <int S>
 __attribute__((always_inline)) inline void forward_super(const CholeskyFactor& F, int s, double* X,
                                                          const int* rmap) {
-  const auto [nscol, nsrow, r, L, Xs] = supernode<S>(F, s, X, rmap);
+  const int k1 = F.super[s], nscol = F.super[s + 1] - k1;
+  const std::ptrdiff_t nsrow = F.rowp[s + 1] - F.rowp[s];
+  const int* r = rmap + F.rowp[s];
+  const double* L = F.vals.data() + F.valp[s];
+  double* Xs = X + static_cast<std::ptrdiff_t>(k1) * S;
   int j = 0;
   for (; j + kPanel <= nscol; j += kPanel) forward_panel<S, kPanel>(L, nsrow, j, r, X, Xs);
   switch (nscol - j) {
@@ -144,7 +132,11 @@ __attribute__((always_inline)) inline void forward_super(const CholeskyFactor& F
 
 template <int S>
 __attribute__((always_inline)) inline void backward_super(const CholeskyFactor& F, int s, double* X) {
-  const auto [nscol, nsrow, r, L, Xs] = supernode<S>(F, s, X, F.rows.data());
+  const int k1 = F.super[s], nscol = F.super[s + 1] - k1;
+  const std::ptrdiff_t nsrow = F.rowp[s + 1] - F.rowp[s];
+  const int* r = F.rows.data() + F.rowp[s];
+  const double* L = F.vals.data() + F.valp[s];
+  double* Xs = X + static_cast<std::ptrdiff_t>(k1) * S;
   const int full = nscol / kPanel * kPanel;  // the same panels as forward_super, last first
   switch (nscol - full) {
     case 3: backward_panel<S, 3>(L, nsrow, full, r, X, Xs); break;
@@ -192,7 +184,11 @@ __attribute__((always_inline)) inline void top_body(const CholeskyFactor& F, dou
       continue;
     }
     MBI_INTERP_OMP("omp barrier")
-    const auto [nscol, nsrow, r, L, Xs] = supernode<S>(F, s, X, rows);
+    const int k1 = F.super[s], nscol = F.super[s + 1] - k1;
+    const std::ptrdiff_t nsrow = F.rowp[s + 1] - F.rowp[s];
+    const int* r = rows + F.rowp[s];
+    const double* L = F.vals.data() + F.valp[s];
+    double* Xs = X + static_cast<std::ptrdiff_t>(k1) * S;
     Vec<S> y[kTopBlock];
     for (int j = 0; j < nscol; j += kTopBlock) {
       const int B = std::min(kTopBlock, nscol - j);
@@ -242,7 +238,11 @@ __attribute__((always_inline)) inline void top_body(const CholeskyFactor& F, dou
       continue;
     }
     MBI_INTERP_OMP("omp barrier")
-    const auto [nscol, nsrow, r, L, Xs] = supernode<S>(F, s, X, rows);
+    const int k1 = F.super[s], nscol = F.super[s + 1] - k1;
+    const std::ptrdiff_t nsrow = F.rowp[s + 1] - F.rowp[s];
+    const int* r = rows + F.rowp[s];
+    const double* L = F.vals.data() + F.valp[s];
+    double* Xs = X + static_cast<std::ptrdiff_t>(k1) * S;
     for (int j = (nscol - 1) / kTopBlock * kTopBlock; j >= 0; j -= kTopBlock) {
       const int B = std::min(kTopBlock, nscol - j);
       std::ptrdiff_t lo, hi;
