@@ -5,11 +5,16 @@
 //   x = c_0 + sum_k b_k c_k + sum_{k<=l} b_k b_l c_kl
 //   c_0 = P_0, c_k = 2 (P_0k - P_0), c_kk = P_0 + P_k - 2 P_0k,
 //   c_kl = 2 (P_0 - P_0k - P_0l + P_kl) (k < l),
-// evaluated in Horner form x = c_0 + sum_k b_k (c_k + sum_{l>=k} b_l c_kl): in 3D 9 FMAs on
-// 4-float vectors (x, y, z, 0) a point. For normals, J = dx/du = sum_k (dx/db_k) a_k^T is linear in
-// b: column r of J is J0_r + sum_l b_l J_lr with J0_r = sum_k a_k[r] c_k and
-// J_lr = sum_k a_k[r] e_kl (e_kl = c_kl for k != l, 2 c_kk for k = l); the mapped normal is
-// cof(J) n = n_0 (j_1 x j_2) + n_1 (j_2 x j_0) + n_2 (j_0 x j_1) (fact 6).
+// evaluated in Horner form x = c_0 + sum_k b_k t_k, t_k = c_k + sum_{l>=k} b_l c_kl: in 3D 9 FMAs
+// on (x, y, z, 0) vectors a point, two points to a 256-bit vector.
+//
+// Normals need no second table. With D_k = dx/db_k = c_k + sum_l e_kl b_l (e_kl = c_kl for
+// k != l, 2 c_kk for k = l; from the t_k above, 6 more FMAs in 3D) and A the matrix whose columns
+// are the gradients a_k of b_k over the rest space, the Jacobian is J = D A^T, so
+//   cof(J) n = cof(D) cof(A)^T n = cof(D) m,   m = cof(A)^T n   (fact 6; cof(XY) = cof(X) cof(Y)).
+// m depends on the rest state only: set_rest_normals() stores it per point (in double, rounded
+// once) in place of n, and a point's normal is cof(D) m = m_1 (D_2 x D_3) + m_2 (D_3 x D_1) +
+// m_3 (D_1 x D_2), renormalised.
 //
 // The coefficients are computed in double from B and rounded to float once per call.
 #include <mbi/interp/fast_evaluate.hpp>
@@ -18,6 +23,7 @@
 
 #include "detail.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -39,13 +45,26 @@ namespace {
 
 // Per element, the position polynomial's terms (d floats each, packed) padded to whole cache
 // lines (3D: 10 x 3 = 30 floats in 32, 128 B: 2 lines, 64-byte aligned; the x86 kernel loads 4
-// floats at each term and ignores the 4th), and likewise the Jacobian's (3D: 12 x 3 in 48).
+// floats at each term and ignores the 4th).
 constexpr int position_terms(int d) { return 1 + d * (d + 3) / 2; }  // 10 in 3D, 6 in 2D
-constexpr int jacobian_terms(int d) { return d * (d + 1); }          // 12 in 3D, 6 in 2D
 constexpr int coef_stride(int d) { return d == 3 ? 32 : 16; }
-constexpr int jac_stride(int d) { return d == 3 ? 48 : 16; }
-static_assert(position_terms(3) * 3 + 1 <= coef_stride(3) && jacobian_terms(3) * 3 + 1 <= jac_stride(3));
-static_assert(position_terms(2) * 2 <= coef_stride(2) && jacobian_terms(2) * 2 <= jac_stride(2));
+static_assert(position_terms(3) * 3 + 1 <= coef_stride(3) && position_terms(2) * 2 <= coef_stride(2));
+
+// Records past the last point (element 0): the x86 kernel prefetches the coefficients of the
+// point kPrefetch ahead without a bounds check.
+constexpr int kPrefetch = 16;
+
+// Index of c_k (lin) and c_kl, k <= l (quad), 1-based k, l, in an element's terms.
+struct TermIndex {
+  int lin[4] = {}, quad[4][4] = {};
+  constexpr explicit TermIndex(int d) {
+    int s = 1;
+    for (int k = 1; k <= d; ++k) {
+      lin[k] = s++;
+      for (int l = k; l <= d; ++l, ++s) quad[k][l] = quad[l][k] = s;
+    }
+  }
+};
 
 // the first 64-byte boundary in a buffer allocated with 16 floats to spare
 template <class T>
@@ -75,9 +94,10 @@ std::int32_t as_word(float f) {
 
 // ------------------------------------------------------------------------ portable kernel
 template <int D>
-void eval_scalar(const std::int32_t* rec, const float* coef, const float* jac, const float* nrest,
-                 float* pos, float* nout, long long begin, long long end) {
-  constexpr int NC = coef_stride(D), NJ = jac_stride(D);
+void eval_scalar(const std::int32_t* rec, const float* coef, const float* mrest, float sigma, float* pos,
+                 float* nout, long long begin, long long end) {
+  constexpr int NC = coef_stride(D);
+  constexpr TermIndex ix(D);
   for (long long p = begin; p < end; ++p) {
     const std::int32_t* r = rec + p * (D + 1);
     const long long e = r[0];
@@ -86,41 +106,37 @@ void eval_scalar(const std::int32_t* rec, const float* coef, const float* jac, c
     const float* C = coef + e * NC;
     float x[D];
     for (int c = 0; c < D; ++c) x[c] = C[c];
-    int s = 1;
     for (int k = 1; k <= D; ++k) {
       float t[D];
-      for (int c = 0; c < D; ++c) t[c] = C[s * D + c];
-      ++s;
-      for (int l = k; l <= D; ++l, ++s)
-        for (int c = 0; c < D; ++c) t[c] += b[l] * C[s * D + c];
+      for (int c = 0; c < D; ++c) t[c] = C[ix.lin[k] * D + c];
+      for (int l = k; l <= D; ++l)
+        for (int c = 0; c < D; ++c) t[c] += b[l] * C[ix.quad[k][l] * D + c];
       for (int c = 0; c < D; ++c) x[c] += b[k] * t[c];
     }
     for (int c = 0; c < D; ++c) pos[p * D + c] = x[c];
     if (!nout) continue;
-    const float* G = jac + e * NJ;
-    float J[D][D];  // J[c][r]: component c of column r
-    for (int rr = 0; rr < D; ++rr) {
-      const float* g = G + rr * (D + 1) * D;
+    float Dk[D + 1][D];  // Dk[k][c] = component c of dx/db_k
+    for (int k = 1; k <= D; ++k)
       for (int c = 0; c < D; ++c) {
-        float v = g[c];
-        for (int l = 1; l <= D; ++l) v += b[l] * g[l * D + c];
-        J[c][rr] = v;
+        float v = C[ix.lin[k] * D + c];
+        for (int l = 1; l <= D; ++l) v += (k == l ? 2.0f : 1.0f) * b[l] * C[ix.quad[k][l] * D + c];
+        Dk[k][c] = sigma * v;
       }
-    }
-    const float* n = nrest + p * D;
+    const float* m = mrest + p * D;
     float o[D];
     if constexpr (D == 3) {
-      float Cm[3][3];
-      for (int rr = 0; rr < 3; ++rr) {
-        const int r1 = (rr + 1) % 3, r2 = (rr + 2) % 3;
-        Cm[0][rr] = J[1][r1] * J[2][r2] - J[2][r1] * J[1][r2];
-        Cm[1][rr] = J[2][r1] * J[0][r2] - J[0][r1] * J[2][r2];
-        Cm[2][rr] = J[0][r1] * J[1][r2] - J[1][r1] * J[0][r2];
+      // cof(D) m: column k of cof(D) is D_{k+1} x D_{k+2}
+      for (int c = 0; c < 3; ++c) o[c] = 0;
+      for (int k = 1; k <= 3; ++k) {
+        const float* u = Dk[k % 3 + 1];
+        const float* w = Dk[(k + 1) % 3 + 1];
+        o[0] += m[k - 1] * (u[1] * w[2] - u[2] * w[1]);
+        o[1] += m[k - 1] * (u[2] * w[0] - u[0] * w[2]);
+        o[2] += m[k - 1] * (u[0] * w[1] - u[1] * w[0]);
       }
-      for (int c = 0; c < 3; ++c) o[c] = Cm[c][0] * n[0] + Cm[c][1] * n[1] + Cm[c][2] * n[2];
     } else {
-      o[0] = J[1][1] * n[0] - J[1][0] * n[1];
-      o[1] = -J[0][1] * n[0] + J[0][0] * n[1];
+      o[0] = m[0] * Dk[2][1] - m[1] * Dk[1][1];
+      o[1] = -m[0] * Dk[2][0] + m[1] * Dk[1][0];
     }
     float len = 0;
     for (int c = 0; c < D; ++c) len += o[c] * o[c];
@@ -131,121 +147,118 @@ void eval_scalar(const std::int32_t* rec, const float* coef, const float* jac, c
 
 #ifdef MBI_FAST_X86
 // ------------------------------------------------------------------------ x86 kernel (3D)
-// 4-float vectors, FMA. Groups of 4 points are written as 3 aligned vectors (streaming stores:
-// the output is not read back by this pass, so it bypasses the caches and saves the
-// write-allocate reads).
+// Two points to a 256-bit vector (x, y, z, * | x, y, z, *), FMA; each point's terms are loaded
+// 16 bytes at a time from its element's 2 cache lines, which are prefetched kPrefetch points
+// ahead (with random points the coefficient table is read from L2, not L1). Groups of 4 points
+// are written as 3 aligned 16-byte vectors with streaming stores (the output is not read back
+// by this pass, so it bypasses the caches and saves the write-allocate reads).
 #define MBI_TARGET __attribute__((target("avx2,fma")))
 
-MBI_TARGET inline __m128 term(const float* C, int k) { return _mm_loadu_ps(C + 3 * k); }
-
-MBI_TARGET inline __m128 position3(const float* C, __m128 b1, __m128 b2, __m128 b3) {
-  __m128 t1 = _mm_fmadd_ps(term(C, 2), b1, term(C, 1));
-  __m128 t2 = _mm_fmadd_ps(term(C, 6), b2, term(C, 5));
-  const __m128 t3 = _mm_fmadd_ps(term(C, 9), b3, term(C, 8));
-  t1 = _mm_fmadd_ps(term(C, 3), b2, t1);
-  t2 = _mm_fmadd_ps(term(C, 7), b3, t2);
-  t1 = _mm_fmadd_ps(term(C, 4), b3, t1);
-  __m128 x = _mm_fmadd_ps(t1, b1, term(C, 0));
-  x = _mm_fmadd_ps(t2, b2, x);
-  return _mm_fmadd_ps(t3, b3, x);  // lane 3: not a coordinate (ignored by the stores)
+// term k of elements A (low half) and B (high half)
+MBI_TARGET inline __m256 term2(const float* A, const float* B, int k) {
+  return _mm256_loadu2_m128(B + 3 * k, A + 3 * k);
 }
 
-#define MBI_YZX(v) _mm_shuffle_ps((v), (v), _MM_SHUFFLE(3, 0, 2, 1))
+#define MBI_YZX(v) _mm256_permute_ps((v), _MM_SHUFFLE(3, 0, 2, 1))
 
-MBI_TARGET inline __m128 normal3(const float* G, __m128 b1, __m128 b2, __m128 b3, const float* n) {
-  __m128 j[3];
-  for (int r = 0; r < 3; ++r) {
-    const float* g = G + r * 4 * 3;
-    __m128 v = _mm_fmadd_ps(term(g, 1), b1, term(g, 0));
-    v = _mm_fmadd_ps(term(g, 2), b2, v);
-    j[r] = _mm_fmadd_ps(term(g, 3), b3, v);
+// Positions (and, with Normals, renormalised cof(D) m) of the 2 points whose records start at r.
+template <bool Normals, bool Scaled>
+MBI_TARGET inline void two_points(const std::int32_t* r, const float* coef, const float* m2, __m256 sigma,
+                                  __m256& x, __m256& nrm) {
+  constexpr int NC = coef_stride(3);
+  const __m256 v = _mm256_loadu_ps(reinterpret_cast<const float*>(r));
+  const float* A = coef + static_cast<long long>(r[0]) * NC;
+  const float* B = coef + static_cast<long long>(r[4]) * NC;
+  const __m256 b1 = _mm256_permute_ps(v, 0x55), b2 = _mm256_permute_ps(v, 0xAA), b3 = _mm256_permute_ps(v, 0xFF);
+  // terms: 0 c0, 1 c1, 2 c11, 3 c12, 4 c13, 5 c2, 6 c22, 7 c23, 8 c3, 9 c33
+  const __m256 c11 = term2(A, B, 2), c12 = term2(A, B, 3), c13 = term2(A, B, 4), c22 = term2(A, B, 6),
+               c23 = term2(A, B, 7), c33 = term2(A, B, 9);
+  __m256 t1 = _mm256_fmadd_ps(c11, b1, term2(A, B, 1));
+  __m256 t2 = _mm256_fmadd_ps(c22, b2, term2(A, B, 5));
+  const __m256 t3 = _mm256_fmadd_ps(c33, b3, term2(A, B, 8));
+  t1 = _mm256_fmadd_ps(c12, b2, t1);
+  t2 = _mm256_fmadd_ps(c23, b3, t2);
+  t1 = _mm256_fmadd_ps(c13, b3, t1);
+  __m256 p = _mm256_fmadd_ps(t1, b1, term2(A, B, 0));
+  p = _mm256_fmadd_ps(t2, b2, p);
+  x = _mm256_fmadd_ps(t3, b3, p);  // lanes 3 and 7: not coordinates (ignored by the stores)
+  if constexpr (Normals) {
+    __m256 D1 = _mm256_fmadd_ps(c11, b1, t1);
+    __m256 D2 = _mm256_fmadd_ps(c22, b2, _mm256_fmadd_ps(c12, b1, t2));
+    __m256 D3 = _mm256_fmadd_ps(c33, b3, _mm256_fmadd_ps(c13, b1, _mm256_fmadd_ps(c23, b2, t3)));
+    if constexpr (Scaled) {  // sigma D_k: of order 1 at any model scale (cof(D) is quadratic in D)
+      D1 = _mm256_mul_ps(sigma, D1);
+      D2 = _mm256_mul_ps(sigma, D2);
+      D3 = _mm256_mul_ps(sigma, D3);
+    }
+    const __m256 m = _mm256_loadu2_m128(m2 + 3, m2);
+    const __m256 Y1 = MBI_YZX(D1), Y2 = MBI_YZX(D2), Y3 = MBI_YZX(D3);
+    // a x b = (a * b.yzx - a.yzx * b).yzx; the last shuffle is linear, so it is applied once.
+    __m256 o = _mm256_mul_ps(_mm256_permute_ps(m, 0x00), _mm256_fmsub_ps(D2, Y3, _mm256_mul_ps(Y2, D3)));
+    o = _mm256_fmadd_ps(_mm256_permute_ps(m, 0x55), _mm256_fmsub_ps(D3, Y1, _mm256_mul_ps(Y3, D1)), o);
+    o = _mm256_fmadd_ps(_mm256_permute_ps(m, 0xAA), _mm256_fmsub_ps(D1, Y2, _mm256_mul_ps(Y1, D2)), o);
+    o = _mm256_blend_ps(MBI_YZX(o), _mm256_setzero_ps(), 0x88);  // lanes 3, 7 (not coordinates) to 0
+    const __m256 sq = _mm256_mul_ps(o, o);
+    __m256 s = _mm256_add_ps(sq, _mm256_permute_ps(sq, _MM_SHUFFLE(2, 3, 0, 1)));
+    s = _mm256_add_ps(s, _mm256_permute_ps(s, _MM_SHUFFLE(1, 0, 3, 2)));
+    // 1/sqrt(s): the estimate and one Newton step (relative error about 1e-7)
+    __m256 inv = _mm256_rsqrt_ps(s);
+    const __m256 half_s = _mm256_mul_ps(_mm256_set1_ps(0.5f), s);
+    inv = _mm256_mul_ps(inv, _mm256_fnmadd_ps(_mm256_mul_ps(half_s, inv), inv, _mm256_set1_ps(1.5f)));
+    const __m256 ok = _mm256_cmp_ps(s, _mm256_set1_ps(1.17549435e-38f), _CMP_GT_OQ);  // 0 where J is singular
+    nrm = _mm256_and_ps(_mm256_mul_ps(o, inv), ok);
   }
-  const __m128 n0 = _mm_set1_ps(n[0]), n1 = _mm_set1_ps(n[1]), n2 = _mm_set1_ps(n[2]);
-  const __m128 y0 = MBI_YZX(j[0]), y1 = MBI_YZX(j[1]), y2 = MBI_YZX(j[2]);
-  // a x b = (a * b.yzx - a.yzx * b).yzx; the last shuffle is linear, so it is applied once.
-  __m128 o = _mm_mul_ps(n0, _mm_fmsub_ps(j[1], y2, _mm_mul_ps(y1, j[2])));
-  o = _mm_fmadd_ps(n1, _mm_fmsub_ps(j[2], y0, _mm_mul_ps(y2, j[0])), o);
-  o = _mm_fmadd_ps(n2, _mm_fmsub_ps(j[0], y1, _mm_mul_ps(y0, j[1])), o);
-  o = _mm_blend_ps(MBI_YZX(o), _mm_setzero_ps(), 0x8);  // lane 3 (not a coordinate) to 0
-  const __m128 sq = _mm_mul_ps(o, o);
-  __m128 s = _mm_add_ps(sq, _mm_shuffle_ps(sq, sq, _MM_SHUFFLE(2, 3, 0, 1)));
-  s = _mm_add_ps(s, _mm_shuffle_ps(s, s, _MM_SHUFFLE(1, 0, 3, 2)));
-  // 1/sqrt(s): the estimate and one Newton step (relative error about 1e-7)
-  __m128 inv = _mm_rsqrt_ps(s);
-  const __m128 half_s = _mm_mul_ps(_mm_set1_ps(0.5f), s);
-  inv = _mm_mul_ps(inv, _mm_fnmadd_ps(_mm_mul_ps(half_s, inv), inv, _mm_set1_ps(1.5f)));
-  const __m128 ok = _mm_cmpgt_ps(s, _mm_set1_ps(1.17549435e-38f));  // 0 where J is singular
-  return _mm_and_ps(_mm_mul_ps(o, inv), ok);
 }
 
-// 4 results (x, y, z, *) to 3 vectors x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3.
-MBI_TARGET inline void pack4(__m128 r0, __m128 r1, __m128 r2, __m128 r3, __m128& o0, __m128& o1,
-                             __m128& o2) {
+// 4 results (x, y, z, *), two to a vector, to 3 vectors x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3.
+MBI_TARGET inline void pack4(__m256 a, __m256 b, __m128& o0, __m128& o1, __m128& o2) {
+  const __m128 r0 = _mm256_castps256_ps128(a), r1 = _mm256_extractf128_ps(a, 1);
+  const __m128 r2 = _mm256_castps256_ps128(b), r3 = _mm256_extractf128_ps(b, 1);
   o0 = _mm_blend_ps(r0, _mm_shuffle_ps(r1, r1, _MM_SHUFFLE(0, 0, 0, 0)), 0x8);
   o1 = _mm_shuffle_ps(r1, r2, _MM_SHUFFLE(1, 0, 2, 1));
   o2 = _mm_blend_ps(_mm_shuffle_ps(r3, r3, _MM_SHUFFLE(2, 1, 0, 0)),
                     _mm_shuffle_ps(r2, r2, _MM_SHUFFLE(2, 2, 2, 2)), 0x1);
 }
 
-template <bool Normals>
-MBI_TARGET void eval_x86(const std::int32_t* rec, const float* coef, const float* jac,
-                         const float* nrest, float* pos, float* nout, long long begin, long long end) {
-  constexpr int NC = coef_stride(3), NJ = jac_stride(3);
+// 12 floats to out: streaming when out is 16-byte aligned.
+MBI_TARGET inline void store12(float* out, bool aligned, __m128 o0, __m128 o1, __m128 o2) {
+  if (aligned) {
+    _mm_stream_ps(out, o0);
+    _mm_stream_ps(out + 4, o1);
+    _mm_stream_ps(out + 8, o2);
+  } else {
+    _mm_storeu_ps(out, o0);
+    _mm_storeu_ps(out + 4, o1);
+    _mm_storeu_ps(out + 8, o2);
+  }
+}
+
+// Points [begin, end) with end - begin a multiple of 4 (the caller runs the rest portably).
+template <bool Normals, bool Scaled>
+MBI_TARGET void eval_x86(const std::int32_t* rec, const float* coef, const float* mrest, float sigma,
+                         float* pos, float* nout, long long begin, long long end) {
+  constexpr int NC = coef_stride(3);
+  const __m256 sig = _mm256_set1_ps(sigma);
   const bool aligned = (reinterpret_cast<std::uintptr_t>(pos + 3 * begin) % 16 == 0) &&
                        (!Normals || reinterpret_cast<std::uintptr_t>(nout + 3 * begin) % 16 == 0);
-  long long p = begin;
-  for (; p + 4 <= end; p += 4) {
-    __m128 r[4], q[4];
-    for (int k = 0; k < 4; ++k) {
-      const __m128i w = _mm_loadu_si128(reinterpret_cast<const __m128i*>(rec + 4 * (p + k)));
-      const long long e = _mm_cvtsi128_si32(w);
-      const __m128 v = _mm_castsi128_ps(w);
-      const __m128 b1 = _mm_shuffle_ps(v, v, 0x55), b2 = _mm_shuffle_ps(v, v, 0xAA),
-                   b3 = _mm_shuffle_ps(v, v, 0xFF);
-      r[k] = position3(coef + e * NC, b1, b2, b3);
-      if constexpr (Normals) q[k] = normal3(jac + e * NJ, b1, b2, b3, nrest + 3 * (p + k));
+  for (long long p = begin; p < end; p += 4) {
+    for (int k = 0; k < 4; ++k) {  // records are padded: p + k + kPrefetch is always a record
+      const char* ahead = reinterpret_cast<const char*>(coef + static_cast<long long>(rec[4 * (p + k + kPrefetch)]) * NC);
+      _mm_prefetch(ahead, _MM_HINT_T0);
+      _mm_prefetch(ahead + 64, _MM_HINT_T0);
     }
+    __m256 x0, x1, n0, n1;
+    two_points<Normals, Scaled>(rec + 4 * p, coef, mrest + 3 * p, sig, x0, n0);
+    two_points<Normals, Scaled>(rec + 4 * (p + 2), coef, mrest + 3 * (p + 2), sig, x1, n1);
     __m128 o0, o1, o2;
-    pack4(r[0], r[1], r[2], r[3], o0, o1, o2);
-    float* out = pos + 3 * p;
-    if (aligned) {
-      _mm_stream_ps(out, o0);
-      _mm_stream_ps(out + 4, o1);
-      _mm_stream_ps(out + 8, o2);
-    } else {
-      _mm_storeu_ps(out, o0);
-      _mm_storeu_ps(out + 4, o1);
-      _mm_storeu_ps(out + 8, o2);
-    }
+    pack4(x0, x1, o0, o1, o2);
+    store12(pos + 3 * p, aligned, o0, o1, o2);
     if constexpr (Normals) {
-      pack4(q[0], q[1], q[2], q[3], o0, o1, o2);
-      float* nn = nout + 3 * p;
-      if (aligned) {
-        _mm_stream_ps(nn, o0);
-        _mm_stream_ps(nn + 4, o1);
-        _mm_stream_ps(nn + 8, o2);
-      } else {
-        _mm_storeu_ps(nn, o0);
-        _mm_storeu_ps(nn + 4, o1);
-        _mm_storeu_ps(nn + 8, o2);
-      }
+      pack4(n0, n1, o0, o1, o2);
+      store12(nout + 3 * p, aligned, o0, o1, o2);
     }
   }
   _mm_sfence();
-  for (; p < end; ++p) {  // the last 1-3 points of the range: exact-size stores
-    const __m128i w = _mm_loadu_si128(reinterpret_cast<const __m128i*>(rec + 4 * p));
-    const long long e = _mm_cvtsi128_si32(w);
-    const __m128 v = _mm_castsi128_ps(w);
-    const __m128 b1 = _mm_shuffle_ps(v, v, 0x55), b2 = _mm_shuffle_ps(v, v, 0xAA),
-                 b3 = _mm_shuffle_ps(v, v, 0xFF);
-    alignas(16) float t[4];
-    _mm_store_ps(t, position3(coef + e * NC, b1, b2, b3));
-    std::memcpy(pos + 3 * p, t, 3 * sizeof(float));
-    if constexpr (Normals) {
-      _mm_store_ps(t, normal3(jac + e * NJ, b1, b2, b3, nrest + 3 * p));
-      std::memcpy(nout + 3 * p, t, 3 * sizeof(float));
-    }
-  }
 }
 
 #endif
@@ -282,10 +295,11 @@ FastEvaluator::FastEvaluator(const Embedding& emb, int threads) : threads_(threa
       for (int k = 1; k <= d; ++k)
         for (int r = 0; r < d; ++r)
           grads_[(static_cast<size_t>(e) * d + (k - 1)) * d + r] =
-              static_cast<float>(emb.gradients(static_cast<Eigen::Index>(e) * (d + 1) + k, r));
+              emb.gradients(static_cast<Eigen::Index>(e) * (d + 1) + k, r);
   }
-  // records: one aligned block (the x86 kernel loads a 3D record as one 16-byte vector)
-  records_.assign(static_cast<size_t>(p_) * (d + 1), 0);
+  // records: one block (the x86 kernel loads two 3D records as one 32-byte vector), then
+  // kPrefetch records of element 0 for the prefetches past the end
+  records_.assign(static_cast<size_t>(p_ + kPrefetch) * (d + 1), 0);
   for (long long i = 0; i < p_; ++i) {
     std::int32_t* r = records_.data() + i * (d + 1);
     r[0] = emb.element(i);
@@ -299,9 +313,35 @@ void FastEvaluator::set_rest_normals(const Eigen::Ref<const Eigen::MatrixXd>& no
                 ", got " + std::to_string(normals.rows()) + " x " + std::to_string(normals.cols()));
   if (grads_.empty() && p_ > 0)
     throw Error("FastEvaluator: normals need the embedding's basis gradients (filled by embed())");
-  normals_.assign(static_cast<size_t>(p_) * d_ + 4, 0.0f);  // padding: 16-byte loads of the last one
-  for (long long i = 0; i < p_; ++i)
-    for (int c = 0; c < d_; ++c) normals_[static_cast<size_t>(i) * d_ + c] = static_cast<float>(normals(i, c));
+  // m = cof(A)^T n per point, A = [a_1 .. a_d] (the element's basis gradients as columns):
+  // m_k = n . (column k of cof(A)); in 3D column k is a_{k+1} x a_{k+2}.
+  // padding: 16-byte loads of the last one, and room to move the block (rest_normals_for())
+  normals_.assign(static_cast<size_t>(p_) * d_ + 4 + kSlack, 0.0f);
+  moff_ = 0;
+  const int d = d_;
+  for (long long i = 0; i < p_; ++i) {
+    const double* a = grads_.data() + static_cast<size_t>(records_[static_cast<size_t>(i) * (d + 1)]) * d * d;
+    auto g = [&](int k, int r) { return a[(k - 1) * d + r]; };  // component r of a_k
+    double n[3] = {normals(i, 0), normals(i, 1), d == 3 ? normals(i, 2) : 0.0}, m[3] = {};
+    if (d == 3) {
+      for (int k = 1; k <= 3; ++k) {
+        const int u = k % 3 + 1, w = (k + 1) % 3 + 1;
+        m[k - 1] = n[0] * (g(u, 1) * g(w, 2) - g(u, 2) * g(w, 1)) + n[1] * (g(u, 2) * g(w, 0) - g(u, 0) * g(w, 2)) +
+                   n[2] * (g(u, 0) * g(w, 1) - g(u, 1) * g(w, 0));
+      }
+    } else {
+      m[0] = n[0] * g(2, 1) - n[1] * g(2, 0);
+      m[1] = -n[0] * g(1, 1) + n[1] * g(1, 0);
+    }
+    // Only m's direction matters (the normal is renormalised) and |m| ~ 1/h^2 for elements of
+    // size h: a power of 2 brings its largest component to [0.5, 1) (exact, any scale).
+    double big = 0;
+    for (int c = 0; c < d; ++c) big = std::max(big, std::abs(m[c]));
+    int ex = 0;
+    if (std::isfinite(big) && big > 0) std::frexp(big, &ex);
+    for (int c = 0; c < d; ++c)
+      normals_[static_cast<size_t>(i) * d + c] = static_cast<float>(std::ldexp(m[c], -ex));
+  }
 }
 
 int FastEvaluator::threads() const {
@@ -323,11 +363,9 @@ void FastEvaluator::prepare(const BezierPoints& B, bool normals) {
                 std::to_string(d) + " with m >= " + std::to_string(m_) + ", got " +
                 std::to_string(B.rows()) + " x " + std::to_string(B.cols()));
   if (normals && !has_rest_normals()) throw Error("FastEvaluator: normals asked for, but no rest normals were set");
-  const int NC = coef_stride(d), NJ = jac_stride(d);
+  const int NC = coef_stride(d);
   coef_.resize(static_cast<size_t>(m_) * NC + 16);  // zeros: the padding stays 0
-  if (normals) jac_.resize(static_cast<size_t>(m_) * NJ + 16);
   float* const coef = align64(coef_.data());
-  float* const jac = normals ? align64(jac_.data()) : nullptr;
   const auto& edges = bezier_edges(d);
   // local edge index of pair (i, j)
   int edge_of[4][4] = {};
@@ -336,7 +374,8 @@ void FastEvaluator::prepare(const BezierPoints& B, bool normals) {
     edge_of[edges[s].second][edges[s].first] = static_cast<int>(s);
   }
   const int m = m_;
-  MBI_OMP("omp parallel for schedule(static) num_threads(threads()) if (m > 4096)")
+  double dmax = 0;  // the largest |c_k|: the scale of the derivatives dx/db_k
+  MBI_OMP("omp parallel for schedule(static) num_threads(threads()) if (m > 4096) reduction(max : dmax)")
   for (int e = 0; e < m; ++e) {
     auto P = [&](int k, int c) { return B(static_cast<Eigen::Index>(e) * K + k, c); };
     auto Pe = [&](int i, int j, int c) { return P(d + 1 + edge_of[i][j], c); };
@@ -346,6 +385,7 @@ void FastEvaluator::prepare(const BezierPoints& B, bool normals) {
     for (int k = 1; k <= d; ++k)
       for (int c = 0; c < d; ++c) {
         cl[k][c] = 2 * (Pe(0, k, c) - P(0, c));
+        dmax = std::max(dmax, std::abs(cl[k][c]));
         cq[k][k][c] = P(0, c) + P(k, c) - 2 * Pe(0, k, c);
         for (int l = k + 1; l <= d; ++l)
           cq[k][l][c] = cq[l][k][c] = 2 * (P(0, c) - Pe(0, k, c) - Pe(0, l, c) + Pe(k, l, c));
@@ -357,23 +397,36 @@ void FastEvaluator::prepare(const BezierPoints& B, bool normals) {
       for (int l = k; l <= d; ++l, ++s)
         for (int c = 0; c < d; ++c) C[s * d + c] = static_cast<float>(cq[k][l][c]);
     }
-    if (!normals) continue;
-    float* G = jac + static_cast<size_t>(e) * NJ;
-    const float* a = grads_.data() + static_cast<size_t>(e) * d * d;  // a[(k-1) d + r]
-    for (int r = 0; r < d; ++r) {
-      float* g = G + r * (d + 1) * d;
-      for (int c = 0; c < d; ++c) {
-        double j0 = 0;
-        for (int k = 1; k <= d; ++k) j0 += a[(k - 1) * d + r] * cl[k][c];
-        g[c] = static_cast<float>(j0);
-        for (int l = 1; l <= d; ++l) {
-          double v = 0;
-          for (int k = 1; k <= d; ++k) v += a[(k - 1) * d + r] * (k == l ? 2.0 : 1.0) * cq[k][l][c];
-          g[l * d + c] = static_cast<float>(v);
-        }
-      }
-    }
   }
+  // sigma = 2^-e with dmax in [2^(e-1), 2^e): normals scale D by it (exact), so that cof(D) neither
+  // underflows nor overflows in float for models of any size float can hold.
+  int ex = 0;
+  if (std::isfinite(dmax) && dmax > 0) std::frexp(dmax, &ex);
+  dscale_ = static_cast<float>(std::ldexp(1.0, std::clamp(-ex, -126, 126)));
+}
+
+// The rest-normal block is read 12 bytes a point in step with the two outputs written 12 bytes a
+// point. When its address equals an output's modulo 4 KiB (likely: large blocks are page-aligned
+// alike), each load waits on a recent store to the same low 12 address bits ("4K aliasing"; 1.3x
+// the time of the whole pass measured on this project's Zen 4 machine). So the block is kept
+// at least 64 bytes after and 1 KiB before each output modulo 4 KiB, moved once when an output
+// buffer first breaks that (then never again for the same buffers).
+const float* FastEvaluator::rest_normals_for(const float* positions, const float* normals) {
+  auto clear = [&](std::size_t off) {
+    const auto at = reinterpret_cast<std::uintptr_t>(normals_.data() + off);
+    for (const float* out : {positions, normals}) {
+      const std::uintptr_t gap = (at - reinterpret_cast<std::uintptr_t>(out)) % 4096;
+      if (gap < 64 || gap > 4096 - 1024) return false;
+    }
+    return true;
+  };
+  if (!clear(moff_)) {
+    std::size_t off = 0;
+    while (off + 4 < kSlack && !clear(off)) off += 4;  // exists: each output rules out 1088 of 4096 bytes
+    std::memmove(normals_.data() + off, normals_.data() + moff_, (static_cast<size_t>(p_) * d_ + 4) * sizeof(float));
+    moff_ = off;
+  }
+  return normals_.data() + moff_;
 }
 
 void FastEvaluator::evaluate(const BezierPoints& B, RowMatrixXf& positions) {
@@ -393,20 +446,24 @@ void FastEvaluator::evaluate(const BezierPoints& B, float* positions, float* nor
   if (p_ == 0) return;
   const std::int32_t* rec = records_.data();
   const float* coef = align64(coef_.data());
-  const float* jac = with_normals ? align64(jac_.data()) : nullptr;
-  const float* nrest = with_normals ? normals_.data() : nullptr;
+  const float* mrest = with_normals ? rest_normals_for(positions, normals) : nullptr;
+  const float sigma = dscale_;
   const int d = d_;
   const long long p = p_;
   auto run = [&](long long begin, long long end) {
 #ifdef MBI_FAST_X86
     if (d == 3 && detail::have_avx2_fma()) {
-      if (with_normals) eval_x86<true>(rec, coef, jac, nrest, positions, normals, begin, end);
-      else eval_x86<false>(rec, coef, jac, nrest, positions, normals, begin, end);
-      return;
+      const long long mid = begin + (end - begin) / 4 * 4;
+      // sigma within 2^+-16 leaves |cof(D) m|^2 within 2^+-64 (m: [0.5, 1)): no scaling needed
+      const bool scaled = !(sigma >= 0x1p-16f && sigma <= 0x1p16f);
+      if (!with_normals) eval_x86<false, false>(rec, coef, mrest, sigma, positions, normals, begin, mid);
+      else if (scaled) eval_x86<true, true>(rec, coef, mrest, sigma, positions, normals, begin, mid);
+      else eval_x86<true, false>(rec, coef, mrest, sigma, positions, normals, begin, mid);
+      begin = mid;  // the last 1-3 points of the range: portably, exact-size stores
     }
 #endif
-    if (d == 3) eval_scalar<3>(rec, coef, jac, nrest, positions, normals, begin, end);
-    else eval_scalar<2>(rec, coef, jac, nrest, positions, normals, begin, end);
+    if (d == 3) eval_scalar<3>(rec, coef, mrest, sigma, positions, normals, begin, end);
+    else eval_scalar<2>(rec, coef, mrest, sigma, positions, normals, begin, end);
   };
   const int nt = threads();
   if (nt <= 1) {

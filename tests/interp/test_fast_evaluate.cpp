@@ -113,6 +113,7 @@ TEST_CASE("FastEvaluator: few points (tails shorter than a group of 4) and an em
     RowMatrixXf pf, nf;
     fe.evaluate(s.B, pf, nf);
     CHECK((pf.cast<double>() - pd).cwiseAbs().maxCoeff() <= position_tolerance(s.B));
+    CHECK((nf.cast<double>() - nd).cwiseAbs().maxCoeff() < 2e-5);
   }
   Embedding empty;
   empty.bary.resize(0, 4);
@@ -121,6 +122,47 @@ TEST_CASE("FastEvaluator: few points (tails shorter than a group of 4) and an em
   const Setup s = make(3, 1, 0.0, 1.0);
   fe.evaluate(s.B, pf);
   CHECK(pf.rows() == 0);
+}
+
+// Normals are cof(D) (cof(A)^T n) with D = dx/db quadratic in the model's size: the kernel
+// rescales by powers of 2 so that models of any size float holds keep their normals.
+TEST_CASE("FastEvaluator: normals at extreme model scales, and zero on a collapsed element", "[fast_evaluate]") {
+  for (int d : {2, 3}) {
+    const Setup s = make(d, 4003, -0.1, 1.1);
+    Eigen::MatrixXd pd, nd;
+    evaluate<double>(s.B, s.emb, s.normals, pd, nd, 1);
+    for (double scale : {1e-30, 1e-20, 1e-12, 1e12, 1e20, 1e30}) {
+      // the same model scaled: Bezier points times scale, gradients over the rest space divided
+      Embedding emb = s.emb;
+      emb.gradients /= scale;
+      const BezierPoints B = s.B * scale;
+      FastEvaluator fe(emb, 1);
+      fe.set_rest_normals(s.normals);
+      RowMatrixXf pf, nf;
+      fe.evaluate(B, pf, nf);
+      INFO("d = " << d << ", scale " << scale);
+      CHECK(((pf.cast<double>() / scale) - pd).cwiseAbs().maxCoeff() <= position_tolerance(s.B));
+      CHECK((nf.cast<double>() - nd).cwiseAbs().maxCoeff() < 2e-5);
+    }
+    // element of point 0 collapsed to one point: every coefficient is exactly 0, so J = 0 and the
+    // normal is 0 (the double kernel's J is round-off there, from the Bernstein derivatives)
+    BezierPoints B = s.B;
+    const int K = (d + 1) * (d + 2) / 2;
+    const int e = s.emb.element(0);
+    for (int k = 0; k < K; ++k) B.row(e * K + k) = s.B.row(e * K);
+    FastEvaluator fe(s.emb, 1);
+    fe.set_rest_normals(s.normals);
+    RowMatrixXf pf, nf;
+    fe.evaluate(B, pf, nf);
+    int collapsed = 0;
+    for (Eigen::Index i = 0; i < nf.rows(); ++i) {
+      if (s.emb.element(i) != e) continue;
+      ++collapsed;
+      CHECK(nf.row(i).norm() == 0.0f);
+    }
+    CHECK(collapsed > 0);
+    CHECK(std::isfinite(nf.cast<double>().sum()));
+  }
 }
 
 TEST_CASE("FastEvaluator rejects inconsistent input", "[fast_evaluate]") {

@@ -5,10 +5,12 @@
 // Per point it reads a packed record of 4 (d+1) bytes (element id as int32, then the barycentric
 // coordinates b_1..b_d as float; b_0 = 1 - b_1 - ... - b_d) and writes d floats, interleaved
 // (x0 y0 z0 x1 y1 z1 ...: a row-major p x d matrix, the layout a GPU vertex buffer takes). In 3D
-// that is 16 B in and 12 B out, 28 B a point; with normals also the rest normal (12 B) in and the
-// mapped normal (12 B) out. Per call it turns the element Bezier points into each element's
-// quadratic in (b_1..b_d) (and, for normals, the Jacobian's linear form), in float, once per
-// element; the points then cost 9 vector FMAs each in 3D. Threads: OpenMP when the build has it.
+// that is 16 B in and 12 B out, 28 B a point; with normals also the rest normal (12 B, kept as
+// cof(A)^T n, A the element's basis gradients) in and the mapped normal (12 B) out. Per call it
+// turns the element Bezier points into each element's quadratic in (b_1..b_d), in float, once
+// per element; a point then costs 9 FMAs in 3D (on x86, two points to a 256-bit vector), and its
+// normal 6 more for the derivatives D_k = dx/db_k, then cof(D) (cof(A)^T n), renormalised.
+// Threads: OpenMP when the build has it.
 //
 // Results agree with interp::evaluate<double> to float round-off (a few ulp of the coordinate
 // magnitudes: tests/interp/test_fast_evaluate.cpp states the bound). interp::evaluate<double>
@@ -16,6 +18,7 @@
 #include <mbi/interp/embed.hpp>
 #include <mbi/interp/modified_bi.hpp>
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -56,14 +59,17 @@ class FastEvaluator {
 
  private:
   void prepare(const BezierPoints& B, bool normals);
+  const float* rest_normals_for(const float* positions, const float* normals);
+  static constexpr std::size_t kSlack = 1024;  // floats (4 KiB) to move the rest-normal block in
 
   int d_ = 3, m_ = 0, threads_ = 0;
+  float dscale_ = 1.0f;                // per call: a power of 2 near 1 / max |dx/db_k| (normals)
   long long p_ = 0;
-  std::vector<std::int32_t> records_;  // p (d+1) words: element id, then d float bit patterns
-  std::vector<float> grads_;           // m d d: rows 1..d of each element's basis gradients
-  std::vector<float> normals_;         // p d (+ padding) rest normals
+  std::vector<std::int32_t> records_;  // (p + padding) (d+1) words: element id, then d float bit patterns
+  std::vector<double> grads_;          // m d d: rows 1..d of each element's basis gradients
+  std::vector<float> normals_;         // p d from moff_ (+ padding): per point m = cof(A)^T n (see fast_evaluate.cpp)
+  std::size_t moff_ = 0;               // where normals_'s block starts, in floats
   std::vector<float> coef_;            // m x 32 (3D; 2D: 16): position terms, cache-line aligned, per call
-  std::vector<float> jac_;             // m x 48 (3D; 2D: 16): Jacobian terms, per call with normals
 };
 
 }  // namespace mbi::interp
