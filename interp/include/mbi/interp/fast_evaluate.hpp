@@ -63,6 +63,7 @@ class FastEvaluator {
   static constexpr std::size_t kSlack = 1024;  // floats (4 KiB) to move the rest-normal block in
 
   int d_ = 3, m_ = 0, threads_ = 0;
+  bool coherent_ = false;              // most points follow a point of the same element
   float dscale_ = 1.0f;                // per call: a power of 2 near 1 / max |dx/db_k| (normals)
   long long p_ = 0;
   std::vector<std::int32_t> records_;  // (p + padding) (d+1) words: element id, then d float bit patterns
