@@ -3,12 +3,14 @@
 #   bench/results/<date>-<host>.json   Google Benchmark JSON, with this machine and commit
 #   bench/results/<date>-<host>.md     the report (scripts/bench_report.py), with PNG plots beside it
 #
-#   bash scripts/bench.sh            full run (about 3 minutes on a 2-core machine, plus the build)
+#   bash scripts/bench.sh            full run: every benchmark 3 times in random order, the medians
+#                                    reported (about 8 minutes on a 2-core machine, plus the build)
 #   bash scripts/bench.sh --quick    small sizes, short runs, no 10K precompute (under a minute);
 #                                    writes to build/bench-quick/ unless --out is given (CI)
 #   bash scripts/bench.sh --out DIR  write into DIR instead
 #   MBI_BENCH_BASELINE=OLD.json      an earlier run (e.g. before a change, same machine): the
 #                                    report's target table gets its figures as a 'before' column
+#   MBI_BENCH_REPETITIONS=N          repetitions of each benchmark (default 3; --quick: 1)
 #
 # Installs missing Debian packages and builds mbi-bench with the release preset first (set
 # MBI_BENCH_NO_BUILD=1 to skip both). Uses the scanned models beside the clone (../shared/models)
@@ -48,7 +50,14 @@ mkdir -p "$out"
 stamp="$(date +%Y-%m-%d)-$(hostname -s 2>/dev/null || hostname)"
 json="$out/$stamp.json"
 start=$(date +%s)
-MBI_BENCH_QUICK=$quick build/release/mbi-bench \
+reps="${MBI_BENCH_REPETITIONS:-$([ "$quick" = 1 ] && echo 1 || echo 3)}"
+repeat=()
+if [ "$reps" -gt 1 ]; then
+  # interleaved at random, so that a slow spell of a shared machine spreads over many benchmarks
+  repeat=(--benchmark_repetitions="$reps" --benchmark_enable_random_interleaving=true
+          --benchmark_report_aggregates_only=true)
+fi
+MBI_BENCH_QUICK=$quick build/release/mbi-bench "${repeat[@]}" \
   --benchmark_out="$json" --benchmark_out_format=json --benchmark_counters_tabular=false
 wall=$(( $(date +%s) - start ))
 echo "bench.sh: mbi-bench took ${wall} s"

@@ -88,10 +88,18 @@ class Results:
     def __init__(self, data):
         self.data = data
         self.rows = []
-        for b in data["benchmarks"]:
-            if b.get("run_type", "iteration") != "iteration" and b.get("aggregate_name") != "median":
+        # with repetitions (scripts/bench.sh runs 3, randomly interleaved) the medians stand for
+        # each benchmark; a benchmark that failed has no aggregate and keeps its error row
+        benches = data["benchmarks"]
+        with_median = {b.get("run_name") for b in benches if b.get("aggregate_name") == "median"}
+        self.repetitions = max((int(b.get("repetitions", 1)) for b in benches), default=1)
+        for b in benches:
+            if b.get("run_type", "iteration") == "aggregate":
+                if b.get("aggregate_name") != "median":
+                    continue
+            elif b.get("run_name") in with_median:
                 continue
-            fam, kv, plain = parse_name(b["name"])
+            fam, kv, plain = parse_name(b.get("run_name") or b["name"])
             self.rows.append(dict(fam=fam, kv=kv, plain=plain, b=b))
 
     def find(self, fam, plain=None, **kv):
@@ -268,9 +276,14 @@ def report(data, json_path, wall_s, baseline=None, baseline_path=None):
         ["wall time of the run", f"{wall_s:.0f} s" if wall_s else "?"],
     ]))
     w("")
-    w("Times are wall-clock per iteration (Google Benchmark, `UseRealTime`), one measurement each "
-      "(no repetitions). Google Benchmark reports its own library as a "
-      f"`{ctx.get('library_build_type', '?')}` build; mbi itself is built with the `release` preset.")
+    if R.repetitions > 1:
+        how = (f"each the median of {R.repetitions} repetitions run in random order among all the others "
+               "(a slow spell of this shared machine then falls on different benchmarks, not all on one)")
+    else:
+        how = "one measurement each (no repetitions)"
+    w(f"Times are wall-clock per iteration (Google Benchmark, `UseRealTime`), {how}. Google Benchmark "
+      f"reports its own library as a `{ctx.get('library_build_type', '?')}` build; mbi itself is built "
+      "with the `release` preset.")
     w("")
 
     # ------------------------------------------------------------------ targets
