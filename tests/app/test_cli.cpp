@@ -7,7 +7,7 @@
 #include <mbi/io/io.hpp>
 #include <mbi/generate/procedural.hpp>
 
-#include "common/temp_dir.hpp"
+#include "common/run_mbi.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -19,37 +19,13 @@
 #include <sys/wait.h>
 
 namespace fs = std::filesystem;
+using mbi::test::q;
+using mbi::test::Result;
+using mbi::test::run_mbi;
 using mbi::test::TempDir;
 
 namespace {
 
-struct Result {
-  int code = -1;
-  std::string err, out;
-};
-
-std::string slurp_text(const fs::path& file) {
-  std::ifstream in(file);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-// Runs mbi with arguments (already quoted where needed), with optional environment assignments
-// ("NAME=value ..."); captures stdout and stderr.
-Result run_mbi(const std::string& args, const TempDir& dir, const std::string& env = "") {
-  const fs::path err = dir / "stderr.txt", out = dir / "stdout.txt";
-  const std::string cmd = (env.empty() ? "" : "env " + env + " ") + "\"" + MBI_EXE + "\" " + args +
-                          " > \"" + out.string() + "\" 2> \"" + err.string() + "\"";
-  const int status = std::system(cmd.c_str());
-  Result r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.err = slurp_text(err);
-  r.out = slurp_text(out);
-  return r;
-}
-
-std::string q(const fs::path& p) { return "\"" + p.string() + "\""; }
 
 // A 3D setup on disk: box control mesh (TetGen), twisted positions (text), dense bar (OBJ).
 struct Files {
@@ -337,27 +313,9 @@ TEST_CASE("mbi run: a failing simulation step exits 3, keeps the outputs so far,
   TempDir dir("cli");
   // as in the runner test "a failing simulation step stops the run and keeps what was written":
   // an absurd force on a soft bar makes the simulator's energy guard fail step 3
-  std::ofstream(dir / "fail.toml") << R"(
-[dense]
-builtin = "paper-bar"
-[control]
-builtin = "paper-bar"
-[material]
-young = 1000
-[simulation]
-frames = 20
-[[constraints]]
-select = { box_relative = { min = [0, 0, 0], max = [1, 1, 0] } }
-[[pokes]]
-first = 3
-last = 20
-point = [0.0, 0.0, 6.0]
-force = [1e15, 0, 0]
-[output]
-every = 2
-)";
   const fs::path out = dir / "o";
-  const Result r = run_mbi("run " + q(dir / "fail.toml") + " --out " + q(out) + " --quiet", dir);
+  const Result r =
+      run_mbi("run " + q(mbi::test::source_dir() / "tests/data/scenes/fail.toml") + " --out " + q(out) + " --quiet", dir);
   INFO(r.err);
   CHECK(r.code == 3);
   // --quiet: stderr holds the error alone, on one line, naming the step and the frames kept

@@ -5,6 +5,9 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include "common/files.hpp"
+#include "common/temp_dir.hpp"
+
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -17,28 +20,10 @@
 
 namespace fs = std::filesystem;
 using namespace mbi::io;
+using mbi::test::slurp;
+using mbi::test::TempDir;
 
 namespace {
-
-struct TempDir {
-  fs::path dir;
-  TempDir() {
-    dir = fs::temp_directory_path() / ("mbi_cli_cage_" + std::to_string(::getpid()));
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(dir, ec);
-  }
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 /// Runs `mbi <args>` with stderr captured to `err`; returns the exit code.
 int run(const std::string& args, const fs::path& err) {
@@ -74,12 +59,12 @@ SurfaceMesh ellipsoid() {
 }  // namespace
 
 TEST_CASE("mbi cage writes a containing control mesh and its statistics", "[cli][cage]") {
-  TempDir tmp;
-  const fs::path dense = tmp.dir / "e.obj";
+  TempDir tmp("cli-cage");
+  const fs::path dense = tmp.path() / "e.obj";
   write_surface(dense, ellipsoid());
   const SurfaceMesh m = read_surface(dense);
-  const fs::path err = tmp.dir / "err.txt";
-  const std::string base = (tmp.dir / "cage").string();
+  const fs::path err = tmp.path() / "err.txt";
+  const std::string base = (tmp.path() / "cage").string();
   const auto t0 = std::chrono::steady_clock::now();
   REQUIRE(run("cage \"" + dense.string() + "\" --vertices 120 --out \"" + base + "\" --stats \"" +
                   base + ".json\"",
@@ -116,12 +101,12 @@ TEST_CASE("mbi cage writes a containing control mesh and its statistics", "[cli]
 }
 
 TEST_CASE("mbi cage --mesher tetgen", "[cli][cage][tetgen]") {
-  TempDir tmp;
-  const fs::path dense = tmp.dir / "e.obj";
+  TempDir tmp("cli-cage");
+  const fs::path dense = tmp.path() / "e.obj";
   write_surface(dense, ellipsoid());
   const SurfaceMesh m = read_surface(dense);
-  const fs::path err = tmp.dir / "err.txt";
-  const std::string base = (tmp.dir / "cage").string();
+  const fs::path err = tmp.path() / "err.txt";
+  const std::string base = (tmp.path() / "cage").string();
   REQUIRE(run("cage \"" + dense.string() + "\" --vertices 120 --mesher tetgen --out \"" + base +
                   "\" --stats \"" + base + ".json\"",
               err) == 0);
@@ -145,36 +130,36 @@ TEST_CASE("mbi cage --mesher tetgen", "[cli][cage][tetgen]") {
   REQUIRE(slurp(base + ".ele") == ele);
 
   REQUIRE(run("cage \"" + dense.string() + "\" --vertices 120 --mesher delaunay --out \"" +
-                  (tmp.dir / "x").string() + "\"",
+                  (tmp.path() / "x").string() + "\"",
               err) != 0);
   REQUIRE(slurp(err).find("mesher") != std::string::npos);
-  REQUIRE_FALSE(fs::exists(tmp.dir / "x.node"));
+  REQUIRE_FALSE(fs::exists(tmp.path() / "x.node"));
 }
 
 TEST_CASE("mbi cage reports bad input on one line with exit code 2", "[cli][cage]") {
-  TempDir tmp;
-  const fs::path err = tmp.dir / "err.txt";
-  const fs::path missing = tmp.dir / "missing.obj";
+  TempDir tmp("cli-cage");
+  const fs::path err = tmp.path() / "err.txt";
+  const fs::path missing = tmp.path() / "missing.obj";
   REQUIRE(run("cage \"" + missing.string() + "\" --vertices 100 --out \"" +
-                  (tmp.dir / "x").string() + "\"",
+                  (tmp.path() / "x").string() + "\"",
               err) == 2);
   std::string msg = slurp(err);
   INFO(msg);
   REQUIRE(msg.rfind("mbi cage: error: " + missing.string(), 0) == 0);
   REQUIRE(std::count(msg.begin(), msg.end(), '\n') == 1);
 
-  const fs::path bad = tmp.dir / "bad.obj";
+  const fs::path bad = tmp.path() / "bad.obj";
   std::ofstream(bad) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n";
-  REQUIRE(run("cage \"" + bad.string() + "\" --vertices 100 --out \"" + (tmp.dir / "x").string() +
+  REQUIRE(run("cage \"" + bad.string() + "\" --vertices 100 --out \"" + (tmp.path() / "x").string() +
                   "\"",
               err) == 2);
   msg = slurp(err);
   REQUIRE(msg.find(bad.string() + ":4: face 0") != std::string::npos);
-  REQUIRE_FALSE(fs::exists(tmp.dir / "x.node"));
+  REQUIRE_FALSE(fs::exists(tmp.path() / "x.node"));
 
-  const fs::path ok = tmp.dir / "ok.obj";
+  const fs::path ok = tmp.path() / "ok.obj";
   write_surface(ok, ellipsoid());
-  REQUIRE(run("cage \"" + ok.string() + "\" --vertices 2 --out \"" + (tmp.dir / "x").string() +
+  REQUIRE(run("cage \"" + ok.string() + "\" --vertices 2 --out \"" + (tmp.path() / "x").string() +
                   "\"",
               err) == 2);
   msg = slurp(err);  // the option is named, not the library's function or parameter
@@ -182,5 +167,5 @@ TEST_CASE("mbi cage reports bad input on one line with exit code 2", "[cli][cage
   REQUIRE(msg.find("make_cage") == std::string::npos);
   REQUIRE(msg.find("target_vertices") == std::string::npos);
   REQUIRE(std::count(msg.begin(), msg.end(), '\n') == 1);
-  REQUIRE_FALSE(fs::exists(tmp.dir / "x.node"));
+  REQUIRE_FALSE(fs::exists(tmp.path() / "x.node"));
 }

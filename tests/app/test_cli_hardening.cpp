@@ -9,7 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/temp_dir.hpp"
+#include "common/run_mbi.hpp"
 
 #include <signal.h>
 #include <sys/wait.h>
@@ -24,36 +24,17 @@
 #include <thread>
 
 namespace fs = std::filesystem;
+using mbi::test::q;
+using mbi::test::Result;
+using mbi::test::slurp;
 using mbi::test::TempDir;
 using nlohmann::json;
 
 namespace {
 
-struct Result {
-  int code = -1;
-  std::string err, out;
-};
-
-std::string slurp(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
-
-// Runs mbi in `cwd` (so that `out/<name>` lands there).
-Result run_mbi(const std::string& args, const TempDir& dir, const fs::path& cwd = {}) {
-  const fs::path err = dir / "stderr.txt", out = dir / "stdout.txt";
-  const std::string cmd = "cd " + q(cwd.empty() ? dir.path() : cwd) + " && '" + std::string(MBI_EXE) +
-                          "' " + args + " > " + q(out) + " 2> " + q(err);
-  const int status = std::system(cmd.c_str());
-  Result r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.err = slurp(err);
-  r.out = slurp(out);
-  return r;
+// Runs mbi in `cwd` (default: dir, so that `out/<name>` lands there).
+Result run_in(const std::string& args, const TempDir& dir, const fs::path& cwd = {}) {
+  return mbi::test::run_mbi(args, dir, "", cwd.empty() ? dir.path() : cwd);
 }
 
 // Every path under `dir` (recursively, links not followed).
@@ -144,7 +125,7 @@ TEST_CASE("run: a scene name that is not one file name is refused; nothing is wr
     INFO(name);
     write(work / "s.toml", drag_scene(name));
     const auto before = tree(dir.path());
-    const Result r = run_mbi("run s.toml --frames 1", dir, work);
+    const Result r = run_in("run s.toml --frames 1", dir, work);
     CHECK(r.code == 2);
     CHECK_THAT(r.err, Catch::StartsWith("mbi run: error: ") && Catch::Contains("cannot name an output folder") &&
                           Catch::Contains("--out"));
@@ -159,14 +140,14 @@ TEST_CASE("run: a scene name that is not one file name is refused; nothing is wr
   }
   // --out is the way to choose another folder, whatever the name
   write(work / "s.toml", drag_scene("../../x"));
-  Result r = run_mbi("run s.toml --frames 1 --out " + q(dir / "chosen"), dir, work);
+  Result r = run_in("run s.toml --frames 1 --out " + q(dir / "chosen"), dir, work);
   INFO(r.err);
   CHECK(r.code == 0);
   CHECK(fs::exists(dir / "chosen" / "mesh_0001.obj"));
   CHECK_FALSE(fs::exists(dir / "x"));
   // a safe name, verbatim (spaces and all), under out/
   write(work / "s.toml", drag_scene("my run 1"));
-  r = run_mbi("run s.toml --frames 1", dir, work);
+  r = run_in("run s.toml --frames 1", dir, work);
   CHECK(r.code == 0);
   CHECK(fs::exists(work / "out" / "my run 1" / "metrics.json"));
 }
@@ -177,7 +158,7 @@ TEST_CASE("run: symbolic links are not followed out of the output folder", "[cli
   fs::create_directories(dir / "out");
   fs::create_directories(dir / "elsewhere");
   fs::create_directory_symlink("../elsewhere", dir / "out" / "linked");
-  Result r = run_mbi("run s.toml --frames 1", dir);
+  Result r = run_in("run s.toml --frames 1", dir);
   CHECK(r.code == 2);
   CHECK_THAT(r.err, Catch::Contains("out/linked") && Catch::Contains("symbolic link"));
   CHECK(fs::is_empty(dir / "elsewhere"));
@@ -187,9 +168,9 @@ TEST_CASE("run: symbolic links are not followed out of the output folder", "[cli
   write(dir / "victim.txt", "precious\n");
   fs::create_symlink("../victim.txt", dir / "o" / "mesh_0000.obj");
   fs::create_symlink("../victim.txt", dir / "o" / "metrics.json");
-  r = run_mbi("run s.toml --frames 1 --out o", dir);
+  r = run_in("run s.toml --frames 1 --out o", dir);
   CHECK(r.code == 2);  // not empty
-  r = run_mbi("run s.toml --frames 1 --out o --force", dir);
+  r = run_in("run s.toml --frames 1 --out o --force", dir);
   INFO(r.err);
   CHECK(r.code == 0);
   CHECK(slurp(dir / "victim.txt") == "precious\n");
@@ -204,7 +185,7 @@ TEST_CASE("run --force never removes or replaces an input in the output folder",
   box_obj(dir / "o" / "mesh_0000.obj", Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, 2));
   const std::string before = slurp(dir / "o" / "mesh_0000.obj");
   write(dir / "s.toml", drag_scene("in-out"));
-  const Result r = run_mbi("run s.toml --frames 1 --out o --force --mesh o/mesh_0000.obj", dir);
+  const Result r = run_in("run s.toml --frames 1 --out o --force --mesh o/mesh_0000.obj", dir);
   CHECK(r.code == 2);
   CHECK_THAT(r.err, Catch::Contains("is an input"));
   CHECK(slurp(dir / "o" / "mesh_0000.obj") == before);
@@ -220,14 +201,14 @@ TEST_CASE("cage: one overwrite rule; an input is never an output, whatever its s
   const std::string model = slurp(m);
   // --vtk naming the input: refused even with --force, nothing written
   for (const std::string& spelling : std::vector<std::string>{m.string(), (dir / "." / "m.obj").string(), std::string("m.obj")}) {
-    const Result r = run_mbi("cage m.obj -n 20 --out c --vtk " + q(spelling) + " --force", dir);
+    const Result r = run_in("cage m.obj -n 20 --out c --vtk " + q(spelling) + " --force", dir);
     CHECK(r.code == 2);
     CHECK_THAT(r.err, Catch::Contains("is an input") && Catch::Contains("--vtk"));
   }
   fs::create_hard_link(m, dir / "hard.obj");
   fs::create_symlink("m.obj", dir / "soft.obj");
   for (const char* other : {"hard.obj", "soft.obj"}) {
-    const Result r = run_mbi(std::string("cage m.obj -n 20 --out c --stats ") + other + " --force", dir);
+    const Result r = run_in(std::string("cage m.obj -n 20 --out c --stats ") + other + " --force", dir);
     CHECK(r.code == 2);
     CHECK_THAT(r.err, Catch::Contains("is an input"));
   }
@@ -236,11 +217,11 @@ TEST_CASE("cage: one overwrite rule; an input is never an output, whatever its s
   CHECK_FALSE(has_temporaries(dir.path()));
 
   // existing outputs: refused (every one of them) without --force, replaced with it
-  Result r = run_mbi("cage m.obj -n 20 --out c --stats c.json --vtk c.vtk", dir);
+  Result r = run_in("cage m.obj -n 20 --out c --stats c.json --vtk c.vtk", dir);
   REQUIRE(r.code == 0);
   for (const std::string extra : {"", " --stats new.json", " --vtk new.vtk"}) {
     write(dir / "c.node", "mine\n");
-    r = run_mbi("cage m.obj -n 20 --out c" + extra, dir);
+    r = run_in("cage m.obj -n 20 --out c" + extra, dir);
     CHECK(r.code == 2);
     CHECK_THAT(r.err, Catch::Contains("c.node: exists (use --force to overwrite)"));
     CHECK(slurp(dir / "c.node") == "mine\n");
@@ -248,14 +229,14 @@ TEST_CASE("cage: one overwrite rule; an input is never an output, whatever its s
     CHECK_FALSE(fs::exists(dir / "new.vtk"));
   }
   fs::remove(dir / "c.node");
-  r = run_mbi("cage m.obj -n 20 --out c --stats c.json", dir);  // c.ele and c.json exist
+  r = run_in("cage m.obj -n 20 --out c --stats c.json", dir);  // c.ele and c.json exist
   CHECK(r.code == 2);
   CHECK_FALSE(fs::exists(dir / "c.node"));
-  r = run_mbi("cage m.obj -n 20 --out c --stats c.json --vtk c.vtk --force", dir);
+  r = run_in("cage m.obj -n 20 --out c --stats c.json --vtk c.vtk --force", dir);
   CHECK(r.code == 0);
   CHECK(mbi::io::read_tetgen(dir / "c").U.rows() > 0);
   // two outputs of one command on one file
-  r = run_mbi("cage m.obj -n 20 --out d --stats d.node", dir);
+  r = run_in("cage m.obj -n 20 --out d --stats d.node", dir);
   CHECK(r.code == 2);
   CHECK_THAT(r.err, Catch::Contains("another output"));
   CHECK_FALSE(fs::exists(dir / "d.node"));
@@ -279,7 +260,7 @@ TEST_CASE("deform --out equal to an input is refused even with --force (spelling
                                  "--out o.obj --stats x.txt", "--out o.obj --stats c.ele"}) {
     INFO(out);
     fs::create_directories(dir / "sub");
-    const Result r = run_mbi(base + out, dir);
+    const Result r = run_in(base + out, dir);
     CHECK(r.code == 2);
     CHECK_THAT(r.err, Catch::StartsWith("mbi deform: error: ") && Catch::Contains("is an input"));
     CHECK_FALSE(fs::exists(dir / "o.obj"));
@@ -294,7 +275,7 @@ TEST_CASE("the stats writer leaves a user's <stats>.tmp alone and leaves no temp
           "[cli][hardening]") {
   TempDir dir("hard");
   write(dir / "s.json.tmp", "a user's file\n");
-  const Result r = run_mbi("deform --example twist-bar --stats s.json", dir);
+  const Result r = run_in("deform --example twist-bar --stats s.json", dir);
   INFO(r.err);
   REQUIRE(r.code == 0);
   CHECK(slurp(dir / "s.json.tmp") == "a user's file\n");
@@ -312,22 +293,22 @@ TEST_CASE("cage and deform: an unwritable output fails before any work, nothing 
   // the last output cannot be written: the first ones are neither created nor replaced
   for (const std::string bad : {"--stats file/s.json", "--vtk file/c.vtk", "--vtk nosuchdir/c.vtk"}) {
     INFO(bad);
-    const Result r = run_mbi("cage m.obj -n 20 --out c --stats ok.json " + bad, dir);
+    const Result r = run_in("cage m.obj -n 20 --out c --stats ok.json " + bad, dir);
     CHECK(r.code == 2);
     CHECK_FALSE(fs::exists(dir / "c.node"));
     CHECK_FALSE(fs::exists(dir / "c.ele"));
     CHECK_FALSE(fs::exists(dir / "ok.json"));
     CHECK(r.out.empty());  // no result printed: it failed before the mesh was made
   }
-  Result r = run_mbi("cage m.obj -n 20 --out c", dir);
+  Result r = run_in("cage m.obj -n 20 --out c", dir);
   REQUIRE(r.code == 0);
   const std::string node = slurp(dir / "c.node");
-  r = run_mbi("cage m.obj -n 30 --out c --force --stats file/s.json", dir);
+  r = run_in("cage m.obj -n 30 --out c --force --stats file/s.json", dir);
   CHECK(r.code == 2);
   CHECK(slurp(dir / "c.node") == node);
 
   // deform: --out and --stats together
-  r = run_mbi("deform --example twist-bar --out o.obj --stats file/s.json", dir);
+  r = run_in("deform --example twist-bar --out o.obj --stats file/s.json", dir);
   CHECK(r.code == 2);
   CHECK_FALSE(fs::exists(dir / "o.obj"));
   CHECK_FALSE(has_temporaries(dir.path()));
@@ -344,7 +325,7 @@ TEST_CASE("deform: a failure after the mesh is written (a non-finite statistic) 
   X(3, 0) = 1e300;  // finite, but the energies overflow
   mbi::io::write_points(dir / "x.txt", X);
   mbi::io::write_points(dir / "p.txt", U * 0.5);
-  const Result r = run_mbi("deform --control c.node --deformed x.txt --mesh p.txt --out o.txt "
+  const Result r = run_in("deform --control c.node --deformed x.txt --mesh p.txt --out o.txt "
                            "--stats s.json --method bi", dir);
   INFO(r.err);
   CHECK(r.code == 2);
@@ -358,7 +339,7 @@ TEST_CASE("run: a drag blowing up ends with exit 3, the frames so far and metric
           "[cli][hardening]") {
   TempDir dir("hard");
   write(dir / "s.toml", drag_scene("blow", "", "[1, 1e200, 0, 0]"));
-  const Result r = run_mbi("run s.toml --frames 4 --out o", dir);
+  const Result r = run_in("run s.toml --frames 4 --out o", dir);
   CHECK(r.code == 3);
   CHECK_THAT(r.err, Catch::Contains("mbi run: error: frame 1") && Catch::Contains("outputs up to frame 0 kept"));
   CHECK(mbi::io::read_surface(dir / "o" / "mesh_0000.obj").V.rows() > 0);
@@ -380,7 +361,7 @@ TEST_CASE("run: pictures too wide fail at load, before frame 0", "[cli][hardenin
         "name = \"wide\"\nmode = \"drag\"\n[dense]\nbuiltin = \"image-grid\"\nimage = \"wide.png\"\ngrid = 20\n"
         "[control]\nbuiltin = \"grid-2d\"\ncells = [4, 1]\n[[drags]]\nnear = [0, 0]\nkeys = [[0, 0, 0]]\n"
         "[interpolation]\ngpu = \"off\"\n");
-  const Result r = run_mbi("run s.toml --frames 2", dir);
+  const Result r = run_in("run s.toml --frames 2", dir);
   CHECK(r.code == 2);
   CHECK_THAT(r.err, Catch::Contains("wide.png") && Catch::Contains("16384"));
   CHECK_FALSE(fs::exists(dir / "out"));
@@ -445,7 +426,7 @@ TEST_CASE("a run killed with SIGKILL leaves every earlier output complete, no pa
   CHECK_FALSE(fs::exists(o / "metrics.json"));
 
   // the next --force run there removes the dead run's temporaries and its frames
-  const Result r = run_mbi("run s.toml --frames 1 --out o --force", dir);
+  const Result r = run_in("run s.toml --frames 1 --out o --force", dir);
   INFO(r.err);
   REQUIRE(r.code == 0);
   CHECK_FALSE(has_temporaries(o));
@@ -463,7 +444,7 @@ TEST_CASE("a flat 3-coordinate model is 2D everywhere unless --force-3d", "[cli]
   flat_obj(dir / "flat3.obj", 512, 384, 3.0);
   // run: image-warp.toml --mesh flat.obj
   const fs::path warp = fs::path(src) / "scenes" / "image-warp.toml";
-  Result r = run_mbi("run " + q(warp) + " --mesh flat.obj --frames 2 --gpu off --out w", dir);
+  Result r = run_in("run " + q(warp) + " --mesh flat.obj --frames 2 --gpu off --out w", dir);
   INFO(r.err);
   REQUIRE(r.code == 0);
   CHECK(json::parse(slurp(dir / "w" / "metrics.json"))["dim"] == 2);
@@ -471,20 +452,20 @@ TEST_CASE("a flat 3-coordinate model is 2D everywhere unless --force-3d", "[cli]
   std::string scene = slurp(warp);
   scene.replace(scene.find("mesh_format = \"none\""), 20, "mesh_format = \"obj\"");
   write(dir / "warp.toml", scene);
-  r = run_mbi("run warp.toml --mesh flat3.obj --frames 2 --gpu off --out w3", dir);
+  r = run_in("run warp.toml --mesh flat3.obj --frames 2 --gpu off --out w3", dir);
   REQUIRE(r.code == 0);
   const mbi::io::SurfaceMesh m3 = mbi::io::read_surface(dir / "w3" / "mesh_0002.obj");
   CHECK((m3.V.col(2).array() == 3.0).all());
   // --force-3d: the model stays 3D, and the scene's 2D control mesh does not fit it
-  r = run_mbi("run " + q(warp) + " --mesh flat.obj --frames 2 --gpu off --out w4 --force-3d", dir);
+  r = run_in("run " + q(warp) + " --mesh flat.obj --frames 2 --gpu off --out w4 --force-3d", dir);
   CHECK(r.code == 2);
   CHECK_THAT(r.err, Catch::Contains("2D dense model") || Catch::Contains("3D"));
 
   // cage: voxel gives triangles, tetgen refuses clearly, --force-3d makes tetrahedra
-  r = run_mbi("cage flat.obj -n 30 --out c --stats c.json", dir);
+  r = run_in("cage flat.obj -n 30 --out c --stats c.json", dir);
   REQUIRE(r.code == 0);
   CHECK(json::parse(slurp(dir / "c.json"))["dim"] == 2);
-  r = run_mbi("cage flat.obj -n 30 --out t --mesher tetgen", dir);
+  r = run_in("cage flat.obj -n 30 --out t --mesher tetgen", dir);
   CHECK(r.code == 2);
   CHECK_THAT(r.err, Catch::Contains("flat") && Catch::Contains("--force-3d") && Catch::Contains("voxel"));
   CHECK_FALSE(fs::exists(dir / "t.node"));
@@ -496,7 +477,7 @@ TEST_CASE("a flat 3-coordinate model is 2D everywhere unless --force-3d", "[cli]
   X3.leftCols(2) = c.U * 1.05;
   X3.col(2).setConstant(0.0);
   mbi::io::write_points(dir / "x3.txt", X3);
-  r = run_mbi("deform --control c.node --deformed x3.txt --mesh flat3.obj --out d.obj --method bi", dir);
+  r = run_in("deform --control c.node --deformed x3.txt --mesh flat3.obj --out d.obj --method bi", dir);
   INFO(r.err);
   REQUIRE(r.code == 0);
   const mbi::io::SurfaceMesh d = mbi::io::read_surface(dir / "d.obj");
@@ -505,7 +486,7 @@ TEST_CASE("a flat 3-coordinate model is 2D everywhere unless --force-3d", "[cli]
   CHECK((d.V.leftCols(2) - 1.05 * f.V.leftCols(2)).cwiseAbs().maxCoeff() < 1e-9 * 512);
   X3(0, 2) = 1.0;  // not one plane: refused
   mbi::io::write_points(dir / "x3b.txt", X3);
-  r = run_mbi("deform --control c.node --deformed x3b.txt --mesh flat3.obj --out e.obj", dir);
+  r = run_in("deform --control c.node --deformed x3b.txt --mesh flat3.obj --out e.obj", dir);
   CHECK(r.code == 2);
   CHECK_THAT(r.err, Catch::Contains("not in one plane"));
 }
@@ -526,7 +507,7 @@ TEST_CASE("poke offset_relative: a small and a large model are poked alike", "[c
   double moved[2];
   int k = 0;
   for (const char* model : {"small", "large"}) {
-    const Result r = run_mbi(std::string("run p.toml --mesh ") + model + ".obj --out " + model, dir);
+    const Result r = run_in(std::string("run p.toml --mesh ") + model + ".obj --out " + model, dir);
     INFO(r.err);
     REQUIRE(r.code == 0);
     const mbi::io::SurfaceMesh rest = mbi::io::read_surface(dir / (std::string(model) + ".obj"));
@@ -588,7 +569,7 @@ TEST_CASE("metrics.json has the documented keys in every mode and method; the ra
             mode == "simulate" ? simulate_scene(name, method)
                                : drag_scene(name, "", "[3, 0.4, 0.3, 0.0]",
                                             "every = 1\nimage = false\n") + "");
-      const Result r = run_mbi("run " + name + ".toml --frames 3 --method " + method + " --out " + name, dir);
+      const Result r = run_in("run " + name + ".toml --frames 3 --method " + method + " --out " + name, dir);
       INFO(r.err);
       REQUIRE(r.code == 0);
       const json j = json::parse(slurp(dir / name / "metrics.json"));
@@ -634,7 +615,7 @@ TEST_CASE("deform --stats has the documented keys for each method; ratio null at
     for (const std::string x : {"rest", "bent"}) {
       INFO(method << " " << x);
       const std::string stats = method + "-" + x + ".json";
-      const Result r = run_mbi("deform --control c.node --deformed " + x + ".txt --mesh p.txt --out " + method +
+      const Result r = run_in("deform --control c.node --deformed " + x + ".txt --mesh p.txt --out " + method +
                                    x + ".txt --method " + method + " --stats " + stats,
                                dir);
       INFO(r.err);

@@ -7,7 +7,7 @@
 
 #include <Eigen/Geometry>
 
-#include "common/temp_dir.hpp"
+#include "common/run_mbi.hpp"
 
 #include <algorithm>
 #include <cstdio>
@@ -16,35 +16,14 @@
 #include <sys/wait.h>
 
 namespace fs = std::filesystem;
+using mbi::test::q;
+using mbi::test::Result;
+using mbi::test::run_mbi;
+using mbi::test::slurp;
 using mbi::test::TempDir;
 
 namespace {
 
-struct Result {
-  int code = -1;
-  std::string err, out;
-};
-
-std::string slurp(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-Result run_mbi(const std::string& args, const TempDir& dir) {
-  const fs::path err = dir / "stderr.txt", out = dir / "stdout.txt";
-  const std::string cmd = "\"" + std::string(MBI_EXE) + "\" " + args + " > \"" + out.string() +
-                          "\" 2> \"" + err.string() + "\"";
-  const int status = std::system(cmd.c_str());
-  Result r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.err = slurp(err);
-  r.out = slurp(out);
-  return r;
-}
-
-std::string q(const fs::path& p) { return "\"" + p.string() + "\""; }
 
 int count_lines(const std::string& s) { return static_cast<int>(std::count(s.begin(), s.end(), '\n')); }
 

@@ -22,6 +22,12 @@ class TempDir {
   TempDir& operator=(const TempDir&) = delete;
   const std::filesystem::path& path() const { return path_; }
   std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+  /// Number of entries in the folder (to check that no temporary file is left behind).
+  int entries() const {
+    int n = 0;
+    for (auto it = std::filesystem::directory_iterator(path_); it != std::filesystem::directory_iterator(); ++it) ++n;
+    return n;
+  }
 
  private:
   std::filesystem::path path_;

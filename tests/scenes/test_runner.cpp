@@ -11,6 +11,7 @@
 #include <mbi/io/io.hpp>
 #include <mbi/scenes/runner.hpp>
 
+#include "common/files.hpp"
 #include "common/temp_dir.hpp"
 
 #include <nlohmann/json.hpp>
@@ -26,14 +27,9 @@ namespace fs = std::filesystem;
 using namespace mbi::scenes;
 using namespace mbi::io;
 using namespace mbi::generate;
+using mbi::test::source_dir;
 
 namespace {
-
-fs::path source_dir() {
-  const char* s = std::getenv("MBI_SOURCE_DIR");
-  REQUIRE(s != nullptr);
-  return s;
-}
 
 nlohmann::json read_json(const fs::path& p) {
   std::ifstream in(p);
@@ -264,26 +260,7 @@ TEST_CASE("a mesh override replaces the dense model and method bi gives BI outpu
 TEST_CASE("a failing simulation step stops the run and keeps what was written", "[runner]") {
   mbi::test::TempDir dir("run");
   // an absurd force on a soft bar: the simulator's energy guard fails step 3
-  std::ofstream(dir / "fail.toml") << R"(
-[dense]
-builtin = "paper-bar"
-[control]
-builtin = "paper-bar"
-[material]
-young = 1000
-[simulation]
-frames = 20
-[[constraints]]
-select = { box_relative = { min = [0, 0, 0], max = [1, 1, 0] } }
-[[pokes]]
-first = 3
-last = 20
-point = [0.0, 0.0, 6.0]
-force = [1e15, 0, 0]
-[output]
-every = 2
-)";
-  const Scene sc = load_scene(dir / "fail.toml");
+  const Scene sc = load_scene(source_dir() / "tests" / "data" / "scenes" / "fail.toml");
   RunOptions o;
   o.out_dir = dir / "out";
   const RunResult r = run_scene(sc, o);

@@ -6,6 +6,7 @@
 #include <mbi/io/image.hpp>
 #include <mbi/viewer/camera.hpp>
 
+#include "common/files.hpp"
 #include "common/grid_meshes.hpp"
 #include "common/temp_dir.hpp"
 
@@ -19,16 +20,11 @@
 #include <sstream>
 
 namespace fs = std::filesystem;
+using mbi::test::source_dir;
 using mbi::test::TempDir;
 using namespace mbi::viewer;
 
 namespace {
-
-std::string source_dir() {
-  const char* s = std::getenv("MBI_SOURCE_DIR");
-  REQUIRE(s != nullptr);
-  return s;
-}
 
 struct Run {
   int code = -1;
@@ -43,10 +39,7 @@ Run view(const std::string& args, const TempDir& dir, bool display = true) {
   const int status = std::system(cmd.c_str());
   Run r;
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream in(err);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  r.err = ss.str();
+  r.err = mbi::test::slurp(err);
   return r;
 }
 

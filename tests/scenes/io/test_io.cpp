@@ -4,6 +4,9 @@
 
 #include <catch2/catch.hpp>
 
+#include "common/files.hpp"
+#include "common/temp_dir.hpp"
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -17,39 +20,11 @@
 
 namespace fs = std::filesystem;
 using namespace mbi::io;
+using mbi::test::slurp;
+using mbi::test::TempDir;
+using mbi::test::write_text;
 
 namespace {
-
-/// A fresh folder for one test case, removed afterwards.
-struct TempDir {
-  fs::path dir;
-  explicit TempDir(const std::string& name) {
-    dir = fs::temp_directory_path() / ("mbi_scenes_io_" + std::to_string(::getpid()) + "_" + name);
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(dir, ec);
-  }
-  fs::path operator/(const std::string& f) const { return dir / f; }
-  /// Number of entries in the folder (to check that no temporary file is left behind).
-  int entries() const {
-    int n = 0;
-    for (auto it = fs::directory_iterator(dir); it != fs::directory_iterator(); ++it) ++n;
-    return n;
-  }
-};
-
-void write_text(const fs::path& p, const std::string& s) {
-  std::ofstream out(p, std::ios::binary);
-  out << s;
-}
-
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
 
 /// Doubles that need all 17 digits, of varied magnitudes and signs.
 double awkward(std::mt19937_64& rng) {
@@ -191,7 +166,7 @@ TEST_CASE("TetGen files round-trip exactly, 3D and 2D", "[io]") {
     REQUIRE((m.U.array() == U.array()).all());
     REQUIRE(m.T == T);
   }
-  REQUIRE(read_text(tmp / "c.face") == "2 0\n0 0 1 2\n1 1 3 4\n");  // written, never read
+  REQUIRE(slurp(tmp / "c.face") == "2 0\n0 0 1 2\n1 1 3 4\n");  // written, never read
   REQUIRE((read_node(tmp / "c.node").array() == U.array()).all());
   REQUIRE(read_control_mesh(tmp / "c.ele").T == T);
 
@@ -264,7 +239,7 @@ TEST_CASE("VTK output: counts, cell types and exact coordinates", "[io]") {
   T << 0, 1, 2, 3;
   Eigen::MatrixXd D = Eigen::MatrixXd::Constant(4, 3, 0.5);
   write_vtk(tmp / "a.vtk", U, T, D);
-  const std::string s = read_text(tmp / "a.vtk");
+  const std::string s = slurp(tmp / "a.vtk");
   REQUIRE(s.rfind("# vtk DataFile Version 3.0\n", 0) == 0);
   REQUIRE(s.find("DATASET UNSTRUCTURED_GRID") != std::string::npos);
   REQUIRE(s.find("POINTS 4 double\n0.10000000000000001 0.20000000000000001 0.29999999999999999\n") !=
@@ -277,7 +252,7 @@ TEST_CASE("VTK output: counts, cell types and exact coordinates", "[io]") {
   Eigen::MatrixXi T2(1, 3);
   T2 << 0, 1, 2;
   write_vtk(tmp / "b.vtk", U2, T2);
-  REQUIRE(read_text(tmp / "b.vtk").find("CELL_TYPES 1\n5\n") != std::string::npos);
+  REQUIRE(slurp(tmp / "b.vtk").find("CELL_TYPES 1\n5\n") != std::string::npos);
 }
 
 TEST_CASE("PC2: header layout, appended frames, atomic finish", "[io]") {
@@ -297,7 +272,7 @@ TEST_CASE("PC2: header layout, appended frames, atomic finish", "[io]") {
     w.finish();
   }
   REQUIRE(fs::file_size(tmp / "a.pc2") == 32u + 3u * 6u * 12u);
-  const std::string raw = read_text(tmp / "a.pc2");
+  const std::string raw = slurp(tmp / "a.pc2");
   REQUIRE(std::memcmp(raw.data(), "POINTCACHE2\0", 12) == 0);
   std::int32_t header[5];
   std::memcpy(header, raw.data() + 12, 20);
@@ -345,13 +320,13 @@ TEST_CASE("writers reject bad data and leave the target untouched", "[io]") {
   TempDir tmp("atomic");
   SurfaceMesh m = awkward_mesh(false);
   write_surface(tmp / "m.obj", m);
-  const std::string before = read_text(tmp / "m.obj");
+  const std::string before = slurp(tmp / "m.obj");
   m.V(3, 1) = std::numeric_limits<double>::quiet_NaN();
   require_io_error([&] { write_surface(tmp / "m.obj", m); }, tmp / "m.obj", 0, "vertex 3");
   m = awkward_mesh(false);
   m.polygons[1][2] = 99;
   require_io_error([&] { write_surface(tmp / "m.obj", m); }, tmp / "m.obj", 0, "face 1");
-  REQUIRE(read_text(tmp / "m.obj") == before);
+  REQUIRE(slurp(tmp / "m.obj") == before);
   REQUIRE(tmp.entries() == 1);
   require_io_error([&] { write_points(tmp / "nope" / "p.txt", Eigen::MatrixXd::Ones(2, 2)); },
                    tmp / "nope" / "p.txt", 0, "folder");
@@ -603,7 +578,7 @@ TEST_CASE("truncated and corrupted files of every format: IoError or success, no
   int errors = 0, successes = 0;
   for (const auto& r : readers) {
     const fs::path orig = tmp / r.file;
-    const std::string good = read_text(orig);
+    const std::string good = slurp(orig);
     REQUIRE_NOTHROW(r.read(orig));
     auto attempt = [&](const std::string& bytes) {
       write_text(orig, bytes);

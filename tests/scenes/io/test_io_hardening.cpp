@@ -9,6 +9,9 @@
 
 #include <catch2/catch.hpp>
 
+#include "common/files.hpp"
+#include "common/temp_dir.hpp"
+
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -22,33 +25,11 @@
 
 namespace fs = std::filesystem;
 using namespace mbi::io;
+using mbi::test::slurp;
+using mbi::test::source_dir;
+using mbi::test::TempDir;
 
 namespace {
-
-fs::path source_dir() {
-  const char* s = std::getenv("MBI_SOURCE_DIR");
-  REQUIRE(s != nullptr);
-  return s;
-}
-
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-struct TempDir {
-  fs::path dir;
-  explicit TempDir(const std::string& name) {
-    dir = fs::temp_directory_path() / ("mbi_io_hardening_" + std::to_string(::getpid()) + "_" + name);
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(dir, ec);
-  }
-  fs::path operator/(const std::string& f) const { return dir / f; }
-};
 
 std::string error_of(const std::function<void()>& f) {
   try {
@@ -344,7 +325,7 @@ TEST_CASE("fuzz corpora replayed: every seed and every input a fuzzer found, res
       const bool regression = f.rfind("crash-", 0) == 0 || f.rfind("leak-", 0) == 0 ||
                               f.rfind("timeout-", 0) == 0 || f.rfind("oom-", 0) == 0;
       INFO(e.path());
-      const std::string bytes = read_text(e.path());
+      const std::string bytes = slurp(e.path());
       bool ok = true;
       try {
         parse(bytes);
@@ -391,9 +372,9 @@ TEST_CASE("OutputSet: an output reserved but never written is not committed over
     REQUIRE_THAT(error_of([&] { out.commit(); }), Catch::Contains("b.json: was not written"));
   }
   CHECK(!fs::exists(a));                          // nothing renamed into place
-  CHECK(read_text(b) == "the user's file\n");     // the target is untouched
+  CHECK(slurp(b) == "the user's file\n");     // the target is untouched
   std::size_t left = 0;                           // and no staging file stays behind
-  for (const auto& e : fs::directory_iterator(t.dir)) left += e.path().filename() != "b.json";
+  for (const auto& e : fs::directory_iterator(t.path())) left += e.path().filename() != "b.json";
   CHECK(left == 0);
   {
     OutputSet out({}, true);
@@ -402,8 +383,8 @@ TEST_CASE("OutputSet: an output reserved but never written is not committed over
     write_text_atomic(out.staging(ib), "[]\n");
     out.commit();
   }
-  CHECK(read_text(a) == "{}\n");
-  CHECK(read_text(b) == "[]\n");
+  CHECK(slurp(a) == "{}\n");
+  CHECK(slurp(b) == "[]\n");
 }
 
 TEST_CASE("numbers: one leading '+' is a sign, '+-1' and '++1' are not numbers", "[io][hardening]") {
