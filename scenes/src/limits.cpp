@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <sstream>
 
 namespace mbi::scenes {
 
@@ -39,6 +41,68 @@ double physical_memory_bytes() {
   return static_cast<double>(pages) * static_cast<double>(size);
 }
 
+namespace {
+// The number in a cgroup limit file, 0 for "max", unreadable or unlimited (v1 writes about 2^63).
+double limit_in(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  std::string word;
+  if (!(in >> word) || word == "max") return 0.0;
+  char* end = nullptr;
+  const double v = std::strtod(word.c_str(), &end);
+  if (end == word.c_str() || *end != '\0' || !(v > 0) || v >= 1152921504606846976.0) return 0.0;  // 2^60
+  return v;
+}
+
+// The smallest limit in `name` from `dir` up to `top` (both under the mount), 0 when none.
+double smallest_up(const std::filesystem::path& top, const std::string& rel, const std::string& name) {
+  double best = 0.0;
+  std::filesystem::path p = rel;
+  for (;;) {
+    const double v = limit_in(top / p.relative_path() / name);
+    if (v > 0 && (best == 0 || v < best)) best = v;
+    if (!p.has_relative_path()) break;
+    p = p.parent_path();
+  }
+  return best;
+}
+}  // namespace
+
+double cgroup_memory_limit(const std::string& proc_self_cgroup, const std::filesystem::path& root) {
+  double best = 0.0;
+  auto take = [&](double v) {
+    if (v > 0 && (best == 0 || v < best)) best = v;
+  };
+  std::istringstream lines(proc_self_cgroup);
+  std::string line;
+  while (std::getline(lines, line)) {
+    // hierarchy-ID:controller-list:cgroup-path
+    const size_t a = line.find(':'), b = a == std::string::npos ? a : line.find(':', a + 1);
+    if (b == std::string::npos) continue;
+    const std::string id = line.substr(0, a), controllers = line.substr(a + 1, b - a - 1), path = line.substr(b + 1);
+    if (path.empty() || path[0] != '/' || path.find("..") != std::string::npos) continue;
+    if (id == "0" && controllers.empty()) {  // v2: the whole mount, or unified/ beside v1
+      take(smallest_up(root, path, "memory.max"));
+      take(smallest_up(root / "unified", path, "memory.max"));
+    } else {
+      std::istringstream names(controllers);
+      std::string c;
+      while (std::getline(names, c, ','))
+        if (c == "memory") take(smallest_up(root / "memory", path, "memory.limit_in_bytes"));
+    }
+  }
+  return best;
+}
+
+double usable_memory_bytes() {
+  const double physical = physical_memory_bytes();
+  std::ifstream in("/proc/self/cgroup");
+  std::stringstream text;
+  text << in.rdbuf();
+  const double group = cgroup_memory_limit(text.str(), "/sys/fs/cgroup");
+  if (group > 0 && (physical <= 0 || group < physical)) return group;
+  return physical;
+}
+
 void check_run_size(const std::string& where, long long dense_vertices, long long control_vertices,
                     long long control_elements, int d) {
   const char* kind = d == 3 ? " tetrahedra" : " triangles";
@@ -49,12 +113,12 @@ void check_run_size(const std::string& where, long long dense_vertices, long lon
                      std::to_string(kMaxControlElements) + kind +
                      " (the precompute grows about as n^2.5; see docs/limits.md)");
   const double need = estimate_run_bytes(dense_vertices, control_vertices, control_elements, d);
-  const double have = physical_memory_bytes();
+  const double physical = physical_memory_bytes(), have = usable_memory_bytes();
   if (have > 0 && need > 0.75 * have)
     throw SceneError(where + ": the run needs about " + gib(need) + " of memory (" +
                      std::to_string(dense_vertices) + " dense vertices, " +
-                     std::to_string(control_vertices) + " control vertices), over 3/4 of this "
-                     "machine's " + gib(have));
+                     std::to_string(control_vertices) + " control vertices), over 3/4 of " +
+                     (have < physical ? "this process's control group limit of " : "this machine's ") + gib(have));
 }
 
 }  // namespace mbi::scenes

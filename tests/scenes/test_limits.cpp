@@ -5,6 +5,8 @@
 
 #include <catch2/catch.hpp>
 
+#include "common/temp_dir.hpp"
+
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -77,4 +79,37 @@ TEST_CASE("run size: caps and the memory estimate against the machine", "[limits
   CHECK(estimate_run_bytes(2000000, 450, 2000, 3) > estimate_run_bytes(1000000, 450, 2000, 3));
   CHECK(estimate_run_bytes(1000, 20000, 120000, 3) > estimate_run_bytes(1000, 10000, 60000, 3));
   CHECK(estimate_run_bytes(3000000000LL, 10, 10, 3) > 3e9 * 8);
+}
+
+// A container's memory limit (cgroup) counts like a smaller machine.
+TEST_CASE("run size: the control group's memory limit, cgroup v1 and v2", "[limits]") {
+  mbi::test::TempDir dir("cgroup");
+  const std::filesystem::path root = dir.path();
+  auto put = [&](const std::filesystem::path& rel, const std::string& text) {
+    std::filesystem::create_directories((root / rel).parent_path());
+    std::ofstream(root / rel) << text;
+  };
+  // nothing mounted: no limit
+  CHECK(cgroup_memory_limit("0::/user.slice\n", root) == 0.0);
+  // v2: the smallest memory.max on the path up to the mount; "max" is no limit
+  put("a/b/memory.max", "max\n");
+  put("a/memory.max", "2147483648\n");
+  put("memory.max", "8589934592\n");
+  CHECK(cgroup_memory_limit("0::/a/b\n", root) == 2147483648.0);
+  CHECK(cgroup_memory_limit("0::/\n", root) == 8589934592.0);
+  // v1 (memory controller among others); about 2^63 means unlimited
+  put("memory/docker/x/memory.limit_in_bytes", "9223372036854771712\n");
+  put("memory/memory.limit_in_bytes", "1073741824\n");
+  CHECK(cgroup_memory_limit("12:cpu,cpuacct:/docker/x\n4:memory:/docker/x\n", root) == 1073741824.0);
+  // hybrid: v2 under unified/ beside v1; the smaller wins
+  put("unified/s/memory.max", "536870912\n");
+  CHECK(cgroup_memory_limit("4:memory:/docker/x\n0::/s\n", root) == 536870912.0);
+  // malformed lines and files are no limit, not an error
+  put("memory/bad/memory.limit_in_bytes", "lots\n");
+  CHECK(cgroup_memory_limit("garbage\n4:memory\n4:memory:relative\n4:memory:/../etc\n", root) == 0.0);
+  CHECK(cgroup_memory_limit("4:memory:/bad\n", root) == 1073741824.0);  // the parent's limit
+  // this process: positive, and never more than the machine
+  const double usable = usable_memory_bytes();
+  CHECK(usable > 0);
+  CHECK(usable <= physical_memory_bytes());
 }
