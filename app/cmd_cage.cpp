@@ -44,8 +44,7 @@ const mbi::cli::Registrar reg(
         namespace fs = std::filesystem;
         // BASE, without a .node/.ele/.face extension
         fs::path base(a->out);
-        std::string ext = base.extension().string();
-        for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+        const std::string ext = mbi::io::lower_extension(base);
         if (ext == ".node" || ext == ".ele" || ext == ".face") base.replace_extension();
         fs::path node = base, ele = base;
         node += ".node";
@@ -61,11 +60,7 @@ const mbi::cli::Registrar reg(
         opt.target_vertices = a->vertices;
         opt.force_3d = a->force_3d;
         opt.mesher = mbi::generate::parse_mesher(a->mesher);
-        if (opt.mesher == mbi::generate::Mesher::TetGen && !a->force_3d && dense.V.rows() > 0 &&
-            dense.V.cols() == 3 && dense.V.allFinite() &&
-            dense.V.col(2).maxCoeff() == dense.V.col(2).minCoeff() &&
-            // a single point is not flat but degenerate: make_cage says so
-            (dense.V.leftCols(2).colwise().maxCoeff() - dense.V.leftCols(2).colwise().minCoeff()).maxCoeff() > 0)
+        if (opt.mesher == mbi::generate::Mesher::TetGen && !a->force_3d && mbi::generate::is_planar(dense.V))
           throw std::runtime_error(
               a->dense + ": the model is flat (every z = " + std::to_string(dense.V(0, 2)) +
               "), a 2D input; TetGen makes tetrahedra only: use the voxel mesher (the default) "

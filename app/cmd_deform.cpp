@@ -38,11 +38,7 @@ double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-std::string lower_ext(const fs::path& p) {
-  std::string e = p.extension().string();
-  for (char& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return e;
-}
+std::string lower_ext(const fs::path& p) { return mbi::io::lower_extension(p); }
 // A library message without its function name ("validate_mesh: element 5 ..." -> "element 5
 // ..."): the user did not call that function.
 std::string plain(const std::exception& e) {

@@ -99,10 +99,7 @@ SceneModels load_models(const Scene& sc, const fs::path& mesh_override, bool for
   if (!sc.control.path.empty()) from_file = io::read_control_mesh(resolve(sc, sc.control.path));
   // a flat 3-coordinate model is 2D (as in mbi cage and mbi deform) unless --force-3d or a 3D
   // control mesh file says otherwise
-  const bool flat = m.dense.V.cols() == 3 && m.dense.V.allFinite() &&
-                    m.dense.V.col(2).maxCoeff() == m.dense.V.col(2).minCoeff() &&
-                    // a single point is not flat but degenerate (make_cage says so)
-                    (m.dense.V.leftCols(2).colwise().maxCoeff() - m.dense.V.leftCols(2).colwise().minCoeff()).maxCoeff() > 0;
+  const bool flat = generate::is_planar(m.dense.V);
   if (flat && !force_3d && !(from_file && from_file->dim() == 3)) {
     if (sc.control.builtin == ControlBuiltin::Box && sc.control.path.empty())
       throw SceneError(m.dense_name + ": the model is flat (every z = " + format_num(m.dense.V(0, 2)) +
@@ -464,15 +461,20 @@ class Outputs {
 }  // namespace
 
 namespace {
+// The names of the files run_scene writes into its output folder.
+const std::regex& output_names() {
+  static const std::regex ours(R"((mesh_[0-9]+\.(obj|ply)|control_[0-9]+\.vtk|frame_[0-9]+\.png|dense\.pc2|metrics\.json))");
+  return ours;
+}
+
 // Removes the files of an earlier run (only names that run_scene writes) from `dir`, so that
 // --force does not leave its extra frames beside the new ones.
 // Also the temporaries a killed run left there (".mbi-tmp.<pid>.*" of a process that is gone).
 // A symbolic link under one of these names is removed itself, never followed.
 void clear_outputs(const fs::path& dir) {
-  static const std::regex ours(R"((mesh_[0-9]+\.(obj|ply)|control_[0-9]+\.vtk|frame_[0-9]+\.png|dense\.pc2|metrics\.json))");
   std::vector<fs::path> old;
   for (const auto& e : fs::directory_iterator(dir))
-    if ((e.is_symlink() || e.is_regular_file()) && std::regex_match(e.path().filename().string(), ours))
+    if ((e.is_symlink() || e.is_regular_file()) && std::regex_match(e.path().filename().string(), output_names()))
       old.push_back(e.path());
   for (const auto& p : old) fs::remove(p);
   io::remove_stale_temporaries(dir);
@@ -480,11 +482,6 @@ void clear_outputs(const fs::path& dir) {
 }  // namespace
 
 namespace {
-
-const std::regex& output_names() {
-  static const std::regex ours(R"((mesh_[0-9]+\.(obj|ply)|control_[0-9]+\.vtk|frame_[0-9]+\.png|dense\.pc2|metrics\.json))");
-  return ours;
-}
 
 // The scene's inputs that are files (what --force must never remove or replace).
 std::vector<fs::path> input_files(const Scene& sc, const RunOptions& opt) {

@@ -640,6 +640,12 @@ Mesher parse_mesher(const std::string& name) {
   throw CageError("unknown mesher '" + name + "' (expected voxel or tetgen)");
 }
 
+bool is_planar(const Eigen::Ref<const Eigen::MatrixXd>& V) {
+  if (V.rows() == 0 || V.cols() != 3 || !V.allFinite()) return false;
+  if (V.col(2).maxCoeff() != V.col(2).minCoeff()) return false;
+  return (V.leftCols(2).colwise().maxCoeff() - V.leftCols(2).colwise().minCoeff()).maxCoeff() > 0;
+}
+
 double min_dihedral_angle_deg(const Eigen::Ref<const Eigen::MatrixXd>& U,
                               const Eigen::Ref<const Eigen::MatrixXi>& T) {
   double best = 180.0;

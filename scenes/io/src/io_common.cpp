@@ -209,11 +209,7 @@ void put(std::FILE* f, const std::string& s, const std::filesystem::path& file) 
   put(f, s.data(), s.size(), file);
 }
 
-std::string extension(const std::filesystem::path& file) {
-  std::string e = file.extension().string();
-  for (char& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return e;
-}
+std::string extension(const std::filesystem::path& file) { return lower_extension(file); }
 
 void check_finite(const Eigen::Ref<const Eigen::MatrixXd>& P, const std::filesystem::path& file,
                   const char* what) {
@@ -236,5 +232,11 @@ void check_indices(const Eigen::Ref<const Eigen::MatrixXi>& E, long long n,
 }  // namespace mbi::io::detail
 
 namespace mbi::io {
+
+std::string lower_extension(const std::filesystem::path& file) {
+  std::string e = file.extension().string();
+  for (char& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return e;
+}
 std::string read_bytes(const std::filesystem::path& file) { return detail::slurp(file); }
 }  // namespace mbi::io

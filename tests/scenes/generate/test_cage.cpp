@@ -425,3 +425,22 @@ TEST_CASE("TetGen cages of the bunny", "[cage][models][tetgen]") {
     if (target == 100) check_deterministic(s, opt, c);
   }
 }
+
+TEST_CASE("is_planar: a model with one z and some extent in x or y", "[cage]") {
+  Eigen::MatrixXd V(4, 3);
+  V << 0, 0, 2, 1, 0, 2, 0, 1, 2, 1, 1, 2;
+  CHECK(mbi::generate::is_planar(V));
+  Eigen::MatrixXd line = V;
+  line.col(1).setZero();  // still a line in the plane: planar
+  CHECK(mbi::generate::is_planar(line));
+  Eigen::MatrixXd bent = V;
+  bent(3, 2) = 2.0000001;
+  CHECK_FALSE(mbi::generate::is_planar(bent));
+  CHECK_FALSE(mbi::generate::is_planar(V.topRows(1)));                        // one point: degenerate
+  CHECK_FALSE(mbi::generate::is_planar(Eigen::MatrixXd::Constant(5, 3, 1.5)));  // all equal: degenerate
+  Eigen::MatrixXd nan = V;
+  nan(0, 0) = std::nan("");
+  CHECK_FALSE(mbi::generate::is_planar(nan));
+  CHECK_FALSE(mbi::generate::is_planar(V.leftCols(2)));  // 2 columns: already 2D, not a flat 3D model
+  CHECK_FALSE(mbi::generate::is_planar(Eigen::MatrixXd(0, 3)));
+}

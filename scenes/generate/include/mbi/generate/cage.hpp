@@ -76,6 +76,11 @@ struct CageResult {
 CageResult make_cage(const Eigen::Ref<const Eigen::MatrixXd>& V,
                      const Eigen::Ref<const Eigen::MatrixXi>& F, const CageOptions& options = {});
 
+/// True when V (n x 3) is a planar model, 2D in `mbi cage` and `mbi run` unless --force-3d:
+/// finite, every z the same, and some extent in x or y (one point, or points all equal, are
+/// degenerate, not planar: make_cage says so).
+bool is_planar(const Eigen::Ref<const Eigen::MatrixXd>& V);
+
 /// Smallest dihedral angle (degrees) over the tetrahedra T of U (3D), or smallest interior
 /// angle over the triangles (2D).
 double min_dihedral_angle_deg(const Eigen::Ref<const Eigen::MatrixXd>& U,

@@ -100,6 +100,10 @@ void write_surface(const std::filesystem::path& file, const Eigen::Ref<const Eig
 /// True for the extensions read_surface reads (.obj, .off, .ply, .stl, any case).
 bool is_surface_file(const std::filesystem::path& file);
 
+/// The file's extension in lower case, with its dot (".obj"; "" when there is none): how every
+/// reader and writer picks a format.
+std::string lower_extension(const std::filesystem::path& file);
+
 // ----------------------------------------------------------------------------------------------
 // Point lists (.txt, .xyz): one point per line, d numbers separated by blanks or commas; blank
 // lines and '#' comments are allowed. Every line must have the same count d.
