@@ -656,25 +656,24 @@ struct Merger {
   }
 };
 
+// The triangle count of a binary STL (little-endian uint32 at byte 80; data has >= 84 bytes).
+std::uint32_t stl_count(std::string_view data) {
+  std::uint32_t n = 0;
+  std::memcpy(&n, data.data() + 80, 4);
+  if constexpr (std::endian::native == std::endian::big) n = __builtin_bswap32(n);
+  return n;
+}
+
 SurfaceMesh read_stl(std::string_view bytes, const path& file) {
   // A binary STL is recognised by its size (84 + 50 per triangle); its 80-byte header may hold
   // anything, so a byte-order mark is skipped only for ASCII.
   std::string_view data = bytes;
-  if (data.size() >= 84) {
-    std::uint32_t n = 0;
-    std::memcpy(&n, data.data() + 80, 4);
-    if constexpr (std::endian::native == std::endian::big) n = __builtin_bswap32(n);
-    if (84 + 50ull * n != data.size()) data = detail::skip_bom(data);
-  } else {
-    data = detail::skip_bom(data);
-  }
+  if (data.size() < 84 || 84 + 50ull * stl_count(data) != data.size()) data = detail::skip_bom(data);
   Merger merge;
   SurfaceMesh m;
   bool binary = false;
   if (data.size() >= 84) {
-    std::uint32_t n = 0;
-    std::memcpy(&n, data.data() + 80, 4);
-    if constexpr (std::endian::native == std::endian::big) n = __builtin_bswap32(n);
+    const std::uint32_t n = stl_count(data);
     if (84 + 50ull * n == data.size()) binary = true;
     else if (data.compare(0, 5, "solid") != 0)
       fail(file, 0, "binary STL: header says " + std::to_string(n) + " triangles (" +
@@ -687,9 +686,7 @@ SurfaceMesh read_stl(std::string_view bytes, const path& file) {
   attr->format = ".stl";
   attr->binary = binary;
   if (binary) {
-    std::uint32_t n = 0;
-    std::memcpy(&n, data.data() + 80, 4);
-    if constexpr (std::endian::native == std::endian::big) n = __builtin_bswap32(n);
+    const std::uint32_t n = stl_count(data);
     attr->stl_header = std::string(data.substr(0, 80));
     bool any_attribute = false;
     for (std::uint32_t t = 0; t < n; ++t) {
