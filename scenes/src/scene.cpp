@@ -453,7 +453,7 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& file) {
     if (c.minCoeff() < 1 || c.maxCoeff() > 1000 || (c - c.array().round().matrix()).norm() > 0)
       t.fail("cells", "expected positive integers <= 1000");
     if (t.has("cells")) {  // the box / grid it makes, counted in 64 bits before it is built
-      const bool flat = t.value().as_table().at("cells").as_array().size() == 2;
+      const bool flat = sc.control.builtin == ControlBuiltin::Grid2D;  // [nx, ny] for box: nz = 1
       const auto nx = static_cast<long long>(c.x()), ny = static_cast<long long>(c.y()),
                  nz = static_cast<long long>(c.z());
       const long long verts = (nx + 1) * (ny + 1) * (flat ? 1 : nz + 1);

@@ -33,6 +33,9 @@ TEST_CASE("scenes over the control-mesh caps are refused at load within a second
       {"builtin = \"box\"\ncells = [1000, 1000, 1000]\n", "1003003001 control vertices and 6000000000 tetrahedra"},
       {"builtin = \"box\"\ncells = [100, 100, 100]\n", "1030301 control vertices and 6000000 tetrahedra"},
       {"generate_vertices = 100000\n", "100000 control vertices exceed the cap of 20000"},
+      // two cells for a box: one layer of boxes (nz = 1), counted as tetrahedra, not triangles
+      {"builtin = \"box\"\ncells = [140, 140]\n", "39762 control vertices and 117600 tetrahedra"},
+      {"builtin = \"grid-2d\"\ncells = [150, 150]\n", "22801 control vertices and 45000 triangles"},
   };
   for (const auto& [control, message] : cases) {
     const fs::path p = write_scene("caps.toml", head + control);
