@@ -173,9 +173,10 @@ std::size_t OutputSet::add(const std::filesystem::path& target, const std::strin
       throw IoError(named + ": is also another output of this command (" + e.target.string() + ")");
   if (present) {
     if (std::filesystem::is_directory(target, ec)) throw IoError(named + ": is a folder");
-    if (!force_) throw IoError(named + ": exists (use --force to overwrite)");
+    // a FIFO, socket or device is refused as such: --force would not change that
     if (!std::filesystem::is_regular_file(st) && !std::filesystem::is_symlink(st))
-      throw IoError(named + ": exists and is not a regular file");
+      throw IoError(named + ": exists and is not a regular file (a FIFO, socket or device)");
+    if (!force_) throw IoError(named + ": exists (use --force to overwrite)");
   }
   Entry e;
   e.target = target;
