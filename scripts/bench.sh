@@ -4,7 +4,7 @@
 #   bench/results/<date>-<host>.md     the report (scripts/bench_report.py), with PNG plots beside it
 #
 #   bash scripts/bench.sh            full run: every benchmark 3 times in random order, the medians
-#                                    reported (about 8 minutes on a 2-core machine, plus the build)
+#                                    reported (about 6 minutes on a 2-core machine, plus the build)
 #   bash scripts/bench.sh --quick    small sizes, short runs, no 10K precompute (under a minute);
 #                                    writes to build/bench-quick/ unless --out is given (CI)
 #   bash scripts/bench.sh --out DIR  write into DIR instead

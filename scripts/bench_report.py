@@ -116,8 +116,16 @@ class Results:
         return [r for r in self.rows if r["fam"] == fam and not r["b"].get("error_occurred")]
 
     def errors(self):
-        return [(r["b"]["name"], r["b"].get("error_message", "")) for r in self.rows
-                if r["b"].get("error_occurred")]
+        # a benchmark that failed in every repetition has no median: its rows once each
+        seen, out = set(), []
+        for r in self.rows:
+            if not r["b"].get("error_occurred"):
+                continue
+            name = r["b"].get("run_name") or r["b"]["name"]
+            if name not in seen:
+                seen.add(name)
+                out.append((name, r["b"].get("error_message", "")))
+        return out
 
 
 # ------------------------------------------------------------------------------------ format

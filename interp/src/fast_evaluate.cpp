@@ -24,6 +24,7 @@
 #include "detail.hpp"
 
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -138,10 +139,11 @@ void eval_scalar(const std::int32_t* rec, const float* coef, const float* mrest,
       o[0] = m[0] * Dk[2][1] - m[1] * Dk[1][1];
       o[1] = -m[0] * Dk[2][0] + m[1] * Dk[1][0];
     }
-    float len = 0;
-    for (int c = 0; c < D; ++c) len += o[c] * o[c];
-    len = std::sqrt(len);
-    for (int c = 0; c < D; ++c) nout[p * D + c] = len > 0 ? o[c] / len : 0.0f;
+    float sq = 0;
+    for (int c = 0; c < D; ++c) sq += o[c] * o[c];
+    const float len = std::sqrt(sq);
+    // 0 where J is singular: the x86 kernel's threshold, so that both give the same points 0
+    for (int c = 0; c < D; ++c) nout[p * D + c] = sq > FLT_MIN ? o[c] / len : 0.0f;
   }
 }
 
@@ -206,7 +208,7 @@ MBI_TARGET inline void two_points(const std::int32_t* r, const float* coef, cons
     __m256 inv = _mm256_rsqrt_ps(s);
     const __m256 half_s = _mm256_mul_ps(_mm256_set1_ps(0.5f), s);
     inv = _mm256_mul_ps(inv, _mm256_fnmadd_ps(_mm256_mul_ps(half_s, inv), inv, _mm256_set1_ps(1.5f)));
-    const __m256 ok = _mm256_cmp_ps(s, _mm256_set1_ps(1.17549435e-38f), _CMP_GT_OQ);  // 0 where J is singular
+    const __m256 ok = _mm256_cmp_ps(s, _mm256_set1_ps(FLT_MIN), _CMP_GT_OQ);  // 0 where J is singular
     nrm = _mm256_and_ps(_mm256_mul_ps(o, inv), ok);
   }
 }
@@ -250,8 +252,9 @@ MBI_TARGET void eval_x86(const std::int32_t* rec, const float* coef, const float
         _mm_prefetch(ahead + 64, _MM_HINT_T0);
       }
     __m256 x0, x1, n0, n1;
-    two_points<Normals, Scaled>(rec + 4 * p, coef, mrest + 3 * p, sig, x0, n0);
-    two_points<Normals, Scaled>(rec + 4 * (p + 2), coef, mrest + 3 * (p + 2), sig, x1, n1);
+    // (no rest normals without normals: mrest is null then, and no offset is taken from it)
+    two_points<Normals, Scaled>(rec + 4 * p, coef, Normals ? mrest + 3 * p : nullptr, sig, x0, n0);
+    two_points<Normals, Scaled>(rec + 4 * (p + 2), coef, Normals ? mrest + 3 * (p + 2) : nullptr, sig, x1, n1);
     __m128 o0, o1, o2;
     pack4(x0, x1, o0, o1, o2);
     store12(pos + 3 * p, aligned, o0, o1, o2);
@@ -325,6 +328,7 @@ void FastEvaluator::set_rest_normals(const Eigen::Ref<const Eigen::MatrixXd>& no
   // padding: 16-byte loads of the last one, and room to move the block (rest_normals_for())
   normals_.assign(static_cast<size_t>(p_) * d_ + 4 + kSlack, 0.0f);
   moff_ = 0;
+  moves_ = 0;
   const int d = d_;
   for (long long i = 0; i < p_; ++i) {
     const double* a = grads_.data() + static_cast<size_t>(records_[static_cast<size_t>(i) * (d + 1)]) * d * d;
@@ -413,11 +417,13 @@ void FastEvaluator::prepare(const BezierPoints& B, bool normals) {
 }
 
 // The rest-normal block is read 12 bytes a point in step with the two outputs written 12 bytes a
-// point. When its address equals an output's modulo 4 KiB (likely: large blocks are page-aligned
-// alike), each load waits on a recent store to the same low 12 address bits ("4K aliasing"; 1.3x
-// the time of the whole pass measured on this project's Zen 4 machine). So the block is kept
-// at least 64 bytes after and 1 KiB before each output modulo 4 KiB, moved once when an output
-// buffer first breaks that (then never again for the same buffers).
+// point. When the block starts just before an output modulo 4 KiB (or at the same offset, as
+// large blocks that are all page-aligned alike do), each load finds a recent store with the same
+// low 12 address bits and waits on it ("4K aliasing"; 1.3x the time of the whole pass measured
+// on this project's Zen 4 machine). So (block - output) modulo 4 KiB is kept within [64, 3072]
+// bytes for both outputs: the block is moved once when an output buffer first breaks that, then
+// never again for the same buffers; callers that alternate buffers needing different places get
+// at most two moves, then the block stays where it is (a slower pass, not a copy every frame).
 const float* FastEvaluator::rest_normals_for(const float* positions, const float* normals) {
   auto clear = [&](std::size_t off) {
     const auto at = reinterpret_cast<std::uintptr_t>(normals_.data() + off);
@@ -427,7 +433,8 @@ const float* FastEvaluator::rest_normals_for(const float* positions, const float
     }
     return true;
   };
-  if (!clear(moff_)) {
+  if (!clear(moff_) && moves_ < 2) {
+    ++moves_;
     std::size_t off = 0;
     while (off + 4 < kSlack && !clear(off)) off += 4;  // exists: each output rules out 1088 of 4096 bytes
     std::memmove(normals_.data() + off, normals_.data() + moff_, (static_cast<size_t>(p_) * d_ + 4) * sizeof(float));

@@ -93,14 +93,22 @@ double cgroup_memory_limit(const std::string& proc_self_cgroup, const std::files
   return best;
 }
 
-double usable_memory_bytes() {
+namespace {
+// usable_memory_bytes(), and whether the control group's limit is what bounds it
+double usable_memory(bool& by_group) {
   const double physical = physical_memory_bytes();
   std::ifstream in("/proc/self/cgroup");
   std::stringstream text;
   text << in.rdbuf();
   const double group = cgroup_memory_limit(text.str(), "/sys/fs/cgroup");
-  if (group > 0 && (physical <= 0 || group < physical)) return group;
-  return physical;
+  by_group = group > 0 && (physical <= 0 || group < physical);
+  return by_group ? group : physical;
+}
+}  // namespace
+
+double usable_memory_bytes() {
+  bool by_group = false;
+  return usable_memory(by_group);
 }
 
 void check_run_size(const std::string& where, long long dense_vertices, long long control_vertices,
@@ -113,12 +121,13 @@ void check_run_size(const std::string& where, long long dense_vertices, long lon
                      std::to_string(kMaxControlElements) + kind +
                      " (the precompute grows about as n^2.5; see docs/limits.md)");
   const double need = estimate_run_bytes(dense_vertices, control_vertices, control_elements, d);
-  const double physical = physical_memory_bytes(), have = usable_memory_bytes();
+  bool by_group = false;
+  const double have = usable_memory(by_group);
   if (have > 0 && need > 0.75 * have)
     throw SceneError(where + ": the run needs about " + gib(need) + " of memory (" +
                      std::to_string(dense_vertices) + " dense vertices, " +
                      std::to_string(control_vertices) + " control vertices), over 3/4 of " +
-                     (have < physical ? "this process's control group limit of " : "this machine's ") + gib(have));
+                     (by_group ? "this process's control group limit of " : "this machine's ") + gib(have));
 }
 
 }  // namespace mbi::scenes

@@ -128,7 +128,8 @@ TEST_CASE("FastEvaluator: few points (tails shorter than a group of 4) and an em
 // Points in a mesh's order (most follow a point of the same element) take the kernel without
 // prefetches: the same results as the double kernel.
 TEST_CASE("FastEvaluator: points stored by element agree with the double kernel", "[fast_evaluate]") {
-  const Setup s = make(3, 30001, 0.0, 1.0);
+  const Setup s = make(3, 70001, 0.0, 1.0);  // 2 threads take at least 2 x 32K points
+  CHECK_FALSE(FastEvaluator(s.emb).coherent());  // random order: the prefetching kernel
   std::vector<int> order(static_cast<size_t>(s.emb.size()));
   for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return s.emb.element(a) < s.emb.element(b); });
@@ -144,6 +145,8 @@ TEST_CASE("FastEvaluator: points stored by element agree with the double kernel"
   evaluate<double>(s.B, sorted, normals, pd, nd, 1);
   for (int threads : {1, 2}) {
     FastEvaluator fe(sorted, threads);
+    REQUIRE(fe.coherent());
+    REQUIRE(fe.threads() == threads);
     fe.set_rest_normals(normals);
     RowMatrixXf pf, nf;
     fe.evaluate(s.B, pf, nf);

@@ -174,8 +174,14 @@ std::size_t OutputSet::add(const std::filesystem::path& target, const std::strin
   if (present) {
     if (std::filesystem::is_directory(target, ec)) throw IoError(named + ": is a folder");
     // a FIFO, socket or device is refused as such: --force would not change that
-    if (!std::filesystem::is_regular_file(st) && !std::filesystem::is_symlink(st))
-      throw IoError(named + ": exists and is not a regular file (a FIFO, socket or device)");
+    if (!std::filesystem::is_regular_file(st) && !std::filesystem::is_symlink(st)) {
+      using T = std::filesystem::file_type;
+      const T t = st.type();
+      const char* kind = t == T::fifo ? "a FIFO (named pipe)" : t == T::socket ? "a socket"
+                         : t == T::block ? "a block device" : t == T::character ? "a character device"
+                                                                                : "of another kind";
+      throw IoError(named + ": exists and is not a regular file (" + kind + ")");
+    }
     if (!force_) throw IoError(named + ": exists (use --force to overwrite)");
   }
   Entry e;

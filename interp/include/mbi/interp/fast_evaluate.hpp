@@ -34,7 +34,8 @@ class FastEvaluator {
   /// Throws Error on an inconsistent embedding.
   explicit FastEvaluator(const Embedding& emb, int threads = 0);
 
-  /// Rest normals (p x d, unit) for evaluate(B, positions, normals); kept as float.
+  /// Rest normals (p x d, unit) for evaluate(B, positions, normals); kept per point as float
+  /// m = cof(A)^T n (A: the element's basis gradients), scaled by a power of 2.
   void set_rest_normals(const Eigen::Ref<const Eigen::MatrixXd>& normals);
 
   int dim() const { return d_; }
@@ -42,6 +43,9 @@ class FastEvaluator {
   int elements() const { return m_; }
   /// Threads evaluate() uses.
   int threads() const;
+  /// True when most points follow a point of the same element (a mesh's order): the kernel then
+  /// runs without prefetching the element terms.
+  bool coherent() const { return coherent_; }
   bool has_rest_normals() const { return !normals_.empty(); }
   /// Bytes a point reads and writes (STREAM convention): 4 (d+1) in + 4 d out, plus 8 d with
   /// normals.
@@ -70,6 +74,7 @@ class FastEvaluator {
   std::vector<double> grads_;          // m d d: rows 1..d of each element's basis gradients
   std::vector<float> normals_;         // p d from moff_ (+ padding): per point m = cof(A)^T n (see fast_evaluate.cpp)
   std::size_t moff_ = 0;               // where normals_'s block starts, in floats
+  int moves_ = 0;                      // times the block was moved (at most 2)
   std::vector<float> coef_;            // m x 32 (3D; 2D: 16): position terms, cache-line aligned, per call
 };
 
