@@ -266,6 +266,19 @@ MBI_TARGET void eval_x86(const std::int32_t* rec, const float* coef, const float
   _mm_sfence();
 }
 
+using KernelX86 = void (*)(const std::int32_t*, const float*, const float*, float, float*, float*, long long,
+                           long long);
+
+// The x86 kernel for: normals or not, D scaled or not (only with normals), prefetches or not.
+KernelX86 pick_x86(bool normals, bool scaled, bool prefetch) {
+  static constexpr KernelX86 table[3][2] = {
+      {eval_x86<false, false, false>, eval_x86<false, false, true>},
+      {eval_x86<true, false, false>, eval_x86<true, false, true>},
+      {eval_x86<true, true, false>, eval_x86<true, true, true>},
+  };
+  return table[normals ? (scaled ? 2 : 1) : 0][prefetch ? 1 : 0];
+}
+
 #endif
 
 }  // namespace
@@ -384,6 +397,7 @@ void FastEvaluator::prepare(const BezierPoints& B, bool normals) {
     edge_of[edges[s].first][edges[s].second] = static_cast<int>(s);
     edge_of[edges[s].second][edges[s].first] = static_cast<int>(s);
   }
+  const TermIndex ix(d);
   const int m = m_;
   double dmax = 0;  // the largest |c_k|: the scale of the derivatives dx/db_k
   MBI_OMP("omp parallel for schedule(static) num_threads(threads()) if (m > 4096) reduction(max : dmax)")
@@ -401,13 +415,11 @@ void FastEvaluator::prepare(const BezierPoints& B, bool normals) {
         for (int l = k + 1; l <= d; ++l)
           cq[k][l][c] = cq[l][k][c] = 2 * (P(0, c) - Pe(0, k, c) - Pe(0, l, c) + Pe(k, l, c));
       }
-    int s = 1;
-    for (int k = 1; k <= d; ++k) {
-      for (int c = 0; c < d; ++c) C[s * d + c] = static_cast<float>(cl[k][c]);
-      ++s;
-      for (int l = k; l <= d; ++l, ++s)
-        for (int c = 0; c < d; ++c) C[s * d + c] = static_cast<float>(cq[k][l][c]);
-    }
+    for (int k = 1; k <= d; ++k)
+      for (int c = 0; c < d; ++c) {
+        C[ix.lin[k] * d + c] = static_cast<float>(cl[k][c]);
+        for (int l = k; l <= d; ++l) C[ix.quad[k][l] * d + c] = static_cast<float>(cq[k][l][c]);
+      }
   }
   // sigma = 2^-e with dmax in [2^(e-1), 2^e): normals scale D by it (exact), so that cof(D) neither
   // underflows nor overflows in float for models of any size float can hold.
@@ -464,21 +476,17 @@ void FastEvaluator::evaluate(const BezierPoints& B, float* positions, float* nor
   const float sigma = dscale_;
   const int d = d_;
   const long long p = p_;
+#ifdef MBI_FAST_X86
+  // sigma within 2^+-16 leaves |cof(D) m|^2 within 2^+-64 (m: [0.5, 1)): no scaling needed
+  const KernelX86 x86 = d == 3 && detail::have_avx2_fma()
+                            ? pick_x86(with_normals, !(sigma >= 0x1p-16f && sigma <= 0x1p16f), !coherent_)
+                            : nullptr;
+#endif
   auto run = [&](long long begin, long long end) {
 #ifdef MBI_FAST_X86
-    if (d == 3 && detail::have_avx2_fma()) {
+    if (x86) {
       const long long mid = begin + (end - begin) / 4 * 4;
-      // sigma within 2^+-16 leaves |cof(D) m|^2 within 2^+-64 (m: [0.5, 1)): no scaling needed
-      const bool scaled = !(sigma >= 0x1p-16f && sigma <= 0x1p16f);
-      if (coherent_) {
-        if (!with_normals) eval_x86<false, false, false>(rec, coef, mrest, sigma, positions, normals, begin, mid);
-        else if (scaled) eval_x86<true, true, false>(rec, coef, mrest, sigma, positions, normals, begin, mid);
-        else eval_x86<true, false, false>(rec, coef, mrest, sigma, positions, normals, begin, mid);
-      } else {
-        if (!with_normals) eval_x86<false, false, true>(rec, coef, mrest, sigma, positions, normals, begin, mid);
-        else if (scaled) eval_x86<true, true, true>(rec, coef, mrest, sigma, positions, normals, begin, mid);
-        else eval_x86<true, false, true>(rec, coef, mrest, sigma, positions, normals, begin, mid);
-      }
+      x86(rec, coef, mrest, sigma, positions, normals, begin, mid);
       begin = mid;  // the last 1-3 points of the range: portably, exact-size stores
     }
 #endif
