@@ -5,8 +5,10 @@
 //   x = c_0 + sum_k b_k c_k + sum_{k<=l} b_k b_l c_kl
 //   c_0 = P_0, c_k = 2 (P_0k - P_0), c_kk = P_0 + P_k - 2 P_0k,
 //   c_kl = 2 (P_0 - P_0k - P_0l + P_kl) (k < l),
-// evaluated in Horner form x = c_0 + sum_k b_k t_k, t_k = c_k + sum_{l>=k} b_l c_kl: in 3D 9 FMAs
-// on (x, y, z, 0) vectors a point, two points to a 256-bit vector.
+// evaluated as x = (c_0 + b_1 t_1) + (b_2 t_2 + ... + b_d t_d), t_k = c_k + sum_{l>=k} b_l c_kl
+// (every kernel sums in this order): in 3D 10 multiply-adds on (x, y, z, *) vectors a point. On
+// x86, positions-only calls put one point and two terms in a 256-bit vector (the "pairs" layout
+// below), calls with normals two points (the "packed" layout).
 //
 // Normals need no second table. With D_k = dx/db_k = c_k + sum_l e_kl b_l (e_kl = c_kl for
 // k != l, 2 c_kk for k = l; from the t_k above, 6 more FMAs in 3D) and A the matrix whose columns
@@ -44,9 +46,8 @@
 namespace mbi::interp {
 namespace {
 
-// Per element, the position polynomial's terms (d floats each, packed) padded to whole cache
-// lines (3D: 10 x 3 = 30 floats in 32, 128 B: 2 lines, 64-byte aligned; the x86 kernel loads 4
-// floats at each term and ignores the 4th).
+// Per element, the position polynomial's terms (d floats each) padded to whole cache lines (3D:
+// 10 x 3 = 30 floats in 32, 128 B: 2 lines, 64-byte aligned), in one of two layouts (Layout).
 constexpr int position_terms(int d) { return 1 + d * (d + 3) / 2; }  // 10 in 3D, 6 in 2D
 constexpr int coef_stride(int d) { return d == 3 ? 32 : 16; }
 static_assert(position_terms(3) * 3 + 1 <= coef_stride(3) && position_terms(2) * 2 <= coef_stride(2));
@@ -63,7 +64,8 @@ constexpr int kStreamAhead = 128;
 // Points a thread takes at a time (a multiple of 4); also the fewest points a thread is given.
 constexpr long long kBlock = 32768;
 
-// Index of c_k (lin) and c_kl, k <= l (quad), 1-based k, l, in an element's terms.
+// Index of c_k (lin) and c_kl, k <= l (quad), 1-based k, l, in an element's terms (c_0 is term 0).
+// 3D: 0 c0, 1 c1, 2 c11, 3 c12, 4 c13, 5 c2, 6 c22, 7 c23, 8 c3, 9 c33.
 struct TermIndex {
   int lin[4] = {}, quad[4][4] = {};
   constexpr explicit TermIndex(int d) {
@@ -74,6 +76,27 @@ struct TermIndex {
     }
   }
 };
+
+// Where component c of term t lies in an element's coef_stride(d) floats: off[t] + c stride[t].
+//  packed (normals calls, and 2D): term t at d t, its components side by side;
+//  pairs (3D positions-only calls): eight 16-byte slots, two to a 32-byte vector, read by the
+//   x86 kernel with 4 aligned 256-bit loads: (c1 | c2), (c11 | c22), (c12 | c23), (c13 | c33),
+//   each slot's 4th float holding one component of c0 or c3: slots 0, 2, 4 c0 x, y, z, slots 1,
+//   3, 5 c3 x, y, z (stride 8); slots 6 and 7 end in 0.
+struct Layout {
+  int off[10] = {}, stride[10] = {};
+  constexpr int at(int t, int c) const { return off[t] + c * stride[t]; }
+};
+constexpr Layout packed_layout(int d) {
+  Layout L;
+  for (int t = 0; t < position_terms(d); ++t) L.off[t] = d * t, L.stride[t] = 1;
+  return L;
+}
+constexpr Layout kPairs = {{3, 0, 8, 16, 24, 4, 12, 20, 7, 28}, {8, 1, 1, 1, 1, 1, 1, 1, 8, 1}};
+constexpr Layout kPacked2 = packed_layout(2), kPacked3 = packed_layout(3);
+
+// The layout of a call: pairs for 3D positions, packed otherwise.
+const Layout& layout_for(int d, bool normals) { return d == 2 ? kPacked2 : normals ? kPacked3 : kPairs; }
 
 // the first 64-byte boundary in a buffer allocated with 16 floats to spare
 template <class T>
@@ -94,9 +117,11 @@ std::int32_t as_word(float f) {
 }
 
 // ------------------------------------------------------------------------ portable kernel
+// x = (c_0 + b_1 t_1) + (b_2 t_2 + .. + b_d t_d), summed in this order by every kernel (so that
+// a positions-only call and a call with normals give the same positions).
 template <int D>
-void eval_scalar(const std::int32_t* rec, const float* coef, const float* mrest, float sigma, float* pos,
-                 float* nout, long long begin, long long end) {
+void eval_scalar(const std::int32_t* rec, const float* coef, const Layout& L, const float* mrest, float sigma,
+                 float* pos, float* nout, long long begin, long long end) {
   constexpr int NC = coef_stride(D);
   constexpr TermIndex ix(D);
   for (long long p = begin; p < end; ++p) {
@@ -105,22 +130,25 @@ void eval_scalar(const std::int32_t* rec, const float* coef, const float* mrest,
     float b[D + 1];
     for (int k = 1; k <= D; ++k) b[k] = as_float(r[k]);
     const float* C = coef + e * NC;
+    float t[D + 1][D];  // t_k = c_k + sum_{l >= k} b_l c_kl
+    for (int k = 1; k <= D; ++k)
+      for (int c = 0; c < D; ++c) {
+        t[k][c] = C[L.at(ix.lin[k], c)];
+        for (int l = k; l <= D; ++l) t[k][c] += b[l] * C[L.at(ix.quad[k][l], c)];
+      }
     float x[D];
-    for (int c = 0; c < D; ++c) x[c] = C[c];
-    for (int k = 1; k <= D; ++k) {
-      float t[D];
-      for (int c = 0; c < D; ++c) t[c] = C[ix.lin[k] * D + c];
-      for (int l = k; l <= D; ++l)
-        for (int c = 0; c < D; ++c) t[c] += b[l] * C[ix.quad[k][l] * D + c];
-      for (int c = 0; c < D; ++c) x[c] += b[k] * t[c];
+    for (int c = 0; c < D; ++c) {
+      float rest = b[D] * t[D][c];
+      for (int k = D - 1; k >= 2; --k) rest += b[k] * t[k][c];
+      x[c] = (C[L.at(0, c)] + b[1] * t[1][c]) + rest;
     }
     for (int c = 0; c < D; ++c) pos[p * D + c] = x[c];
     if (!nout) continue;
     float Dk[D + 1][D];  // Dk[k][c] = component c of dx/db_k
     for (int k = 1; k <= D; ++k)
       for (int c = 0; c < D; ++c) {
-        float v = C[ix.lin[k] * D + c];
-        for (int l = 1; l <= D; ++l) v += (k == l ? 2.0f : 1.0f) * b[l] * C[ix.quad[k][l] * D + c];
+        float v = C[L.at(ix.lin[k], c)];
+        for (int l = 1; l <= D; ++l) v += (k == l ? 2.0f : 1.0f) * b[l] * C[L.at(ix.quad[k][l], c)];
         Dk[k][c] = sigma * v;
       }
     const float* m = mrest + p * D;
@@ -172,9 +200,9 @@ MBI_TARGET inline __m256 term2(const float* A, const float* B, int k) {
 
 #define MBI_YZX(v) _mm256_permute_ps((v), _MM_SHUFFLE(3, 0, 2, 1))
 
-// Positions of the 2 points whose records start at r and, with Normals, their derivatives
+// Positions of the 2 points whose records start at r (packed layout) and their derivatives
 // D_k = dx/db_k (times sigma when Scaled: of order 1 at any model scale; cof(D) is quadratic in D).
-template <bool Normals, bool Scaled>
+template <bool Scaled>
 MBI_TARGET inline void two_points(const std::int32_t* r, const float* coef, __m256 sigma, __m256& x, __m256* D) {
   constexpr int NC = coef_stride(3);
   const __m256 v = _mm256_loadu_ps(reinterpret_cast<const float*>(r));
@@ -190,16 +218,14 @@ MBI_TARGET inline void two_points(const std::int32_t* r, const float* coef, __m2
   t1 = _mm256_fmadd_ps(c12, b2, t1);
   t2 = _mm256_fmadd_ps(c23, b3, t2);
   t1 = _mm256_fmadd_ps(c13, b3, t1);
-  __m256 p = _mm256_fmadd_ps(t1, b1, term2(A, B, 0));
-  p = _mm256_fmadd_ps(t2, b2, p);
-  x = _mm256_fmadd_ps(t3, b3, p);  // lanes 3 and 7: not coordinates (ignored by the stores)
-  if constexpr (Normals) {
-    D[0] = _mm256_fmadd_ps(c11, b1, t1);
-    D[1] = _mm256_fmadd_ps(c22, b2, _mm256_fmadd_ps(c12, b1, t2));
-    D[2] = _mm256_fmadd_ps(c33, b3, _mm256_fmadd_ps(c13, b1, _mm256_fmadd_ps(c23, b2, t3)));
-    if constexpr (Scaled)
-      for (int k = 0; k < 3; ++k) D[k] = _mm256_mul_ps(sigma, D[k]);
-  }
+  // (c0 + b1 t1) + (b2 t2 + b3 t3): the pairs kernel's order. Lanes 3 and 7: not coordinates
+  // (ignored by the stores).
+  x = _mm256_add_ps(_mm256_fmadd_ps(t1, b1, term2(A, B, 0)), _mm256_fmadd_ps(t2, b2, _mm256_mul_ps(t3, b3)));
+  D[0] = _mm256_fmadd_ps(c11, b1, t1);
+  D[1] = _mm256_fmadd_ps(c22, b2, _mm256_fmadd_ps(c12, b1, t2));
+  D[2] = _mm256_fmadd_ps(c33, b3, _mm256_fmadd_ps(c13, b1, _mm256_fmadd_ps(c23, b2, t3)));
+  if constexpr (Scaled)
+    for (int k = 0; k < 3; ++k) D[k] = _mm256_mul_ps(sigma, D[k]);
 }
 
 // cof(D) m of 2 points (lanes 3 and 7 set to 0).
@@ -225,14 +251,18 @@ MBI_TARGET inline __m256 renormalise(__m256 o) {
   return _mm256_and_ps(_mm256_mul_ps(o, inv), ok);
 }
 
-// 4 results (x, y, z, *), two to a vector, to 3 vectors x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3.
-MBI_TARGET inline void pack4(__m256 a, __m256 b, __m128& o0, __m128& o1, __m128& o2) {
-  const __m128 r0 = _mm256_castps256_ps128(a), r1 = _mm256_extractf128_ps(a, 1);
-  const __m128 r2 = _mm256_castps256_ps128(b), r3 = _mm256_extractf128_ps(b, 1);
+// 4 results (x, y, z, *) to 3 vectors x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3.
+MBI_TARGET inline void pack4(__m128 r0, __m128 r1, __m128 r2, __m128 r3, __m128& o0, __m128& o1, __m128& o2) {
   o0 = _mm_blend_ps(r0, _mm_shuffle_ps(r1, r1, _MM_SHUFFLE(0, 0, 0, 0)), 0x8);
   o1 = _mm_shuffle_ps(r1, r2, _MM_SHUFFLE(1, 0, 2, 1));
   o2 = _mm_blend_ps(_mm_shuffle_ps(r3, r3, _MM_SHUFFLE(2, 1, 0, 0)),
                     _mm_shuffle_ps(r2, r2, _MM_SHUFFLE(2, 2, 2, 2)), 0x1);
+}
+
+// the same, two results to a vector
+MBI_TARGET inline void pack4(__m256 a, __m256 b, __m128& o0, __m128& o1, __m128& o2) {
+  pack4(_mm256_castps256_ps128(a), _mm256_extractf128_ps(a, 1), _mm256_castps256_ps128(b), _mm256_extractf128_ps(b, 1),
+        o0, o1, o2);
 }
 
 // 12 floats to out: streaming when out is 16-byte aligned.
@@ -248,63 +278,105 @@ MBI_TARGET inline void store12(float* out, bool aligned, __m128 o0, __m128 o1, _
   }
 }
 
-// Points [begin, end) with end - begin a multiple of 4 (the caller runs the rest portably).
-// With normals the work of 4 points runs in three stages over three iterations: positions and D
-// (this group), cof(D) m (the group before), renormalisation (the one before that). Each stage is
-// a long chain of dependent operations; in one iteration they starved the out-of-order window,
-// staggered they overlap (measured: positions + normals 2.4x -> 1.7x the time of positions alone).
-template <bool Normals, bool Scaled, bool Prefetch>
+// Positions and normals, packed layout, points [begin, end) with end - begin a multiple of 4 (the
+// caller runs the rest portably). The work of 4 points runs in three stages over three
+// iterations: positions and D (this group), cof(D) m (the group before), renormalisation (the
+// one before that). Each stage is a long chain of dependent operations; in one iteration they
+// starved the out-of-order window, staggered they overlap (measured: positions + normals 2.4x ->
+// 1.7x the time of positions alone).
+template <bool Scaled, bool Prefetch>
 MBI_TARGET void eval_x86(const std::int32_t* rec, const float* coef, const float* mrest, float sigma,
                          float* pos, float* nout, long long begin, long long end) {
   constexpr int NC = coef_stride(3);
   const __m256 sig = _mm256_set1_ps(sigma);
-  const bool aligned = (reinterpret_cast<std::uintptr_t>(pos + 3 * begin) % 16 == 0) &&
-                       (!Normals || reinterpret_cast<std::uintptr_t>(nout + 3 * begin) % 16 == 0);
+  const bool aligned = reinterpret_cast<std::uintptr_t>(pos + 3 * begin) % 16 == 0 &&
+                       reinterpret_cast<std::uintptr_t>(nout + 3 * begin) % 16 == 0;
   const __m256 zero = _mm256_setzero_ps();
-  // with normals: D and m of the group at p - 4, cof(D) m of the group at p - 8 (two vectors each)
+  // D and m of the group at p - 4, cof(D) m of the group at p - 8 (two vectors each)
   __m256 D[2][3] = {{zero, zero, zero}, {zero, zero, zero}}, m[2] = {zero, zero}, o[2] = {zero, zero};
   __m128 o0, o1, o2;
   long long p = begin;
   for (; p < end; p += 4) {
     prefetch_at(rec + 4 * p, 4LL * 4 * kStreamAhead);  // one 64-byte line of records per 4 points
-    if constexpr (Normals) prefetch_at(mrest + 3 * p, 4LL * 3 * kStreamAhead);
+    prefetch_at(mrest + 3 * p, 4LL * 3 * kStreamAhead);
     if constexpr (Prefetch)
       for (int k = 0; k < 4; ++k) {  // records are padded: p + k + kPrefetch is always a record
         const char* ahead = reinterpret_cast<const char*>(coef + static_cast<long long>(rec[4 * (p + k + kPrefetch)]) * NC);
         _mm_prefetch(ahead, _MM_HINT_T0);
         _mm_prefetch(ahead + 64, _MM_HINT_T0);
       }
-    __m256 n0 = zero, n1 = zero;
-    if constexpr (Normals) {  // stages 3 and 2 (on zeros in the first two iterations: unused)
-      n0 = renormalise(o[0]);
-      n1 = renormalise(o[1]);
-      o[0] = cof_times(D[0], m[0]);
-      o[1] = cof_times(D[1], m[1]);
-    }
+    // stages 3 and 2 (on zeros in the first two iterations: not stored)
+    const __m256 n0 = renormalise(o[0]), n1 = renormalise(o[1]);
+    o[0] = cof_times(D[0], m[0]);
+    o[1] = cof_times(D[1], m[1]);
     __m256 x0, x1;
-    two_points<Normals, Scaled>(rec + 4 * p, coef, sig, x0, D[0]);
-    two_points<Normals, Scaled>(rec + 4 * (p + 2), coef, sig, x1, D[1]);
+    two_points<Scaled>(rec + 4 * p, coef, sig, x0, D[0]);
+    two_points<Scaled>(rec + 4 * (p + 2), coef, sig, x1, D[1]);
     pack4(x0, x1, o0, o1, o2);
     store12(pos + 3 * p, aligned, o0, o1, o2);
-    if constexpr (Normals) {
-      // (no rest normals without normals: mrest is null then, and no offset is taken from it)
-      m[0] = _mm256_loadu2_m128(mrest + 3 * (p + 1), mrest + 3 * p);
-      m[1] = _mm256_loadu2_m128(mrest + 3 * (p + 3), mrest + 3 * (p + 2));
-      if (p - begin >= 8) {
-        pack4(n0, n1, o0, o1, o2);
-        store12(nout + 3 * (p - 8), aligned, o0, o1, o2);
-      }
-    }
-  }
-  if constexpr (Normals) {  // the last two groups: o holds the one at p - 8, D and m the one at p - 4
+    m[0] = _mm256_loadu2_m128(mrest + 3 * (p + 1), mrest + 3 * p);
+    m[1] = _mm256_loadu2_m128(mrest + 3 * (p + 3), mrest + 3 * (p + 2));
     if (p - begin >= 8) {
-      pack4(renormalise(o[0]), renormalise(o[1]), o0, o1, o2);
+      pack4(n0, n1, o0, o1, o2);
       store12(nout + 3 * (p - 8), aligned, o0, o1, o2);
     }
-    if (p - begin >= 4) {
-      pack4(renormalise(cof_times(D[0], m[0])), renormalise(cof_times(D[1], m[1])), o0, o1, o2);
-      store12(nout + 3 * (p - 4), aligned, o0, o1, o2);
+  }
+  // the last two groups: o holds the one at p - 8, D and m the one at p - 4
+  if (p - begin >= 8) {
+    pack4(renormalise(o[0]), renormalise(o[1]), o0, o1, o2);
+    store12(nout + 3 * (p - 8), aligned, o0, o1, o2);
+  }
+  if (p - begin >= 4) {
+    pack4(renormalise(cof_times(D[0], m[0])), renormalise(cof_times(D[1], m[1])), o0, o1, o2);
+    store12(nout + 3 * (p - 4), aligned, o0, o1, o2);
+  }
+  _mm_sfence();
+}
+
+// Positions only, pairs layout: one point to a 256-bit vector, two terms to it, the element's
+// 128 bytes read with 4 aligned 32-byte loads (the packed layout needs 20 16-byte loads for 2
+// points, most of them straddling 16-byte boundaries: 1.1-1.15x the time of this kernel).
+//   T = (c1 | c2) + (b1 | b2)(c11 | c22) + (b2 | b3)(c12 | c23) + (b3 | 0)(c13 | c33) = (t1 | t2)
+//   U = (c0 | c3) + (0 | b3)(c13 | c33) = (c0 | t3)
+//   x = lo + hi of (b1 | b2) T + (1 | b3) U = (c0 + b1 t1) + (b2 t2 + b3 t3)
+MBI_TARGET inline __m128 one_point(const float* C, const std::int32_t* r, __m256i sel12, __m256i sel23) {
+  const __m256 rb = _mm256_broadcast_ps(reinterpret_cast<const __m128*>(r));  // (e, b1, b2, b3) twice
+  const __m256 L0 = _mm256_load_ps(C), L1 = _mm256_load_ps(C + 8), L2 = _mm256_load_ps(C + 16),
+               L3 = _mm256_load_ps(C + 24);
+  const __m256 b12 = _mm256_permutevar_ps(rb, sel12), b23 = _mm256_permutevar_ps(rb, sel23);
+  const __m256 b33 = _mm256_permute_ps(rb, 0xFF), zero = _mm256_setzero_ps();
+  // (c0 | c3) from the slots' 4th floats: (c1z, c11z, c0x, c0y | c2z, c22z, c3x, c3y), then z
+  const __m256 c03 = _mm256_shuffle_ps(_mm256_unpackhi_ps(L0, L1), L2, _MM_SHUFFLE(3, 3, 3, 2));
+  __m256 T = _mm256_fmadd_ps(L1, b12, L0);
+  T = _mm256_fmadd_ps(L2, b23, T);
+  T = _mm256_fmadd_ps(L3, _mm256_blend_ps(b33, zero, 0xF0), T);
+  const __m256 U = _mm256_fmadd_ps(L3, _mm256_blend_ps(zero, b33, 0xF0), c03);
+  const __m256 V = _mm256_fmadd_ps(b12, T, _mm256_mul_ps(U, _mm256_blend_ps(_mm256_set1_ps(1.0f), b33, 0xF0)));
+  return _mm_add_ps(_mm256_castps256_ps128(V), _mm256_extractf128_ps(V, 1));  // lane 3: not a coordinate
+}
+
+template <bool Prefetch>
+MBI_TARGET void eval_x86_pairs(const std::int32_t* rec, const float* coef, const float*, float, float* pos, float*,
+                               long long begin, long long end) {
+  constexpr int NC = coef_stride(3);
+  const __m256i sel12 = _mm256_setr_epi32(1, 1, 1, 1, 2, 2, 2, 2), sel23 = _mm256_setr_epi32(2, 2, 2, 2, 3, 3, 3, 3);
+  const bool aligned = reinterpret_cast<std::uintptr_t>(pos + 3 * begin) % 16 == 0;
+  for (long long p = begin; p < end; p += 4) {
+    prefetch_at(rec + 4 * p, 4LL * 4 * kStreamAhead);
+    if constexpr (Prefetch)
+      for (int k = 0; k < 4; ++k) {  // records are padded: p + k + kPrefetch is always a record
+        const char* ahead = reinterpret_cast<const char*>(coef + static_cast<long long>(rec[4 * (p + k + kPrefetch)]) * NC);
+        _mm_prefetch(ahead, _MM_HINT_T0);
+        _mm_prefetch(ahead + 64, _MM_HINT_T0);
+      }
+    __m128 x[4];
+    for (int k = 0; k < 4; ++k) {
+      const std::int32_t* r = rec + 4 * (p + k);
+      x[k] = one_point(coef + static_cast<long long>(r[0]) * NC, r, sel12, sel23);
     }
+    __m128 o0, o1, o2;
+    pack4(x[0], x[1], x[2], x[3], o0, o1, o2);
+    store12(pos + 3 * p, aligned, o0, o1, o2);
   }
   _mm_sfence();
 }
@@ -312,12 +384,13 @@ MBI_TARGET void eval_x86(const std::int32_t* rec, const float* coef, const float
 using KernelX86 = void (*)(const std::int32_t*, const float*, const float*, float, float*, float*, long long,
                            long long);
 
-// The x86 kernel for: normals or not, D scaled or not (only with normals), prefetches or not.
+// The x86 kernel for: normals or not (positions only: the pairs layout), D scaled or not (only
+// with normals), prefetches or not.
 KernelX86 pick_x86(bool normals, bool scaled, bool prefetch) {
   static constexpr KernelX86 table[3][2] = {
-      {eval_x86<false, false, false>, eval_x86<false, false, true>},
-      {eval_x86<true, false, false>, eval_x86<true, false, true>},
-      {eval_x86<true, true, false>, eval_x86<true, true, true>},
+      {eval_x86_pairs<false>, eval_x86_pairs<true>},
+      {eval_x86<false, false>, eval_x86<false, true>},
+      {eval_x86<true, false>, eval_x86<true, true>},
   };
   return table[normals ? (scaled ? 2 : 1) : 0][prefetch ? 1 : 0];
 }
@@ -441,6 +514,20 @@ void FastEvaluator::prepare(const BezierPoints& B, bool normals) {
     edge_of[edges[s].second][edges[s].first] = static_cast<int>(s);
   }
   const TermIndex ix(d);
+  // where each coefficient goes, and the floats no term uses (set to 0: a call may change the
+  // layout; the kernels read them but ignore what they give)
+  const Layout& L = layout_for(d, normals);
+  int o0[3] = {}, olin[4][3] = {}, oquad[4][4][3] = {}, pads[32] = {}, npads = 0;
+  bool used[32] = {};
+  for (int c = 0; c < d; ++c) {
+    used[o0[c] = L.at(0, c)] = true;
+    for (int k = 1; k <= d; ++k) {
+      used[olin[k][c] = L.at(ix.lin[k], c)] = true;
+      for (int l = 1; l <= d; ++l) used[oquad[k][l][c] = L.at(ix.quad[k][l], c)] = true;
+    }
+  }
+  for (int f = 0; f < NC; ++f)
+    if (!used[f]) pads[npads++] = f;
   const int m = m_;
   double dmax = 0;  // the largest |c_k|: the scale of the derivatives dx/db_k
   MBI_OMP("omp parallel for schedule(static) num_threads(threads()) if (m > 512) reduction(max : dmax)")
@@ -449,7 +536,8 @@ void FastEvaluator::prepare(const BezierPoints& B, bool normals) {
     auto Pe = [&](int i, int j, int c) { return P(d + 1 + edge_of[i][j], c); };
     double cl[4][3] = {}, cq[4][4][3] = {};  // c_k, c_kl (symmetric)
     float* C = coef + static_cast<size_t>(e) * NC;
-    for (int c = 0; c < d; ++c) C[c] = static_cast<float>(P(0, c));
+    for (int f = 0; f < npads; ++f) C[pads[f]] = 0.0f;
+    for (int c = 0; c < d; ++c) C[o0[c]] = static_cast<float>(P(0, c));
     for (int k = 1; k <= d; ++k)
       for (int c = 0; c < d; ++c) {
         cl[k][c] = 2 * (Pe(0, k, c) - P(0, c));
@@ -460,8 +548,8 @@ void FastEvaluator::prepare(const BezierPoints& B, bool normals) {
       }
     for (int k = 1; k <= d; ++k)
       for (int c = 0; c < d; ++c) {
-        C[ix.lin[k] * d + c] = static_cast<float>(cl[k][c]);
-        for (int l = k; l <= d; ++l) C[ix.quad[k][l] * d + c] = static_cast<float>(cq[k][l][c]);
+        C[olin[k][c]] = static_cast<float>(cl[k][c]);
+        for (int l = k; l <= d; ++l) C[oquad[k][l][c]] = static_cast<float>(cq[k][l][c]);
       }
   }
   // sigma = 2^-e with dmax in [2^(e-1), 2^e): normals scale D by it (exact), so that cof(D) neither
@@ -519,6 +607,7 @@ void FastEvaluator::evaluate(const BezierPoints& B, float* positions, float* nor
   const float sigma = dscale_;
   const int d = d_;
   const long long p = p_;
+  const Layout& L = layout_for(d, with_normals);
 #ifdef MBI_FAST_X86
   // sigma within 2^+-16 leaves |cof(D) m|^2 within 2^+-64 (m: [0.5, 1)): no scaling needed
   const KernelX86 x86 = d == 3 && detail::have_avx2_fma()
@@ -533,8 +622,8 @@ void FastEvaluator::evaluate(const BezierPoints& B, float* positions, float* nor
       begin = mid;  // the last 1-3 points of the range: portably, exact-size stores
     }
 #endif
-    if (d == 3) eval_scalar<3>(rec, coef, mrest, sigma, positions, normals, begin, end);
-    else eval_scalar<2>(rec, coef, mrest, sigma, positions, normals, begin, end);
+    if (d == 3) eval_scalar<3>(rec, coef, L, mrest, sigma, positions, normals, begin, end);
+    else eval_scalar<2>(rec, coef, L, mrest, sigma, positions, normals, begin, end);
   };
   const int nt = threads();
   if (nt <= 1) {

@@ -151,10 +151,16 @@ TEST_CASE("FastEvaluator: points stored by element agree with the double kernel"
     REQUIRE(fe.coherent());
     REQUIRE(fe.threads() == threads);
     fe.set_rest_normals(normals);
-    RowMatrixXf pf, nf;
+    // positions alone first (the pairs layout), then with normals (the packed layout), then alone
+    // again: the layout changes between calls, the positions do not
+    RowMatrixXf p0, pf, nf, p2;
+    fe.evaluate(s.B, p0);
     fe.evaluate(s.B, pf, nf);
+    fe.evaluate(s.B, p2);
     CHECK((pf.cast<double>() - pd).cwiseAbs().maxCoeff() <= position_tolerance(s.B));
     CHECK((nf.cast<double>() - nd).cwiseAbs().maxCoeff() < 2e-5);
+    CHECK((p0 - pf).cwiseAbs().maxCoeff() == 0.0f);
+    CHECK((p2 - pf).cwiseAbs().maxCoeff() == 0.0f);
   }
 }
 

@@ -8,8 +8,9 @@
 // that is 16 B in and 12 B out, 28 B a point; with normals also the rest normal (12 B, kept as
 // cof(A)^T n, A the element's basis gradients) in and the mapped normal (12 B) out. Per call it
 // turns the element Bezier points into each element's quadratic in (b_1..b_d), in float, once
-// per element; a point then costs 9 FMAs in 3D (on x86, two points to a 256-bit vector), and its
-// normal 6 more for the derivatives D_k = dx/db_k, then cof(D) (cof(A)^T n), renormalised.
+// per element; a point then costs 10 multiply-adds in 3D (on x86 in 256-bit vectors: one point
+// and two terms to a vector, or two points with normals), and its normal 6 more for the
+// derivatives D_k = dx/db_k, then cof(D) (cof(A)^T n), renormalised.
 // Threads: OpenMP when the build has it.
 //
 // Results agree with interp::evaluate<double> to float round-off (a few ulp of the coordinate
@@ -75,7 +76,7 @@ class FastEvaluator {
   std::vector<float> normals_;         // p d from moff_ (+ padding): per point m = cof(A)^T n (see fast_evaluate.cpp)
   std::size_t moff_ = 0;               // where normals_'s block starts, in floats
   int moves_ = 0;                      // times the block was moved (at most 2)
-  std::vector<float> coef_;            // m x 32 (3D; 2D: 16): position terms, cache-line aligned, per call
+  std::vector<float> coef_;            // m x 32 (3D; 2D: 16): position terms, cache-line aligned, per call (layout: see fast_evaluate.cpp)
 };
 
 }  // namespace mbi::interp
