@@ -24,6 +24,25 @@ namespace {
 // Solve path threshold: the dense operator is used when (unknowns per component) x n is at most
 // this many entries. Measured with mbi-bench (BM_Solve*, see bench/bench_interp.cpp).
 constexpr long long kDenseOperatorMaxEntries = 1LL << 21;
+
+// The rows (and, with cols, the columns) of H that the maps keep (map[k] >= 0: the new index,
+// increasing in k), in one pass over H: what R H R^T (or R H) gives with R the 0/1 selection,
+// without forming the products.
+SpMat restrict_to(const SpMat& H, const std::vector<int>& rows, int nrows, const std::vector<int>* cols, int ncols) {
+  SpMat out(nrows, ncols);
+  out.reserve(H.nonZeros());
+  for (int j = 0; j < H.outerSize(); ++j) {
+    const int c = cols ? (*cols)[static_cast<size_t>(j)] : j;
+    if (c < 0) continue;
+    out.startVec(c);
+    for (SpMat::InnerIterator it(H, j); it; ++it) {
+      const int r = rows[static_cast<size_t>(it.row())];
+      if (r >= 0) out.insertBack(r, c) = it.value();
+    }
+  }
+  out.finalize();
+  return out;
+}
 }  // namespace
 
 namespace detail {
@@ -482,16 +501,10 @@ ModifiedBI::ModifiedBI(const Eigen::Ref<const Eigen::MatrixXd>& U,
     for (int r = 0; r < d; ++r)
       if (free_vertex[i] && !pinned[static_cast<size_t>(i) * d + r]) I.reduced[i * d + r] = I.n_red++;
 
-  // Restriction R (n_red x d n) selects the reduced unknowns.
-  Triplets tr;
-  for (int a = 0; a < d * n; ++a)
-    if (I.reduced[a] >= 0) tr.emplace_back(I.reduced[a], a, 1.0);
-  SpMat R(I.n_red, d * n);
-  R.setFromTriplets(tr.begin(), tr.end());
-  const SpMat Rt = R.transpose();
-  I.Hmm_vibr_red = R * I.H.vibr_mm * Rt;
-  I.Hmm_disc_red = R * I.H.disc_mm * Rt;
-  I.Hmx_red = R * I.H.disc_mx;
+  // The blocks on the reduced unknowns: R H R^T and R H_mx with R (n_red x d n) selecting them.
+  I.Hmm_vibr_red = restrict_to(I.H.vibr_mm, I.reduced, I.n_red, &I.reduced, I.n_red);
+  I.Hmm_disc_red = restrict_to(I.H.disc_mm, I.reduced, I.n_red, &I.reduced, I.n_red);
+  I.Hmx_red = restrict_to(I.H.disc_mx, I.reduced, I.n_red, nullptr, n);
   switch (options.solve_path) {
     case SolvePath::Dense: I.dense = true; break;
     case SolvePath::Sparse: I.dense = false; break;
