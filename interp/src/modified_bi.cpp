@@ -49,7 +49,77 @@ namespace detail {
 
 namespace {
 
+// Which vertices couple in a Hessian: for each vertex j its neighbours (j included), sorted,
+// nb[start[j] .. start[j + 1]). Built from groups of vertices (an element, or the D + 2 vertices
+// of an interior face's two elements) that all couple with each other.
+struct VertexPattern {
+  std::vector<int> start, nb;
+  int degree(int j) const { return start[j + 1] - start[j]; }
+  // position of i among j's neighbours (i must be one)
+  int find(int j, int i) const {
+    const int* b = nb.data() + start[j];
+    return static_cast<int>(std::lower_bound(b, b + degree(j), i) - b);
+  }
+};
+
+template <class Groups>
+VertexPattern vertex_pattern(int n, int count, int size, const Groups& vertex_of) {
+  std::vector<std::vector<int>> lists(n);
+  for (int g = 0; g < count; ++g)
+    for (int a = 0; a < size; ++a) {
+      std::vector<int>& L = lists[vertex_of(g, a)];
+      for (int b = 0; b < size; ++b) {
+        const int v = vertex_of(g, b);
+        if (std::find(L.begin(), L.end(), v) == L.end()) L.push_back(v);
+      }
+    }
+  VertexPattern P;
+  P.start.assign(n + 1, 0);
+  for (int j = 0; j < n; ++j) P.start[j + 1] = P.start[j] + static_cast<int>(lists[j].size());
+  P.nb.reserve(P.start[n]);
+  for (auto& L : lists) {
+    std::sort(L.begin(), L.end());
+    P.nb.insert(P.nb.end(), L.begin(), L.end());
+  }
+  return P;
+}
+
+// A sparse matrix (column-major, compressed) on the pattern: rows R i + r (r < R) of every
+// neighbour i of vertex j in each of the C columns C j + s, values 0. at(r, j, s, pos) is the
+// value of entry (R i + r, C j + s) with pos = P.find(j, i).
+struct BlockMatrix {
+  int R = 1, C = 1;
+  const VertexPattern* P = nullptr;
+  SpMat M;
+  BlockMatrix(const VertexPattern& pattern, int n, int rows_per_vertex, int cols_per_vertex)
+      : R(rows_per_vertex), C(cols_per_vertex), P(&pattern), M(R * n, C * n) {
+    M.resizeNonZeros(static_cast<Eigen::Index>(R) * C * pattern.start[n]);
+    int* outer = M.outerIndexPtr();
+    int* inner = M.innerIndexPtr();
+    int k = 0;
+    for (int j = 0; j < n; ++j)
+      for (int s = 0; s < C; ++s) {
+        outer[C * j + s] = k;
+        for (int q = pattern.start[j]; q < pattern.start[j + 1]; ++q)
+          for (int r = 0; r < R; ++r) inner[k++] = R * pattern.nb[q] + r;
+      }
+    outer[C * n] = k;
+    std::fill(M.valuePtr(), M.valuePtr() + k, 0.0);
+  }
+  double& at(int r, int j, int s, int pos) {
+    return M.valuePtr()[M.outerIndexPtr()[C * j + s] + R * pos + r];
+  }
+  // the matrix without the entries that stayed exactly 0 (axis-aligned meshes have many)
+  SpMat take() {
+    M.prune([](const Eigen::Index&, const Eigen::Index&, const double& v) { return v != 0.0; });
+    return std::move(M);
+  }
+};
+
 // Fixed-size assembly for dimension D (the same code path serves triangles and tetrahedra).
+// Each element's and each interior face's local Hessian is computed on all threads, a block of
+// them at a time (one parallel region: forks are costly on a shared machine), then added into the
+// matrices in element / face order on one thread: the same sums whatever the thread count.
 template <int D>
 Hessians assemble_fixed(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T) {
   using VecD = Eigen::Matrix<double, D, 1>;
@@ -58,6 +128,7 @@ Hessians assemble_fixed(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T) {
   constexpr int NL = D + 2;                      // local vertices of a face pair
   constexpr int NZ = NL * (D + 1);               // local unknowns: m (D each) then x (1 each)
   constexpr int XOFF = NL * D;
+  constexpr int kBlock = 1024;                   // elements or faces a block
   const int n = static_cast<int>(U.rows());
   const int m = static_cast<int>(T.rows());
   auto u = [&](int i) -> VecD { return U.row(i).transpose(); };
@@ -74,126 +145,143 @@ Hessians assemble_fixed(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T) {
     A[e].row(0) = -Einv.colwise().sum();
     volume[e] = std::abs(E.determinant()) / (D == 2 ? 2.0 : 6.0);
   }
-  (void)nt;
   const Eigen::MatrixXi F = interior_faces(T);
   const int nf = static_cast<int>(F.rows());
 
-  // Elements and interior faces in a fixed number of chunks, each assembled into its own
-  // matrices (in parallel), then summed in chunk order: the same sums whatever the thread count.
-  const int chunks = m >= 4096 ? 4 : 1;
-  struct Part {
-    SpMat vibr_mm, disc_mm, disc_mx, disc_xx;
-  };
-  std::vector<Part> parts(chunks);
-  const int ntc = omp_threads(chunks, 1);
-  MBI_INTERP_OMP("omp parallel for num_threads(ntc) if (ntc > 1) schedule(dynamic)")
-  for (int c = 0; c < chunks; ++c) {
-    const int e0 = static_cast<int>(static_cast<long long>(m) * c / chunks);
-    const int e1 = static_cast<int>(static_cast<long long>(m) * (c + 1) / chunks);
-    const int f0 = static_cast<int>(static_cast<long long>(nf) * c / chunks);
-    const int f1 = static_cast<int>(static_cast<long long>(nf) * (c + 1) / chunks);
-    Triplets tv;
-    tv.reserve(static_cast<size_t>(e1 - e0) * NV * NV);
-    for (int e = e0; e < e1; ++e) {
-      // vec(Hess x_c) = L m_local: Hess_pq = sum_k a_k[p] m_k[q] + m_k[p] a_k[q] (fact 2)
-      Eigen::Matrix<double, D * D, NV> L = Eigen::Matrix<double, D * D, NV>::Zero();
-      for (int k = 0; k <= D; ++k)
-        for (int p = 0; p < D; ++p)
-          for (int q = 0; q < D; ++q) {
-            L(p * D + q, k * D + q) += A[e](k, p);
-            L(p * D + q, k * D + p) += A[e](k, q);
-          }
-      const Eigen::Matrix<double, NV, NV> H = volume[e] * (L.transpose() * L);
-      for (int k = 0; k <= D; ++k)
-        for (int r = 0; r < D; ++r)
-          for (int l = 0; l <= D; ++l)
-            for (int s = 0; s < D; ++s)
-              tv.emplace_back(T(e, k) * D + r, T(e, l) * D + s, H(k * D + r, l * D + s));
+  // E_vibr: vec(Hess x_c) = L m_local: Hess_pq = sum_k a_k[p] m_k[q] + m_k[p] a_k[q] (fact 2)
+  const VertexPattern Pe = vertex_pattern(n, m, D + 1, [&](int e, int a) { return T(e, a); });
+  BlockMatrix vibr(Pe, n, D, D);
+  {
+    struct Local {
+      Eigen::Matrix<double, NV, NV> H;
+      int pos[D + 1][D + 1];  // pos[k][l]: T(e, k) among the neighbours of T(e, l)
+    };
+    std::vector<Local> buf(static_cast<size_t>(std::min(m, kBlock)));
+    const int ntb = omp_threads(std::min(m, kBlock), 64);
+    MBI_INTERP_OMP("omp parallel num_threads(ntb) if (ntb > 1)")
+    for (int e0 = 0; e0 < m; e0 += kBlock) {
+      const int e1 = std::min(m, e0 + kBlock);
+      MBI_INTERP_OMP("omp for schedule(static)")
+      for (int e = e0; e < e1; ++e) {
+        Local& Lc = buf[static_cast<size_t>(e - e0)];
+        Eigen::Matrix<double, D * D, NV> L = Eigen::Matrix<double, D * D, NV>::Zero();
+        for (int k = 0; k <= D; ++k)
+          for (int p = 0; p < D; ++p)
+            for (int q = 0; q < D; ++q) {
+              L(p * D + q, k * D + q) += A[e](k, p);
+              L(p * D + q, k * D + p) += A[e](k, q);
+            }
+        Lc.H.noalias() = volume[e] * (L.transpose() * L);
+        for (int k = 0; k <= D; ++k)
+          for (int l = 0; l <= D; ++l) Lc.pos[k][l] = Pe.find(T(e, l), T(e, k));
+      }
+      MBI_INTERP_OMP("omp single")
+      for (int e = e0; e < e1; ++e) {
+        const Local& Lc = buf[static_cast<size_t>(e - e0)];
+        for (int l = 0; l <= D; ++l)
+          for (int s = 0; s < D; ++s)
+            for (int k = 0; k <= D; ++k)
+              for (int r = 0; r < D; ++r)
+                vibr.at(r, T(e, l), s, Lc.pos[k][l]) += Lc.H(k * D + r, l * D + s);
+      }
     }
-    Part& P = parts[c];
-    P.vibr_mm.resize(D * n, D * n);
-    P.vibr_mm.setFromTriplets(tv.begin(), tv.end());
-    Triplets().swap(tv);
+    (void)ntb;
+  }
 
-    // E_disc: the jump of grad x_c across a face is linear; at a face vertex v the phi_v m_v
-    // terms of both sides cancel, leaving sum_k +-a_k (x_k + m_k . (u_v - u_k)) (fact 3).
-    Triplets tmm, tmx, txx;
-    tmm.reserve(static_cast<size_t>(f1 - f0) * XOFF * XOFF);
-    tmx.reserve(static_cast<size_t>(f1 - f0) * XOFF * NL);
-    txx.reserve(static_cast<size_t>(f1 - f0) * NL * NL);
-    std::array<Eigen::Matrix<double, D, NZ>, D> G;
-    std::array<int, NL> local{};
-    for (int f = f0; f < f1; ++f) {
-      for (int j = 0; j < D; ++j) local[j] = F(f, j);
-      for (int s = 0; s < 2; ++s) {
-        const int e = F(f, D + s);
-        for (int k = 0; k <= D; ++k) {
-          bool on_face = false;
-          for (int j = 0; j < D; ++j) on_face = on_face || T(e, k) == F(f, j);
-          if (!on_face) local[D + s] = T(e, k);
-        }
+  // E_disc: the jump of grad x_c across a face is linear; at a face vertex v the phi_v m_v
+  // terms of both sides cancel, leaving sum_k +-a_k (x_k + m_k . (u_v - u_k)) (fact 3).
+  // Local vertices of face f: its D vertices, then the vertex of each side's element off the face.
+  std::vector<std::array<int, NL>> local(static_cast<size_t>(nf));
+  for (int f = 0; f < nf; ++f) {
+    for (int j = 0; j < D; ++j) local[f][j] = F(f, j);
+    for (int s = 0; s < 2; ++s) {
+      const int e = F(f, D + s);
+      for (int k = 0; k <= D; ++k) {
+        bool on_face = false;
+        for (int j = 0; j < D; ++j) on_face = on_face || T(e, k) == F(f, j);
+        if (!on_face) local[f][D + s] = T(e, k);
       }
-      auto local_of = [&](int g) {
-        for (int j = 0; j < NL; ++j)
-          if (local[j] == g) return j;
-        return -1;
-      };
-      for (auto& g : G) g.setZero();
-      for (int s = 0; s < 2; ++s) {
-        const int e = F(f, D + s);
-        const double sgn = s == 0 ? 1.0 : -1.0;
-        for (int k = 0; k <= D; ++k) {
-          const int j = local_of(T(e, k));
-          const VecD a = sgn * A[e].row(k).transpose();
-          for (int v = 0; v < D; ++v) {
-            const VecD w = u(F(f, v)) - u(T(e, k));
-            G[v].col(XOFF + j) += a;
-            G[v].template block<D, D>(0, j * D) += a * w.transpose();
+    }
+  }
+  const VertexPattern Pf = vertex_pattern(n, nf, NL, [&](int f, int a) { return local[f][a]; });
+  BlockMatrix dmm(Pf, n, D, D), dmx(Pf, n, D, 1), dxx(Pf, n, 1, 1);
+  {
+    struct Local {
+      Eigen::Matrix<double, NZ, NZ> H;
+      int pos[NL][NL];  // pos[p][q]: local vertex p among the neighbours of local vertex q
+    };
+    std::vector<Local> buf(static_cast<size_t>(std::min(std::max(nf, 1), kBlock)));
+    const int ntb = omp_threads(std::min(nf, kBlock), 64);
+    MBI_INTERP_OMP("omp parallel num_threads(ntb) if (ntb > 1)")
+    for (int f0 = 0; f0 < nf; f0 += kBlock) {
+      const int f1 = std::min(nf, f0 + kBlock);
+      MBI_INTERP_OMP("omp for schedule(static)")
+      for (int f = f0; f < f1; ++f) {
+        Local& Lc = buf[static_cast<size_t>(f - f0)];
+        const std::array<int, NL>& lv = local[static_cast<size_t>(f)];
+        auto local_of = [&](int g) {
+          for (int j = 0; j < NL; ++j)
+            if (lv[j] == g) return j;
+          return -1;
+        };
+        std::array<Eigen::Matrix<double, D, NZ>, D> G;
+        for (auto& g : G) g.setZero();
+        for (int s = 0; s < 2; ++s) {
+          const int e = F(f, D + s);
+          const double sgn = s == 0 ? 1.0 : -1.0;
+          for (int k = 0; k <= D; ++k) {
+            const int j = local_of(T(e, k));
+            const VecD a = sgn * A[e].row(k).transpose();
+            for (int v = 0; v < D; ++v) {
+              const VecD w = u(F(f, v)) - u(T(e, k));
+              G[v].col(XOFF + j) += a;
+              G[v].template block<D, D>(0, j * D) += a * w.transpose();
+            }
           }
         }
-      }
-      double area;
-      if constexpr (D == 2) {
-        area = (u(F(f, 1)) - u(F(f, 0))).norm();
-      } else {
-        area = 0.5 * (u(F(f, 1)) - u(F(f, 0))).cross(u(F(f, 2)) - u(F(f, 0))).norm();
-      }
-      // integral over a (D-1)-simplex of |g|^2, g linear: |F|/(D(D+1)) (sum |g_v|^2 + |sum g_v|^2)
-      Eigen::Matrix<double, D, NZ> Gs = Eigen::Matrix<double, D, NZ>::Zero();
-      Eigen::Matrix<double, NZ, NZ> H = Eigen::Matrix<double, NZ, NZ>::Zero();
-      for (int v = 0; v < D; ++v) {
-        Gs += G[v];
-        H.noalias() += G[v].transpose() * G[v];
-      }
-      H.noalias() += Gs.transpose() * Gs;
-      H *= area / (D * (D + 1));
-      auto global_m = [&](int a) { return local[a / D] * D + a % D; };
-      for (int a = 0; a < NZ; ++a)
-        for (int b = 0; b < NZ; ++b) {
-          const double h = H(a, b);
-          if (h == 0.0) continue;
-          if (a < XOFF && b < XOFF) tmm.emplace_back(global_m(a), global_m(b), h);
-          else if (a < XOFF) tmx.emplace_back(global_m(a), local[b - XOFF], h);
-          else if (b >= XOFF) txx.emplace_back(local[a - XOFF], local[b - XOFF], h);
+        double area;
+        if constexpr (D == 2) {
+          area = (u(F(f, 1)) - u(F(f, 0))).norm();
+        } else {
+          area = 0.5 * (u(F(f, 1)) - u(F(f, 0))).cross(u(F(f, 2)) - u(F(f, 0))).norm();
         }
+        // integral over a (D-1)-simplex of |g|^2, g linear: |F|/(D(D+1)) (sum |g_v|^2 + |sum g_v|^2)
+        Eigen::Matrix<double, D, NZ> Gs = Eigen::Matrix<double, D, NZ>::Zero();
+        Lc.H.setZero();
+        for (int v = 0; v < D; ++v) {
+          Gs += G[v];
+          Lc.H.noalias() += G[v].transpose() * G[v];
+        }
+        Lc.H.noalias() += Gs.transpose() * Gs;
+        Lc.H *= area / (D * (D + 1));
+        for (int p = 0; p < NL; ++p)
+          for (int q = 0; q < NL; ++q) Lc.pos[p][q] = Pf.find(lv[q], lv[p]);
+      }
+      MBI_INTERP_OMP("omp single")
+      for (int f = f0; f < f1; ++f) {
+        const Local& Lc = buf[static_cast<size_t>(f - f0)];
+        const std::array<int, NL>& lv = local[static_cast<size_t>(f)];
+        // local unknown a: m of local vertex a / D, component a % D (a < XOFF); x of local
+        // vertex a - XOFF. Blocks mm, mx (rows m, columns x) and xx; a column's rows of one
+        // neighbour are contiguous in the matrices and in H.
+        for (int q = 0; q < NL; ++q) {
+          for (int s = 0; s < D; ++s) {
+            double* col = dmm.M.valuePtr() + dmm.M.outerIndexPtr()[D * lv[q] + s];
+            for (int p = 0; p < NL; ++p)
+              for (int r = 0; r < D; ++r) col[D * Lc.pos[p][q] + r] += Lc.H(p * D + r, q * D + s);
+          }
+          double* colx = dmx.M.valuePtr() + dmx.M.outerIndexPtr()[lv[q]];
+          for (int p = 0; p < NL; ++p)
+            for (int r = 0; r < D; ++r) colx[D * Lc.pos[p][q] + r] += Lc.H(p * D + r, XOFF + q);
+          double* colxx = dxx.M.valuePtr() + dxx.M.outerIndexPtr()[lv[q]];
+          for (int p = 0; p < NL; ++p) colxx[Lc.pos[p][q]] += Lc.H(XOFF + p, XOFF + q);
+        }
+      }
     }
-    P.disc_mm.resize(D * n, D * n);
-    P.disc_mm.setFromTriplets(tmm.begin(), tmm.end());
-    P.disc_mx.resize(D * n, n);
-    P.disc_mx.setFromTriplets(tmx.begin(), tmx.end());
-    P.disc_xx.resize(n, n);
-    P.disc_xx.setFromTriplets(txx.begin(), txx.end());
+    (void)ntb;
   }
-  (void)ntc;
-  Hessians Hs = {std::move(parts[0].vibr_mm), std::move(parts[0].disc_mm), std::move(parts[0].disc_mx),
-                 std::move(parts[0].disc_xx)};
-  for (int c = 1; c < chunks; ++c) {
-    Hs.vibr_mm += parts[c].vibr_mm;
-    Hs.disc_mm += parts[c].disc_mm;
-    Hs.disc_mx += parts[c].disc_mx;
-    Hs.disc_xx += parts[c].disc_xx;
-  }
-  return Hs;
+  (void)nt;
+  return {vibr.take(), dmm.take(), dmx.take(), dxx.take()};
 }
 
 }  // namespace
