@@ -47,7 +47,8 @@ def machine_facts(repo):
         except (OSError, subprocess.CalledProcessError):
             return "unknown"
 
-    dirty = git("status", "--porcelain", "--untracked-files=no")
+    # the run's own outputs (bench/results) do not count as local changes
+    dirty = git("status", "--porcelain", "--untracked-files=no", "--", ".", ":(exclude)bench/results")
     return {
         "cpu_model": cpu.group(1).strip() if cpu else "unknown",
         "cores": os.cpu_count(),
