@@ -63,6 +63,7 @@ constexpr int kStreamAhead = 128;
 
 // Points a thread takes at a time (a multiple of 4); also the fewest points a thread is given.
 constexpr long long kBlock = 32768;
+static_assert(kBlock % 4 == 0, "blocks must keep each thread's first output float 16-byte aligned");
 
 // Index of c_k (lin) and c_kl, k <= l (quad), 1-based k, l, in an element's terms (c_0 is term 0).
 // 3D: 0 c0, 1 c1, 2 c11, 3 c12, 4 c13, 5 c2, 6 c22, 7 c23, 8 c3, 9 c33.
@@ -176,14 +177,16 @@ void eval_scalar(const std::int32_t* rec, const float* coef, const Layout& L, co
 }
 
 #ifdef MBI_FAST_X86
-// ------------------------------------------------------------------------ x86 kernel (3D)
-// Two points to a 256-bit vector (x, y, z, * | x, y, z, *), FMA; each point's terms are loaded
-// 16 bytes at a time from its element's 2 cache lines, which are prefetched kPrefetch points
-// ahead when the points are not stored coherently (random points read the coefficient table from
-// L2, not L1; in a mesh's order the prefetches only cost); the input streams (records, rest
-// normals) are prefetched kStreamAhead points ahead in either order. Groups of 4 points
-// are written as 3 aligned 16-byte vectors with streaming stores (the output is not read back
-// by this pass, so it bypasses the caches and saves the write-allocate reads).
+// ------------------------------------------------------------------------ x86 kernels (3D)
+// Two kernels, FMA on 256-bit vectors: positions only (pairs layout, eval_x86_pairs: one point
+// and two terms to a vector, 4 aligned 32-byte loads a point) and positions with normals
+// (packed layout, eval_x86: two points to a vector (x, y, z, * | x, y, z, *), each term loaded
+// 16 bytes at a time). An element's 2 cache lines are prefetched kPrefetch points ahead when the
+// points are not stored coherently (random points read the coefficient table from L2, not L1; in
+// a mesh's order the prefetches only cost); the input streams (records, rest normals) are
+// prefetched kStreamAhead points ahead in either order. Groups of 4 points are written as 3
+// aligned 16-byte vectors with streaming stores (the output is not read back by this pass, so it
+// bypasses the caches and saves the write-allocate reads).
 #define MBI_TARGET __attribute__((target("avx2,fma")))
 
 // Prefetch the byte at p + bytes: integer arithmetic, so that an address past the end of a buffer
@@ -560,7 +563,9 @@ void FastEvaluator::prepare(const BezierPoints& B, bool normals) {
 }
 
 // The rest-normal block is read 12 bytes a point in step with the two outputs written 12 bytes a
-// point. When the block starts just before an output modulo 4 KiB (or at the same offset, as
+// point (the normals 8 points, 96 bytes, behind: the kernel finishes a normal two groups later,
+// which the window below also covers). When the block starts just before an output modulo 4 KiB
+// (or at the same offset, as
 // large blocks that are all page-aligned alike do), each load finds a recent store with the same
 // low 12 address bits and waits on it ("4K aliasing"; 1.3x the time of the whole pass measured
 // on this project's Zen 4 machine). So (block - output) modulo 4 KiB is kept within [64, 3072]

@@ -26,9 +26,11 @@ namespace {
 constexpr long long kDenseOperatorMaxEntries = 1LL << 21;
 
 // The rows (and, with cols, the columns) of H that the maps keep (map[k] >= 0: the new index,
-// increasing in k), in one pass over H: what R H R^T (or R H) gives with R the 0/1 selection,
-// without forming the products.
+// increasing in k, the kept columns numbered 0..ncols-1 without gaps), in one pass over H: what
+// R H R^T (or R H) gives with R the 0/1 selection, without forming the products. H must be
+// compressed (sorted rows in each column), as assembled.
 SpMat restrict_to(const SpMat& H, const std::vector<int>& rows, int nrows, const std::vector<int>* cols, int ncols) {
+  eigen_assert(H.isCompressed());
   SpMat out(nrows, ncols);
   out.reserve(H.nonZeros());
   for (int j = 0; j < H.outerSize(); ++j) {

@@ -99,6 +99,13 @@ TEST_CASE("FastEvaluator: thread counts, caller memory and repeated calls give i
     const Eigen::Map<const RowMatrixXf> pm(buf.data() + 1, p1.rows(), 3), nm(nbuf.data() + 1, p1.rows(), 3);
     CHECK((pm - p1).cwiseAbs().maxCoeff() == 0.0f);
     CHECK((nm - n1).cwiseAbs().maxCoeff() == 0.0f);
+    // positions alone (the other kernel and layout), aligned and not: the same positions
+    RowMatrixXf p0;
+    fe.evaluate(s.B, p0);
+    CHECK((p0 - p1).cwiseAbs().maxCoeff() == 0.0f);
+    std::fill(buf.begin(), buf.end(), -1e30f);
+    fe.evaluate(s.B, buf.data() + 1, nullptr);
+    CHECK((pm - p1).cwiseAbs().maxCoeff() == 0.0f);
   }
   CHECK(ref.bytes_per_point(false) == 28);
   CHECK(ref.bytes_per_point(true) == 52);
@@ -118,6 +125,9 @@ TEST_CASE("FastEvaluator: few points (tails shorter than a group of 4, the first
     fe.evaluate(s.B, pf, nf);
     CHECK((pf.cast<double>() - pd).cwiseAbs().maxCoeff() <= position_tolerance(s.B));
     CHECK((nf.cast<double>() - nd).cwiseAbs().maxCoeff() < 2e-5);
+    RowMatrixXf p0;
+    fe.evaluate(s.B, p0);
+    CHECK((p0 - pf).cwiseAbs().maxCoeff() == 0.0f);
   }
   Embedding empty;
   empty.bary.resize(0, 4);
