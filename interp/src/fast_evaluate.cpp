@@ -6,9 +6,11 @@
 //   c_0 = P_0, c_k = 2 (P_0k - P_0), c_kk = P_0 + P_k - 2 P_0k,
 //   c_kl = 2 (P_0 - P_0k - P_0l + P_kl) (k < l),
 // evaluated as x = (c_0 + b_1 t_1) + (b_2 t_2 + ... + b_d t_d), t_k = c_k + sum_{l>=k} b_l c_kl
-// (every kernel sums in this order): in 3D 10 multiply-adds on (x, y, z, *) vectors a point. On
-// x86, positions-only calls put one point and two terms in a 256-bit vector (the "pairs" layout
-// below), calls with normals two points (the "packed" layout).
+// (every kernel sums in this order): in 3D 10 multiply-adds on (x, y, z, *) vectors a point. The
+// kernels (Simd): AVX2 puts one point and two terms in a 256-bit vector for positions (the
+// "pairs" layout below) and two points with normals (the "packed" layout); AVX-512 puts two
+// points, each as in the AVX2 positions kernel, in a 512-bit vector, with and without normals
+// (pairs layout); the portable loop reads either layout.
 //
 // Normals need no second table. With D_k = dx/db_k = c_k + sum_l e_kl b_l (e_kl = c_kl for
 // k != l, 2 c_kk for k = l; from the t_k above, 6 more FMAs in 3D) and A the matrix whose columns
@@ -16,7 +18,8 @@
 //   cof(J) n = cof(D) cof(A)^T n = cof(D) m,   m = cof(A)^T n   (fact 6; cof(XY) = cof(X) cof(Y)).
 // m depends on the rest state only: set_rest_normals() stores it per point (in double, rounded
 // once) in place of n, and a point's normal is cof(D) m = m_1 (D_2 x D_3) + m_2 (D_3 x D_1) +
-// m_3 (D_1 x D_2), renormalised.
+// m_3 (D_1 x D_2), renormalised (the AVX-512 kernel: the same vector as
+// D_2 x (m_1 D_3 - m_3 D_1) + m_2 (D_3 x D_1), two cross products instead of three).
 //
 // The coefficients are computed in double from B and rounded to float once per call.
 #include <mbi/interp/fast_evaluate.hpp>
@@ -26,6 +29,7 @@
 #include "detail.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cfloat>
 #include <cmath>
 #include <cstring>
@@ -96,8 +100,11 @@ constexpr Layout packed_layout(int d) {
 constexpr Layout kPairs = {{3, 0, 8, 16, 24, 4, 12, 20, 7, 28}, {8, 1, 1, 1, 1, 1, 1, 1, 8, 1}};
 constexpr Layout kPacked2 = packed_layout(2), kPacked3 = packed_layout(3);
 
-// The layout of a call: pairs for 3D positions, packed otherwise.
-const Layout& layout_for(int d, bool normals) { return d == 2 ? kPacked2 : normals ? kPacked3 : kPairs; }
+// The layout of a call: pairs for 3D positions, and for 3D normals on the AVX-512 kernels;
+// packed otherwise.
+const Layout& layout_for(int d, bool normals, Simd simd) {
+  return d == 2 ? kPacked2 : normals && simd != Simd::Avx512 ? kPacked3 : kPairs;
+}
 
 // the first 64-byte boundary in a buffer allocated with 16 floats to spare
 template <class T>
@@ -196,6 +203,16 @@ inline void prefetch_at(const void* p, long long bytes) {
                _MM_HINT_T0);
 }
 
+// Prefetch the element terms (both lines) of the 4 points kPrefetch after p (records are padded:
+// those are always records).
+MBI_TARGET inline void prefetch_terms(const std::int32_t* rec, const float* coef, long long p) {
+  for (int k = 0; k < 4; ++k) {
+    const char* ahead = reinterpret_cast<const char*>(coef + static_cast<long long>(rec[4 * (p + k + kPrefetch)]) * coef_stride(3));
+    _mm_prefetch(ahead, _MM_HINT_T0);
+    _mm_prefetch(ahead + 64, _MM_HINT_T0);
+  }
+}
+
 // term k of elements A (low half) and B (high half)
 MBI_TARGET inline __m256 term2(const float* A, const float* B, int k) {
   return _mm256_loadu2_m128(B + 3 * k, A + 3 * k);
@@ -290,7 +307,6 @@ MBI_TARGET inline void store12(float* out, bool aligned, __m128 o0, __m128 o1, _
 template <bool Scaled, bool Prefetch>
 MBI_TARGET void eval_x86(const std::int32_t* rec, const float* coef, const float* mrest, float sigma,
                          float* pos, float* nout, long long begin, long long end) {
-  constexpr int NC = coef_stride(3);
   const __m256 sig = _mm256_set1_ps(sigma);
   const bool aligned = reinterpret_cast<std::uintptr_t>(pos + 3 * begin) % 16 == 0 &&
                        reinterpret_cast<std::uintptr_t>(nout + 3 * begin) % 16 == 0;
@@ -302,12 +318,7 @@ MBI_TARGET void eval_x86(const std::int32_t* rec, const float* coef, const float
   for (; p < end; p += 4) {
     prefetch_at(rec + 4 * p, 4LL * 4 * kStreamAhead);  // one 64-byte line of records per 4 points
     prefetch_at(mrest + 3 * p, 4LL * 3 * kStreamAhead);
-    if constexpr (Prefetch)
-      for (int k = 0; k < 4; ++k) {  // records are padded: p + k + kPrefetch is always a record
-        const char* ahead = reinterpret_cast<const char*>(coef + static_cast<long long>(rec[4 * (p + k + kPrefetch)]) * NC);
-        _mm_prefetch(ahead, _MM_HINT_T0);
-        _mm_prefetch(ahead + 64, _MM_HINT_T0);
-      }
+    if constexpr (Prefetch) prefetch_terms(rec, coef, p);
     // stages 3 and 2 (on zeros in the first two iterations: not stored)
     const __m256 n0 = renormalise(o[0]), n1 = renormalise(o[1]);
     o[0] = cof_times(D[0], m[0]);
@@ -366,12 +377,7 @@ MBI_TARGET void eval_x86_pairs(const std::int32_t* rec, const float* coef, const
   const bool aligned = reinterpret_cast<std::uintptr_t>(pos + 3 * begin) % 16 == 0;
   for (long long p = begin; p < end; p += 4) {
     prefetch_at(rec + 4 * p, 4LL * 4 * kStreamAhead);
-    if constexpr (Prefetch)
-      for (int k = 0; k < 4; ++k) {  // records are padded: p + k + kPrefetch is always a record
-        const char* ahead = reinterpret_cast<const char*>(coef + static_cast<long long>(rec[4 * (p + k + kPrefetch)]) * NC);
-        _mm_prefetch(ahead, _MM_HINT_T0);
-        _mm_prefetch(ahead + 64, _MM_HINT_T0);
-      }
+    if constexpr (Prefetch) prefetch_terms(rec, coef, p);
     __m128 x[4];
     for (int k = 0; k < 4; ++k) {
       const std::int32_t* r = rec + 4 * (p + k);
@@ -384,29 +390,382 @@ MBI_TARGET void eval_x86_pairs(const std::int32_t* rec, const float* coef, const
   _mm_sfence();
 }
 
+#define MBI_TARGET512 __attribute__((target("avx512f,avx512dq,avx512vl,avx2,fma")))
+// GCC 12's AVX-512 intrinsics fill unused lanes from _mm512_undefined_*() and then warn that
+// they may be (or are) used uninitialized (GCC bug 105593); no lane of those is ever read here.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
+
+// 8 floats at A + k (low half) and at B + k (high half), 32-byte aligned
+MBI_TARGET512 inline __m512 halves(const float* A, const float* B, int k) {
+  return _mm512_insertf32x8(_mm512_castps256_ps512(_mm256_load_ps(A + k)), _mm256_load_ps(B + k), 1);
+}
+
+#define MBI_SWAP512(v) _mm512_shuffle_f32x4((v), (v), _MM_SHUFFLE(2, 3, 0, 1))  // the 128-bit halves of each 256
+#define MBI_YZX512(v) _mm512_permute_ps((v), _MM_SHUFFLE(3, 0, 2, 1))
+
+// Index vectors of the 512-bit kernels (loaded once per call).
+struct Idx512 {
+  __m512i rot, out;
+  MBI_TARGET512 Idx512()
+      : rot(_mm512_setr_epi32(0, 1, 2, 3, 1, 2, 3, 0, 4, 5, 6, 7, 5, 6, 7, 4)),
+        out(_mm512_setr_epi32(0, 1, 2, 8, 9, 10, 16, 17, 18, 24, 25, 26, 0, 0, 0, 0)) {}
+};
+
+// Two points whose records start at r (A in the low 256 bits, B in the high), pairs layout: each
+// half computes what one_point computes, in the same order (masks for its blends). Returns
+// (x_A, ., x_B, .) in 128-bit lanes 0 and 2. With Derivs also X = (D_1 | .) and Ad = (D_2 | D_3)
+// in each point's 256 bits (D_k = dx/db_k; summed in another order than the packed kernel's).
+template <bool Derivs>
+MBI_TARGET512 inline __m512 pair512(const std::int32_t* r, const float* coef, const Idx512& I, __m512& X, __m512& Ad) {
+  constexpr int NC = coef_stride(3);
+  const float* A = coef + static_cast<long long>(r[0]) * NC;
+  const float* B = coef + static_cast<long long>(r[4]) * NC;
+  const __m512 v = _mm512_castps256_ps512(_mm256_loadu_ps(reinterpret_cast<const float*>(r)));
+  const __m512 L0 = halves(A, B, 0), L1 = halves(A, B, 8), L2 = halves(A, B, 16), L3 = halves(A, B, 24);
+  // (rA, rA' | rB, rB'), r' = (b1, b2, b3, e): one cross-lane permute, then every coefficient
+  // vector by an in-lane one with the same pattern in each 128-bit lane (twice the throughput)
+  const __m512 v2 = _mm512_permutexvar_ps(I.rot, v);
+  const __m512 b12 = _mm512_permute_ps(v2, 0x55), b23 = _mm512_permute_ps(v2, 0xAA);
+  const __m512 b3lo = _mm512_maskz_permute_ps(0x0F0F, v2, 0xFF), b3hi = _mm512_maskz_permute_ps(0xF0F0, v2, 0xAA);
+  const __m512 ob3 = _mm512_mask_permute_ps(_mm512_set1_ps(1.0f), 0xF0F0, v2, 0xAA);
+  // (c0 | c3) from the slots' 4th floats, as one_point
+  const __m512 c03 = _mm512_shuffle_ps(_mm512_unpackhi_ps(L0, L1), L2, _MM_SHUFFLE(3, 3, 3, 2));
+  __m512 T = _mm512_fmadd_ps(L1, b12, L0);
+  T = _mm512_fmadd_ps(L2, b23, T);
+  T = _mm512_fmadd_ps(L3, b3lo, T);                                       // (t1 | t2)
+  const __m512 U = _mm512_fmadd_ps(L3, b3hi, c03);                        // (c0 | t3)
+  const __m512 V = _mm512_fmadd_ps(b12, T, _mm512_mul_ps(U, ob3));
+  if constexpr (Derivs) {
+    X = _mm512_fmadd_ps(L1, b12, T);                                      // (t1 + b1 c11 | t2 + b2 c22) = (D1 | .)
+    const __m512 Z = _mm512_fmadd_ps(L2, b12, _mm512_mask_blend_ps(0xF0F0, MBI_SWAP512(X), U));  // (D2 | t3 + b2 c23)
+    const __m512 R = _mm512_fmadd_ps(L3, _mm512_mask_blend_ps(0xF0F0, b12, b3hi), _mm512_maskz_mov_ps(0xF0F0, Z));
+    Ad = _mm512_mask_add_ps(Z, 0xF0F0, R, MBI_SWAP512(R));               // (D2 | . + b3 c33 + b1 c13) = (D2 | D3)
+  }
+  return _mm512_add_ps(V, MBI_SWAP512(V));  // (c0 + b1 t1) + (b2 t2 + b3 t3)
+}
+
+// The 12 floats of 4 points from two pair512 results to 3 stores.
+MBI_TARGET512 inline void store4(float* out, bool aligned, const Idx512& I, __m512 W0, __m512 W1) {
+  const __m512 o = _mm512_permutex2var_ps(W0, I.out, W1);
+  store12(out, aligned, _mm512_castps512_ps128(o), _mm512_extractf32x4_ps(o, 1), _mm512_extractf32x4_ps(o, 2));
+}
+
+// Positions only, pairs layout, two points to a 512-bit vector, 4 points an iteration.
+template <bool Prefetch>
+MBI_TARGET512 void eval_x86_pairs512(const std::int32_t* rec, const float* coef, const float*, float, float* pos,
+                                     float*, long long begin, long long end) {
+  const Idx512 I;
+  const bool aligned = reinterpret_cast<std::uintptr_t>(pos + 3 * begin) % 16 == 0;
+  __m512 none;
+  for (long long p = begin; p < end; p += 4) {
+    prefetch_at(rec + 4 * p, 4LL * 4 * kStreamAhead);
+    if constexpr (Prefetch) prefetch_terms(rec, coef, p);
+    const __m512 W0 = pair512<false>(rec + 4 * p, coef, I, none, none);
+    const __m512 W1 = pair512<false>(rec + 4 * (p + 2), coef, I, none, none);
+    store4(pos + 3 * p, aligned, I, W0, W1);
+  }
+  _mm_sfence();
+}
+
+// o / |o| for the 4 vectors of o (lane 3 of each 0; 0 where |o|^2 <= FLT_MIN: J singular).
+MBI_TARGET512 inline __m512 renormalise512(__m512 o) {
+  const __m512 sq = _mm512_mul_ps(o, o);
+  __m512 s = _mm512_add_ps(sq, _mm512_permute_ps(sq, _MM_SHUFFLE(2, 3, 0, 1)));
+  s = _mm512_add_ps(s, _mm512_permute_ps(s, _MM_SHUFFLE(1, 0, 3, 2)));
+  __m512 inv = _mm512_rsqrt14_ps(s);
+  inv = _mm512_mul_ps(inv, _mm512_fnmadd_ps(_mm512_mul_ps(_mm512_mul_ps(_mm512_set1_ps(0.5f), s), inv), inv,
+                                            _mm512_set1_ps(1.5f)));
+  return _mm512_maskz_mul_ps(_mm512_cmp_ps_mask(s, _mm512_set1_ps(FLT_MIN), _CMP_GT_OQ), o, inv);
+}
+
+// The normals of 4 points (X[h], Ad[h] from pair512, h = 0, 1; m the first 12 floats of M), one
+// point to a 128-bit lane (x, y, z, 0): cof(D) m = D_2 x (m_1 D_3 - m_3 D_1) + m_2 (D_3 x D_1), two
+// cross products at once ((D_2 | D_3) x (m_1 D_3 - m_3 D_1 | m_2 D_1)), then the halves added.
+template <bool Scaled>
+MBI_TARGET512 inline __m512 normals4(const __m512* X, const __m512* Ad, __m512 M, __m512 sig) {
+  const __m512i imerge = _mm512_setr_epi32(0, 1, 2, 3, 8, 9, 10, 11, 16, 17, 18, 19, 24, 25, 26, 27);
+  const __m512i im12[2] = {_mm512_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1, 3, 3, 3, 3, 4, 4, 4, 4),
+                           _mm512_setr_epi32(6, 6, 6, 6, 7, 7, 7, 7, 9, 9, 9, 9, 10, 10, 10, 10)};
+  const __m512i im3[2] = {_mm512_setr_epi32(2, 2, 2, 2, 2, 2, 2, 2, 5, 5, 5, 5, 5, 5, 5, 5),
+                          _mm512_setr_epi32(8, 8, 8, 8, 8, 8, 8, 8, 11, 11, 11, 11, 11, 11, 11, 11)};
+  __m512 O[2];
+  for (int h = 0; h < 2; ++h) {
+    __m512 D1 = X[h], D23 = Ad[h];
+    if constexpr (Scaled) D1 = _mm512_mul_ps(sig, D1), D23 = _mm512_mul_ps(sig, D23);
+    const __m512 m12 = _mm512_permutexvar_ps(im12[h], M), m30 = _mm512_maskz_permutexvar_ps(0x0F0F, im3[h], M);
+    const __m512 D31 = MBI_SWAP512(_mm512_mask_blend_ps(0xF0F0, D1, D23));                 // (D3 | D1)
+    const __m512 Bv = _mm512_fnmadd_ps(D1, m30, _mm512_mul_ps(D31, m12));                 // (m1 D3 - m3 D1 | m2 D1)
+    const __m512 C = _mm512_fmsub_ps(D23, MBI_YZX512(Bv), _mm512_mul_ps(MBI_YZX512(D23), Bv));  // (a x b).zxy
+    O[h] = _mm512_add_ps(C, MBI_SWAP512(C));
+  }
+  return renormalise512(MBI_YZX512(_mm512_maskz_permutex2var_ps(0x7777, O[0], imerge, O[1])));
+}
+
+// 3-vectors of 16 points, one component to a register.
+struct Soa3 {
+  __m512 x, y, z;
+};
+
+// The 4 registers' 128-bit lanes hold vectors (x, y, z, .): lane 4 g + k of the result holds
+// P[k]'s lane g (a 4 x 4 transposition within each 128-bit lane).
+MBI_TARGET512 inline Soa3 to_soa(__m512 P0, __m512 P1, __m512 P2, __m512 P3) {
+  const __m512 t0 = _mm512_unpacklo_ps(P0, P1), t1 = _mm512_unpackhi_ps(P0, P1);
+  const __m512 t2 = _mm512_unpacklo_ps(P2, P3), t3 = _mm512_unpackhi_ps(P2, P3);
+  return {_mm512_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0)), _mm512_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2)),
+          _mm512_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0))};
+}
+
+// Constants of normals16: which 128-bit lanes to merge, and where the m of each SoA lane lies.
+struct Idx16 {
+  __m512i lo, hi, m[3][2];  // m[c]: component c of the point of lane 4 g + k, point 4 k + g: float 12 k + 3 g + c
+  MBI_TARGET512 Idx16()
+      : lo(_mm512_setr_epi32(0, 1, 2, 3, 8, 9, 10, 11, 16, 17, 18, 19, 24, 25, 26, 27)),
+        hi(_mm512_setr_epi32(4, 5, 6, 7, 12, 13, 14, 15, 20, 21, 22, 23, 28, 29, 30, 31)) {
+    alignas(64) std::int32_t f[16];
+    for (int c = 0; c < 3; ++c) {
+      for (int l = 0; l < 16; ++l) f[l] = 12 * (l % 4) + 3 * (l / 4) + c;
+      m[c][0] = _mm512_load_si512(f);  // from floats 0..31 (2 registers)
+      for (int l = 0; l < 16; ++l) f[l] &= 15;
+      m[c][1] = _mm512_load_si512(f);  // from floats 32..47
+    }
+  }
+  static constexpr __mmask16 high(int c) {  // lanes whose float is 32 or more
+    __mmask16 k = 0;
+    for (int l = 0; l < 16; ++l) k |= (12 * (l % 4) + 3 * (l / 4) + c >= 32 ? 1 : 0) << l;
+    return k;
+  }
+};
+
+// The normals of 16 points in four phases, so that the kernel can interleave them with the
+// positions of the next 16 (each phase alone is a chain of dependent steps): the derivatives
+// of pair512 (X[j], Ad[j], j = 0..7) moved to one component a register (16 points a register,
+// lane 4 g + k holding point 4 k + g), cof(D) m = D_2 x (m_1 D_3 - m_3 D_1) + m_2 (D_3 x D_1)
+// with whole registers, the renormalisation, and back to interleaved xyz.
+struct Normals16 {
+  Soa3 D1, D2, D3;
+  __m512 m1, m2, m3, wx, wy, wz;
+
+  // 1: D_1 and D_2 of the 16 points
+  MBI_TARGET512 void phase1(const __m512* X, const __m512* Ad, const Idx16& I) {
+    __m512 P1[4], P2[4];
+    for (int j = 0; j < 4; ++j) {  // P[j]: the vectors of points 4 j .. 4 j + 3, one to a 128-bit lane
+      P1[j] = _mm512_permutex2var_ps(X[2 * j], I.lo, X[2 * j + 1]);
+      P2[j] = _mm512_permutex2var_ps(Ad[2 * j], I.lo, Ad[2 * j + 1]);
+    }
+    D1 = to_soa(P1[0], P1[1], P1[2], P1[3]);
+    D2 = to_soa(P2[0], P2[1], P2[2], P2[3]);
+  }
+  // 2: D_3, the scale, m (48 floats at mr)
+  template <bool Scaled>
+  MBI_TARGET512 void phase2(const __m512* Ad, const float* mr, __m512 sig, const Idx16& I) {
+    __m512 P3[4];
+    for (int j = 0; j < 4; ++j) P3[j] = _mm512_permutex2var_ps(Ad[2 * j], I.hi, Ad[2 * j + 1]);
+    D3 = to_soa(P3[0], P3[1], P3[2], P3[3]);
+    if constexpr (Scaled)
+      for (Soa3* D : {&D1, &D2, &D3})
+        D->x = _mm512_mul_ps(sig, D->x), D->y = _mm512_mul_ps(sig, D->y), D->z = _mm512_mul_ps(sig, D->z);
+    const __m512 M0 = _mm512_loadu_ps(mr), M1 = _mm512_loadu_ps(mr + 16), M2 = _mm512_loadu_ps(mr + 32);
+    m1 = _mm512_mask_permutexvar_ps(_mm512_permutex2var_ps(M0, I.m[0][0], M1), Idx16::high(0), I.m[0][1], M2);
+    m2 = _mm512_mask_permutexvar_ps(_mm512_permutex2var_ps(M0, I.m[1][0], M1), Idx16::high(1), I.m[1][1], M2);
+    m3 = _mm512_mask_permutexvar_ps(_mm512_permutex2var_ps(M0, I.m[2][0], M1), Idx16::high(2), I.m[2][1], M2);
+  }
+  // 3: E = m1 D3 - m3 D1, w = D2 x E + m2 (D3 x D1), renormalised (0 where |w|^2 <= FLT_MIN)
+  MBI_TARGET512 void phase3() {
+    const __m512 Ex = _mm512_fnmadd_ps(m3, D1.x, _mm512_mul_ps(m1, D3.x));
+    const __m512 Ey = _mm512_fnmadd_ps(m3, D1.y, _mm512_mul_ps(m1, D3.y));
+    const __m512 Ez = _mm512_fnmadd_ps(m3, D1.z, _mm512_mul_ps(m1, D3.z));
+    wx = _mm512_fmadd_ps(m2, _mm512_fmsub_ps(D3.y, D1.z, _mm512_mul_ps(D3.z, D1.y)),
+                         _mm512_fmsub_ps(D2.y, Ez, _mm512_mul_ps(D2.z, Ey)));
+    wy = _mm512_fmadd_ps(m2, _mm512_fmsub_ps(D3.z, D1.x, _mm512_mul_ps(D3.x, D1.z)),
+                         _mm512_fmsub_ps(D2.z, Ex, _mm512_mul_ps(D2.x, Ez)));
+    wz = _mm512_fmadd_ps(m2, _mm512_fmsub_ps(D3.x, D1.y, _mm512_mul_ps(D3.y, D1.x)),
+                         _mm512_fmsub_ps(D2.x, Ey, _mm512_mul_ps(D2.y, Ex)));
+    const __m512 s = _mm512_fmadd_ps(wz, wz, _mm512_fmadd_ps(wy, wy, _mm512_mul_ps(wx, wx)));
+    __m512 inv = _mm512_rsqrt14_ps(s);
+    inv = _mm512_mul_ps(inv, _mm512_fnmadd_ps(_mm512_mul_ps(_mm512_mul_ps(_mm512_set1_ps(0.5f), s), inv), inv,
+                                              _mm512_set1_ps(1.5f)));
+    const __mmask16 ok = _mm512_cmp_ps_mask(s, _mm512_set1_ps(FLT_MIN), _CMP_GT_OQ);
+    wx = _mm512_maskz_mul_ps(ok, wx, inv), wy = _mm512_maskz_mul_ps(ok, wy, inv), wz = _mm512_maskz_mul_ps(ok, wz, inv);
+  }
+  // 4: to out (48 floats), point 4 k + g's vector from lane 4 g + k
+  MBI_TARGET512 void phase4(float* out, bool aligned) const {
+    const __m512 zero = _mm512_setzero_ps();
+    const __m512 u0 = _mm512_unpacklo_ps(wx, wy), u1 = _mm512_unpackhi_ps(wx, wy);
+    const __m512 v0 = _mm512_unpacklo_ps(wz, zero), v1 = _mm512_unpackhi_ps(wz, zero);
+    const __m512 Q[4] = {_mm512_shuffle_ps(u0, v0, _MM_SHUFFLE(1, 0, 1, 0)), _mm512_shuffle_ps(u0, v0, _MM_SHUFFLE(3, 2, 3, 2)),
+                         _mm512_shuffle_ps(u1, v1, _MM_SHUFFLE(1, 0, 1, 0)), _mm512_shuffle_ps(u1, v1, _MM_SHUFFLE(3, 2, 3, 2))};
+    const __m512i pack = _mm512_setr_epi32(0, 1, 2, 4, 5, 6, 8, 9, 10, 12, 13, 14, 0, 0, 0, 0);
+    for (int k = 0; k < 4; ++k) {  // Q[k]: points 4 k .. 4 k + 3 as (x, y, z, 0)
+      const __m512 n = _mm512_permutexvar_ps(pack, Q[k]);
+      store12(out + 12 * k, aligned, _mm512_castps512_ps128(n), _mm512_extractf32x4_ps(n, 1), _mm512_extractf32x4_ps(n, 2));
+    }
+  }
+};
+
+template <bool Scaled, bool Prefetch>
+// Positions and normals, pairs layout, two points to a 512-bit vector, 16 points an iteration:
+// the positions 4 at a time (exactly as eval_x86_pairs512), and after each group of 4 one phase
+// of the normals of the 16 points before (Normals16), then the last groups of 4 (normals4). All in
+// registers: a scratch block for the derivatives cost more in L1 misses (its lines evicted by the
+// element terms of random points) and 4K aliasing than the normals themselves.
+MBI_TARGET512 void eval_x86_normals512(const std::int32_t* rec, const float* coef, const float* mrest, float sigma,
+                                       float* pos, float* nout, long long begin, long long end) {
+  const Idx512 I;
+  const Idx16 I16;
+  const __m512 sig = _mm512_set1_ps(sigma);
+  const bool aligned = reinterpret_cast<std::uintptr_t>(pos + 3 * begin) % 16 == 0 &&
+                       reinterpret_cast<std::uintptr_t>(nout + 3 * begin) % 16 == 0;
+  const long long end16 = begin + (end - begin) / 16 * 16;
+  __m512 X[8], Ad[8], Xp[8], Ap[8];
+  Normals16 N;
+  long long p = begin;
+  for (; p < end16; p += 16) {
+    const bool prev = p > begin;
+    for (int q = 0; q < 4; ++q) {
+      const long long g = p + 4 * q;
+      prefetch_at(rec + 4 * g, 4LL * 4 * kStreamAhead);
+      prefetch_at(mrest + 3 * g, 4LL * 3 * kStreamAhead);
+      if constexpr (Prefetch) prefetch_terms(rec, coef, g);
+      const __m512 W0 = pair512<true>(rec + 4 * g, coef, I, X[2 * q], Ad[2 * q]);
+      const __m512 W1 = pair512<true>(rec + 4 * (g + 2), coef, I, X[2 * q + 1], Ad[2 * q + 1]);
+      store4(pos + 3 * g, aligned, I, W0, W1);
+      if (prev) {
+        if (q == 0) N.phase1(Xp, Ap, I16);
+        if (q == 1) N.phase2<Scaled>(Ap, mrest + 3 * (p - 16), sig, I16);
+        if (q == 2) N.phase3();
+        if (q == 3) N.phase4(nout + 3 * (p - 16), aligned);
+      }
+    }
+    for (int j = 0; j < 8; ++j) Xp[j] = X[j], Ap[j] = Ad[j];
+  }
+  if (p > begin) {
+    N.phase1(Xp, Ap, I16);
+    N.phase2<Scaled>(Ap, mrest + 3 * (p - 16), sig, I16);
+    N.phase3();
+    N.phase4(nout + 3 * (p - 16), aligned);
+  }
+  const __m512i pack = _mm512_setr_epi32(0, 1, 2, 4, 5, 6, 8, 9, 10, 12, 13, 14, 0, 0, 0, 0);
+  for (; p < end; p += 4) {
+    const __m512 W0 = pair512<true>(rec + 4 * p, coef, I, X[0], Ad[0]);
+    const __m512 W1 = pair512<true>(rec + 4 * (p + 2), coef, I, X[1], Ad[1]);
+    store4(pos + 3 * p, aligned, I, W0, W1);
+    const __m512 n = _mm512_permutexvar_ps(pack, normals4<Scaled>(X, Ad, _mm512_loadu_ps(mrest + 3 * p), sig));
+    store12(nout + 3 * p, aligned, _mm512_castps512_ps128(n), _mm512_extractf32x4_ps(n, 1), _mm512_extractf32x4_ps(n, 2));
+  }
+  _mm_sfence();
+}
+#pragma GCC diagnostic pop
+
 using KernelX86 = void (*)(const std::int32_t*, const float*, const float*, float, float*, float*, long long,
                            long long);
 
-// The x86 kernel for: normals or not (positions only: the pairs layout), D scaled or not (only
-// with normals), prefetches or not.
-KernelX86 pick_x86(bool normals, bool scaled, bool prefetch) {
-  static constexpr KernelX86 table[3][2] = {
+// The x86 kernel for: the instruction set (Avx512 or Avx2), normals or not, D scaled or not
+// (only with normals), prefetches or not.
+KernelX86 pick_x86(Simd simd, bool normals, bool scaled, bool prefetch) {
+  static constexpr KernelX86 avx2[3][2] = {
       {eval_x86_pairs<false>, eval_x86_pairs<true>},
       {eval_x86<false, false>, eval_x86<false, true>},
       {eval_x86<true, false>, eval_x86<true, true>},
   };
-  return table[normals ? (scaled ? 2 : 1) : 0][prefetch ? 1 : 0];
+  static constexpr KernelX86 avx512[3][2] = {
+      {eval_x86_pairs512<false>, eval_x86_pairs512<true>},
+      {eval_x86_normals512<false, false>, eval_x86_normals512<false, true>},
+      {eval_x86_normals512<true, false>, eval_x86_normals512<true, true>},
+  };
+  return (simd == Simd::Avx512 ? avx512 : avx2)[normals ? (scaled ? 2 : 1) : 0][prefetch ? 1 : 0];
 }
 
 #endif
 
+// ------------------------------------------------------------------------ coefficients
+// The terms of elements [0, m) from their Bezier points B ((m K) x D, K = (D+1)(D+2)/2, the
+// vertices then the edges in the order of bezier_edges(D)), computed in double and rounded to
+// float once, written in layout L; the floats no term uses are set to 0 (a call may change the
+// layout; the kernels read them but ignore what they give). Returns the largest |c_k| (the
+// scale of the derivatives dx/db_k). Everything below is known at compile time but B: no scratch
+// to clear, no offset table to read per element (1,764 elements on one thread, medians of 3,000
+// calls against the layout tables read at run time: 79 -> 34-56 us).
+template <int D, const Layout& L>
+double prepare_terms(const BezierPoints& B, float* coef, int m, int threads) {
+  constexpr int K = (D + 1) * (D + 2) / 2, NC = coef_stride(D);
+  static constexpr TermIndex ix(D);
+  constexpr auto unused = [] {
+    std::array<bool, NC> free{};
+    for (bool& f : free) f = true;
+    for (int c = 0; c < D; ++c) {
+      free[L.at(0, c)] = false;
+      for (int k = 1; k <= D; ++k) {
+        free[L.at(ix.lin[k], c)] = false;
+        for (int l = k; l <= D; ++l) free[L.at(ix.quad[k][l], c)] = false;
+      }
+    }
+    return free;
+  }();
+  // row of the Bezier point on edge (i, j) within an element's K rows
+  int edge_row[D + 1][D + 1] = {};
+  const auto& edges = bezier_edges(D);
+  for (size_t s = 0; s < edges.size(); ++s)
+    edge_row[edges[s].first][edges[s].second] = edge_row[edges[s].second][edges[s].first] =
+        D + 1 + static_cast<int>(s);
+  const double* col[D];
+  for (int c = 0; c < D; ++c) col[c] = B.data() + c * B.rows();  // B is column-major
+  double dmax = 0;
+  MBI_OMP("omp parallel for schedule(static) num_threads(threads) if (m > 512) reduction(max : dmax)")
+  for (int e = 0; e < m; ++e) {
+    const long long row = static_cast<long long>(e) * K;
+    float* C = coef + static_cast<size_t>(e) * NC;
+    for (int f = 0; f < NC; ++f)
+      if (unused[f]) C[f] = 0.0f;
+    for (int c = 0; c < D; ++c) {
+      const double* P = col[c] + row;
+      auto Pe = [&](int i, int j) { return P[edge_row[i][j]]; };
+      C[L.at(0, c)] = static_cast<float>(P[0]);
+      for (int k = 1; k <= D; ++k) {
+        const double ck = 2 * (Pe(0, k) - P[0]);
+        dmax = std::max(dmax, std::abs(ck));
+        C[L.at(ix.lin[k], c)] = static_cast<float>(ck);
+        C[L.at(ix.quad[k][k], c)] = static_cast<float>(P[0] + P[k] - 2 * Pe(0, k));
+        for (int l = k + 1; l <= D; ++l)
+          C[L.at(ix.quad[k][l], c)] = static_cast<float>(2 * (P[0] - Pe(0, k) - Pe(0, l) + Pe(k, l)));
+      }
+    }
+  }
+  return dmax;
+}
+
 }  // namespace
 
-FastEvaluator::FastEvaluator(const Embedding& emb, int threads) : threads_(threads) {
+bool FastEvaluator::supported(Simd s) {
+#ifdef MBI_FAST_X86
+  if (s == Simd::Avx512) return detail::have_avx512();
+  if (s == Simd::Avx2) return detail::have_avx2_fma();
+#else
+  if (s == Simd::Avx512 || s == Simd::Avx2) return false;
+#endif
+  return true;
+}
+
+const char* FastEvaluator::name(Simd s) {
+  switch (s) {
+    case Simd::Auto: return "auto";
+    case Simd::Avx512: return "avx512";
+    case Simd::Avx2: return "avx2";
+    case Simd::Portable: return "portable";
+  }
+  return "?";
+}
+
+FastEvaluator::FastEvaluator(const Embedding& emb, int threads, Simd simd) : threads_(threads) {
   d_ = emb.dim();
   if (d_ != 2 && d_ != 3)
     throw Error("FastEvaluator: the embedding must be 2D or 3D (bary with 3 or 4 columns), got " +
                 std::to_string(emb.bary.cols()) + " columns");
+  if (simd != Simd::Auto && !supported(simd))
+    throw Error(std::string("FastEvaluator: this CPU cannot run the ") + name(simd) + " kernels");
+  if (simd == Simd::Auto) simd = supported(Simd::Avx512) ? Simd::Avx512 : supported(Simd::Avx2) ? Simd::Avx2 : Simd::Portable;
+  simd_ = d_ == 3 ? simd : Simd::Portable;
   if (emb.bary.rows() != emb.element.size())
     throw Error("FastEvaluator: embedding has " + std::to_string(emb.element.size()) + " elements but " +
                 std::to_string(emb.bary.rows()) + " coordinate rows");
@@ -506,55 +865,12 @@ void FastEvaluator::prepare(const BezierPoints& B, bool normals) {
                 std::to_string(d) + " with m >= " + std::to_string(m_) + ", got " +
                 std::to_string(B.rows()) + " x " + std::to_string(B.cols()));
   if (normals && !has_rest_normals()) throw Error("FastEvaluator: normals asked for, but no rest normals were set");
-  const int NC = coef_stride(d);
-  coef_.resize(static_cast<size_t>(m_) * NC + 16);  // zeros: the padding stays 0
+  coef_.resize(static_cast<size_t>(m_) * coef_stride(d) + 16);
   float* const coef = align64(coef_.data());
-  const auto& edges = bezier_edges(d);
-  // local edge index of pair (i, j)
-  int edge_of[4][4] = {};
-  for (size_t s = 0; s < edges.size(); ++s) {
-    edge_of[edges[s].first][edges[s].second] = static_cast<int>(s);
-    edge_of[edges[s].second][edges[s].first] = static_cast<int>(s);
-  }
-  const TermIndex ix(d);
-  // where each coefficient goes, and the floats no term uses (set to 0: a call may change the
-  // layout; the kernels read them but ignore what they give)
-  const Layout& L = layout_for(d, normals);
-  int o0[3] = {}, olin[4][3] = {}, oquad[4][4][3] = {}, pads[32] = {}, npads = 0;
-  bool used[32] = {};
-  for (int c = 0; c < d; ++c) {
-    used[o0[c] = L.at(0, c)] = true;
-    for (int k = 1; k <= d; ++k) {
-      used[olin[k][c] = L.at(ix.lin[k], c)] = true;
-      for (int l = 1; l <= d; ++l) used[oquad[k][l][c] = L.at(ix.quad[k][l], c)] = true;
-    }
-  }
-  for (int f = 0; f < NC; ++f)
-    if (!used[f]) pads[npads++] = f;
-  const int m = m_;
-  double dmax = 0;  // the largest |c_k|: the scale of the derivatives dx/db_k
-  MBI_OMP("omp parallel for schedule(static) num_threads(threads()) if (m > 512) reduction(max : dmax)")
-  for (int e = 0; e < m; ++e) {
-    auto P = [&](int k, int c) { return B(static_cast<Eigen::Index>(e) * K + k, c); };
-    auto Pe = [&](int i, int j, int c) { return P(d + 1 + edge_of[i][j], c); };
-    double cl[4][3] = {}, cq[4][4][3] = {};  // c_k, c_kl (symmetric)
-    float* C = coef + static_cast<size_t>(e) * NC;
-    for (int f = 0; f < npads; ++f) C[pads[f]] = 0.0f;
-    for (int c = 0; c < d; ++c) C[o0[c]] = static_cast<float>(P(0, c));
-    for (int k = 1; k <= d; ++k)
-      for (int c = 0; c < d; ++c) {
-        cl[k][c] = 2 * (Pe(0, k, c) - P(0, c));
-        dmax = std::max(dmax, std::abs(cl[k][c]));
-        cq[k][k][c] = P(0, c) + P(k, c) - 2 * Pe(0, k, c);
-        for (int l = k + 1; l <= d; ++l)
-          cq[k][l][c] = cq[l][k][c] = 2 * (P(0, c) - Pe(0, k, c) - Pe(0, l, c) + Pe(k, l, c));
-      }
-    for (int k = 1; k <= d; ++k)
-      for (int c = 0; c < d; ++c) {
-        C[olin[k][c]] = static_cast<float>(cl[k][c]);
-        for (int l = k; l <= d; ++l) C[oquad[k][l][c]] = static_cast<float>(cq[k][l][c]);
-      }
-  }
+  const int nt = threads();
+  const double dmax = d == 2        ? prepare_terms<2, kPacked2>(B, coef, m_, nt)
+                      : &layout_for(d, normals, simd_) == &kPacked3 ? prepare_terms<3, kPacked3>(B, coef, m_, nt)
+                                    : prepare_terms<3, kPairs>(B, coef, m_, nt);
   // sigma = 2^-e with dmax in [2^(e-1), 2^e): normals scale D by it (exact), so that cof(D) neither
   // underflows nor overflows in float for models of any size float can hold.
   int ex = 0;
@@ -612,11 +928,11 @@ void FastEvaluator::evaluate(const BezierPoints& B, float* positions, float* nor
   const float sigma = dscale_;
   const int d = d_;
   const long long p = p_;
-  const Layout& L = layout_for(d, with_normals);
+  const Layout& L = layout_for(d, with_normals, simd_);
 #ifdef MBI_FAST_X86
   // sigma within 2^+-16 leaves |cof(D) m|^2 within 2^+-64 (m: [0.5, 1)): no scaling needed
-  const KernelX86 x86 = d == 3 && detail::have_avx2_fma()
-                            ? pick_x86(with_normals, !(sigma >= 0x1p-16f && sigma <= 0x1p16f), !coherent_)
+  const KernelX86 x86 = simd_ == Simd::Avx512 || simd_ == Simd::Avx2
+                            ? pick_x86(simd_, with_normals, !(sigma >= 0x1p-16f && sigma <= 0x1p16f), !coherent_)
                             : nullptr;
 #endif
   auto run = [&](long long begin, long long end) {

@@ -42,7 +42,60 @@ Setup make(int d, int points, double lo, double hi, Eigen::RowVectorXd offset = 
 // Float round-off bound for a position: 32 ulp of the largest control-point coordinate (the
 // coefficients are differences of control points and b is in [0, 1] inside an element).
 double position_tolerance(const BezierPoints& B) { return 32 * FLT_EPSILON * B.cwiseAbs().maxCoeff(); }
+
+// Every kernel this CPU runs, the widest first: each test below runs on all of them.
+std::vector<Simd> kernels() {
+  std::vector<Simd> k;
+  for (Simd v : {Simd::Avx512, Simd::Avx2, Simd::Portable})
+    if (FastEvaluator::supported(v)) k.push_back(v);
+  return k;
+}
 }  // namespace
+
+TEST_CASE("FastEvaluator: the kernels this CPU runs, and which one Auto picks", "[fast_evaluate]") {
+  const Setup s3 = make(3, 10, 0.0, 1.0), s2 = make(2, 10, 0.0, 1.0);
+  const std::vector<Simd> k = kernels();
+  REQUIRE(k.back() == Simd::Portable);
+  CHECK(FastEvaluator::supported(Simd::Auto));
+  WARN("kernels on this CPU: " << [&] {
+    std::string names;
+    for (Simd v : k) names += std::string(names.empty() ? "" : ", ") + FastEvaluator::name(v);
+    return names;
+  }());
+  CHECK(FastEvaluator(s3.emb).simd() == k.front());  // Auto: the widest
+  for (Simd v : k) CHECK(FastEvaluator(s3.emb, 0, v).simd() == v);
+  CHECK(FastEvaluator(s2.emb).simd() == Simd::Portable);  // 2D: the portable loop
+  CHECK(std::string(FastEvaluator::name(Simd::Avx512)) == "avx512");
+  CHECK(std::string(FastEvaluator::name(Simd::Portable)) == "portable");
+  for (Simd v : {Simd::Avx512, Simd::Avx2})
+    if (!FastEvaluator::supported(v))
+      CHECK_THROWS_WITH(FastEvaluator(s3.emb, 0, v), Catch::Contains(FastEvaluator::name(v)));
+}
+
+// The two x86 kernels sum every position in the same order with the same fused multiply-adds,
+// so they agree exactly (compared with ==, which takes -0 == +0); their normals differ in the
+// last bits (other formulas for cof(D) m), each within 2e-5 of the double kernel's.
+TEST_CASE("FastEvaluator: the AVX-512 and AVX2 kernels give the same positions", "[fast_evaluate]") {
+  if (!FastEvaluator::supported(Simd::Avx512)) {
+    WARN("skipped: this CPU has no AVX-512");
+    return;
+  }
+  const Setup s = make(3, 100003, -0.2, 1.2);
+  for (const BezierPoints* B : {&s.B, &s.Bbi}) {
+    RowMatrixXf p[2], n[2], q[2];
+    int i = 0;
+    for (Simd v : {Simd::Avx512, Simd::Avx2}) {
+      FastEvaluator fe(s.emb, 0, v);
+      fe.set_rest_normals(s.normals);
+      fe.evaluate(*B, p[i], n[i]);
+      fe.evaluate(*B, q[i]);
+      ++i;
+    }
+    CHECK((p[0].array() == p[1].array()).all());
+    CHECK((q[0].array() == q[1].array()).all());
+    CHECK((n[0] - n[1]).cwiseAbs().maxCoeff() < 4e-5f);
+  }
+}
 
 TEST_CASE("FastEvaluator: float positions and normals agree with the double kernel to float round-off", "[fast_evaluate]") {
   for (int d : {2, 3}) {
@@ -51,10 +104,11 @@ TEST_CASE("FastEvaluator: float positions and normals agree with the double kern
       // points inside and outside (extrapolated) the control mesh
       const Setup s = make(d, 50001, -0.2, 1.2, offset);
       REQUIRE(!s.emb.outside.empty());
-      for (const BezierPoints* B : {&s.B, &s.Bbi}) {
+      for (const BezierPoints* B : {&s.B, &s.Bbi}) for (Simd v : kernels()) {
+        INFO("d = " << d << ", far " << far << ", kernel " << FastEvaluator::name(v));
         Eigen::MatrixXd pd, nd;
         evaluate<double>(*B, s.emb, s.normals, pd, nd, 1);
-        FastEvaluator fe(s.emb);
+        FastEvaluator fe(s.emb, 0, v);
         fe.set_rest_normals(s.normals);
         RowMatrixXf pf, nf;
         fe.evaluate(*B, pf, nf);
@@ -78,12 +132,14 @@ TEST_CASE("FastEvaluator: float positions and normals agree with the double kern
 
 TEST_CASE("FastEvaluator: thread counts, caller memory and repeated calls give identical results", "[fast_evaluate]") {
   const Setup s = make(3, 200003, 0.0, 1.0);
-  FastEvaluator ref(s.emb, 1);
+  for (Simd v : kernels()) {
+  INFO("kernel " << FastEvaluator::name(v));
+  FastEvaluator ref(s.emb, 1, v);
   ref.set_rest_normals(s.normals);
   RowMatrixXf p1, n1;
   ref.evaluate(s.B, p1, n1);
   for (int threads : {2, 3, 7}) {
-    FastEvaluator fe(s.emb, threads);
+    FastEvaluator fe(s.emb, threads, v);
     fe.set_rest_normals(s.normals);
     RowMatrixXf p, n;
     fe.evaluate(s.B, p, n);
@@ -107,19 +163,24 @@ TEST_CASE("FastEvaluator: thread counts, caller memory and repeated calls give i
     fe.evaluate(s.B, buf.data() + 1, nullptr);
     CHECK((pm - p1).cwiseAbs().maxCoeff() == 0.0f);
   }
+  }
+  FastEvaluator ref(s.emb, 1);
   CHECK(ref.bytes_per_point(false) == 28);
   CHECK(ref.bytes_per_point(true) == 52);
 }
 
-// The vector kernel takes groups of 4 points and, with normals, finishes each group two groups
-// later (positions, then cof(D) m, then the renormalisation): 1-4 groups and tails of 1-3 points.
+// The vector kernels take groups of 4 points; with normals the AVX2 kernel finishes each group
+// two groups later (positions, then cof(D) m, then the renormalisation), the AVX-512 kernel takes
+// groups of 16 with the normals of each finished during the next, then groups of 4: 1-4 groups
+// of 4, 1-4 groups of 16 with 0-3 groups of 4 after them, and tails of 1-3 points.
 TEST_CASE("FastEvaluator: few points (tails shorter than a group of 4, the first groups) and an empty embedding", "[fast_evaluate]") {
-  for (int p : {1, 2, 3, 4, 5, 7, 8, 9, 11, 12, 13, 16}) {
-    CAPTURE(p);
+  for (int p : {1, 2, 3, 4, 5, 7, 8, 9, 11, 12, 13, 15, 16, 17, 19, 20, 28, 31, 32, 33, 35, 47, 48, 51, 64, 67, 79, 100})
+  for (Simd v : kernels()) {
+    INFO("points " << p << ", kernel " << FastEvaluator::name(v));
     const Setup s = make(3, p, 0.0, 1.0);
     Eigen::MatrixXd pd, nd;
     evaluate<double>(s.B, s.emb, s.normals, pd, nd, 1);
-    FastEvaluator fe(s.emb);
+    FastEvaluator fe(s.emb, 0, v);
     fe.set_rest_normals(s.normals);
     RowMatrixXf pf, nf;
     fe.evaluate(s.B, pf, nf);
@@ -156,13 +217,14 @@ TEST_CASE("FastEvaluator: points stored by element agree with the double kernel"
   sorted.outside.clear();
   Eigen::MatrixXd pd, nd;
   evaluate<double>(s.B, sorted, normals, pd, nd, 1);
-  for (int threads : {1, 2}) {
-    FastEvaluator fe(sorted, threads);
+  for (int threads : {1, 2}) for (Simd v : kernels()) {
+    INFO("threads " << threads << ", kernel " << FastEvaluator::name(v));
+    FastEvaluator fe(sorted, threads, v);
     REQUIRE(fe.coherent());
     REQUIRE(fe.threads() == threads);
     fe.set_rest_normals(normals);
-    // positions alone first (the pairs layout), then with normals (the packed layout), then alone
-    // again: the layout changes between calls, the positions do not
+    // positions alone first (the pairs layout), then with normals (the packed layout, but for the
+    // AVX-512 kernel), then alone again: the layout may change between calls, the positions do not
     RowMatrixXf p0, pf, nf, p2;
     fe.evaluate(s.B, p0);
     fe.evaluate(s.B, pf, nf);
@@ -181,16 +243,16 @@ TEST_CASE("FastEvaluator: normals at extreme model scales, and zero on a collaps
     const Setup s = make(d, 4003, -0.1, 1.1);
     Eigen::MatrixXd pd, nd;
     evaluate<double>(s.B, s.emb, s.normals, pd, nd, 1);
-    for (double scale : {1e-30, 1e-20, 1e-12, 1e12, 1e20, 1e30}) {
+    for (double scale : {1e-30, 1e-20, 1e-12, 1e12, 1e20, 1e30}) for (Simd v : kernels()) {
       // the same model scaled: Bezier points times scale, gradients over the rest space divided
       Embedding emb = s.emb;
       emb.gradients /= scale;
       const BezierPoints B = s.B * scale;
-      FastEvaluator fe(emb, 1);
+      FastEvaluator fe(emb, 1, v);
       fe.set_rest_normals(s.normals);
       RowMatrixXf pf, nf;
       fe.evaluate(B, pf, nf);
-      INFO("d = " << d << ", scale " << scale);
+      INFO("d = " << d << ", scale " << scale << ", kernel " << FastEvaluator::name(v));
       CHECK(((pf.cast<double>() / scale) - pd).cwiseAbs().maxCoeff() <= position_tolerance(s.B));
       CHECK((nf.cast<double>() - nd).cwiseAbs().maxCoeff() < 2e-5);
     }
@@ -200,18 +262,21 @@ TEST_CASE("FastEvaluator: normals at extreme model scales, and zero on a collaps
     const int K = (d + 1) * (d + 2) / 2;
     const int e = s.emb.element(0);
     for (int k = 0; k < K; ++k) B.row(e * K + k) = s.B.row(e * K);
-    FastEvaluator fe(s.emb, 1);
-    fe.set_rest_normals(s.normals);
-    RowMatrixXf pf, nf;
-    fe.evaluate(B, pf, nf);
-    int collapsed = 0;
-    for (Eigen::Index i = 0; i < nf.rows(); ++i) {
-      if (s.emb.element(i) != e) continue;
-      ++collapsed;
-      CHECK(nf.row(i).norm() == 0.0f);
+    for (Simd v : kernels()) {
+      INFO("d = " << d << ", kernel " << FastEvaluator::name(v));
+      FastEvaluator fe(s.emb, 1, v);
+      fe.set_rest_normals(s.normals);
+      RowMatrixXf pf, nf;
+      fe.evaluate(B, pf, nf);
+      int collapsed = 0;
+      for (Eigen::Index i = 0; i < nf.rows(); ++i) {
+        if (s.emb.element(i) != e) continue;
+        ++collapsed;
+        CHECK(nf.row(i).norm() == 0.0f);
+      }
+      CHECK(collapsed > 0);
+      CHECK(std::isfinite(nf.cast<double>().sum()));
     }
-    CHECK(collapsed > 0);
-    CHECK(std::isfinite(nf.cast<double>().sum()));
   }
 }
 

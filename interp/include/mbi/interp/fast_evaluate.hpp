@@ -11,7 +11,8 @@
 // per element; a point then costs 10 multiply-adds in 3D (on x86 in 256-bit vectors: one point
 // and two terms to a vector, or two points with normals), and its normal 6 more for the
 // derivatives D_k = dx/db_k, then cof(D) (cof(A)^T n), renormalised.
-// Threads: OpenMP when the build has it.
+// Threads: OpenMP when the build has it. Kernels: picked once per evaluator from the vector
+// instructions the CPU has (Simd), or asked for.
 //
 // Results agree with interp::evaluate<double> to float round-off (a few ulp of the coordinate
 // magnitudes: tests/interp/test_fast_evaluate.cpp states the bound). interp::evaluate<double>
@@ -28,12 +29,31 @@ namespace mbi::interp {
 /// p x d float, row-major: point i's coordinates are contiguous (interleaved xyz).
 using RowMatrixXf = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
+/// The vector instructions of an evaluator's kernels (3D; 2D embeddings always run Portable).
+/// Every kernel sums in the same order, so each gives the same positions with and without normals;
+/// different kernels agree to float round-off (they differ in the sign of a zero and, with
+/// normals, in the last bits of the normals).
+enum class Simd {
+  Auto,      ///< the widest the CPU has (what the constructor picks by default)
+  Avx512,    ///< AVX-512 F, DQ and VL (with AVX2 and FMA): two points to a 512-bit vector
+  Avx2,      ///< AVX2 and FMA: one point (positions) or two (with normals) to a 256-bit vector
+  Portable,  ///< plain C++, any CPU
+};
+
 class FastEvaluator {
  public:
   /// Packs emb (element ids, float barycentric coordinates) and, for normals, its per-element
-  /// basis gradients. threads = 0: all cores (OpenMP's default team size); 1 = serial.
-  /// Throws Error on an inconsistent embedding.
-  explicit FastEvaluator(const Embedding& emb, int threads = 0);
+  /// basis gradients. threads = 0: all cores (OpenMP's default team size); 1 = serial. simd: the
+  /// kernels (Auto: the widest this CPU has). Throws Error on an inconsistent embedding or a simd
+  /// the CPU lacks (supported() tells).
+  explicit FastEvaluator(const Embedding& emb, int threads = 0, Simd simd = Simd::Auto);
+
+  /// Whether this CPU (and build) can run the kernels of s (Auto and Portable: always).
+  static bool supported(Simd s);
+  /// "avx512", "avx2", "portable" (or "auto").
+  static const char* name(Simd s);
+  /// The kernels this evaluator runs (never Auto; Portable for 2D).
+  Simd simd() const { return simd_; }
 
   /// Rest normals (p x d, unit) for evaluate(B, positions, normals); kept per point as float
   /// m = cof(A)^T n (A: the element's basis gradients), scaled by a power of 2.
@@ -68,6 +88,7 @@ class FastEvaluator {
   static constexpr std::size_t kSlack = 1024;  // floats (4 KiB) to move the rest-normal block in
 
   int d_ = 3, m_ = 0, threads_ = 0;
+  Simd simd_ = Simd::Portable;
   bool coherent_ = false;              // most points follow a point of the same element
   float dscale_ = 1.0f;                // per call: a power of 2 near 1 / max |dx/db_k| (normals)
   long long p_ = 0;
