@@ -22,6 +22,9 @@
 //                          3 x 8 B; per call the n x 3 control positions.
 //   BM_PeerMbiFormula      per point: element id 4 B + 4 coordinates 4 x 8 B + rest point
 //                          3 x 8 B + output 3 x 8 B; per call x_i, u_i, M_i (15 doubles a vertex).
+//   BM_EvalKernels         BM_Eval's float rows at 1M points with each kernel the CPU runs
+//                          (interp::Simd: AVX-512, AVX2, portable); BM_Eval runs the one picked
+//                          at run time (its label names it).
 //   BM_Triad               a[i] = b[i] + s c[i]: 3 x 8 B per element (as STREAM counts it).
 #include "bench_common.hpp"
 
@@ -31,6 +34,7 @@
 
 #include <algorithm>
 #include <array>
+#include <string>
 #include <thread>
 
 namespace {
@@ -58,8 +62,10 @@ void eval_loop_double(benchmark::State& st, const BezierPoints& B, const Cloud& 
   }
 }
 
-void eval_loop_float(benchmark::State& st, const BezierPoints& B, const Cloud& c, bool normals, int threads) {
-  mbi::interp::FastEvaluator fe(c.emb, threads);
+void eval_loop_float(benchmark::State& st, const BezierPoints& B, const Cloud& c, bool normals, int threads,
+                     mbi::interp::Simd simd = mbi::interp::Simd::Auto) {
+  mbi::interp::FastEvaluator fe(c.emb, threads, simd);
+  st.SetLabel(mbi::interp::FastEvaluator::name(fe.simd()));  // the kernels that ran
   if (normals) fe.set_rest_normals(c.normals);
   mbi::interp::RowMatrixXf pos, nout;
   if (normals) fe.evaluate(B, pos, nout);  // first call sizes the outputs
@@ -106,6 +112,34 @@ void eval_args(benchmark::internal::Benchmark* b) {
             for (int normals : {0, 1}) b->Args({p, control, mbi, threads, dbl, normals});
 }
 BENCHMARK(BM_Eval)->Apply(eval_args)->Unit(benchmark::kMillisecond)->UseRealTime()
+    ->MinTime(mbi::bench::min_time());
+
+// The float kernels side by side (interp::Simd): 1M points (quick: 35K), modified-BI, 448 control
+// vertices. Arguments: simd (1 = AVX-512, 2 = AVX2, 3 = portable), threads (0 = all), normals.
+// A kernel this CPU cannot run is skipped, saying so.
+void BM_EvalKernels(benchmark::State& st) {
+  using mbi::interp::FastEvaluator;
+  using mbi::interp::Simd;
+  const long long p = mbi::bench::quick() ? 35000 : 1000000;
+  const Simd simd = st.range(0) == 1 ? Simd::Avx512 : st.range(0) == 2 ? Simd::Avx2 : Simd::Portable;
+  const int threads = static_cast<int>(st.range(1));
+  const bool normals = st.range(2) != 0;
+  if (!FastEvaluator::supported(simd)) {
+    st.SkipWithError((std::string("this CPU cannot run the ") + FastEvaluator::name(simd) + " kernels").c_str());
+    return;
+  }
+  const Cage& cage = mbi::bench::box_cage(450);
+  const Cloud& c = mbi::bench::cloud(450, p);
+  eval_loop_float(st, cage.bezier_mbi, c, normals, threads, simd);
+  const double bytes = eval_bytes(p, cage.T.rows(), false, normals);
+  st.counters["points"] = static_cast<double>(p);
+  st.counters["bytes_per_eval"] = bytes;
+  st.counters["threads"] = threads > 0 ? threads : all_threads();
+  st.SetItemsProcessed(static_cast<int64_t>(st.iterations()) * p);
+  st.SetBytesProcessed(static_cast<int64_t>(static_cast<double>(st.iterations()) * bytes));
+}
+BENCHMARK(BM_EvalKernels)->ArgNames({"simd", "threads", "normals"})
+    ->ArgsProduct({{1, 2, 3}, {1, 0}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime()
     ->MinTime(mbi::bench::min_time());
 
 // ------------------------------------------------------------------------------------- peers

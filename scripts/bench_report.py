@@ -16,7 +16,7 @@ import re
 import subprocess
 import sys
 
-ALLOWED_SKIPS = ("no OpenGL", "MBI_MODELS_DIR is not set")
+ALLOWED_SKIPS = ("no OpenGL", "MBI_MODELS_DIR is not set", "this CPU cannot run the")
 
 # The paper's Table 1 (Huang et al. 2008), ms.
 PAPER = {
@@ -57,7 +57,33 @@ def machine_facts(repo):
         "commit_dirty": bool(dirty) and dirty != "unknown",
         "branch": git("rev-parse", "--abbrev-ref", "HEAD"),
         "kernel": os.uname().release,
+        "cpu_simd": " ".join(f for f in ("avx2", "fma", "avx512f", "avx512dq", "avx512vl")
+                             if re.search(r"^flags\s*:.*\b" + f + r"\b", read("/proc/cpuinfo"), re.M)),
+        "cpu_family_model": cpu_family_model(),
+        "caches_getconf": caches_getconf(),
     }
+
+
+def caches_getconf():
+    """The data caches as getconf reports them ('L1 data 48 KiB, L2 1024 KiB, ...'), for machines
+    whose sysfs has no cache entries (Google Benchmark then records none)."""
+    out = []
+    for name, label in (("LEVEL1_DCACHE_SIZE", "L1 data"), ("LEVEL2_CACHE_SIZE", "L2"), ("LEVEL3_CACHE_SIZE", "L3")):
+        try:
+            v = int(subprocess.run(["getconf", name], capture_output=True, text=True, check=True).stdout.strip() or 0)
+        except (OSError, ValueError, subprocess.CalledProcessError):
+            v = 0
+        if v > 0:
+            out.append(f"{label} {v // 1024} KiB")
+    return ", ".join(out) + " (getconf)" if out else ""
+
+
+def cpu_family_model():
+    """'family 26, model 2' from /proc/cpuinfo (x86), or ''."""
+    info = read("/proc/cpuinfo")
+    fam = re.search(r"^cpu family\s*:\s*(\d+)", info, re.M)
+    mod = re.search(r"^model\s*:\s*(\d+)", info, re.M)
+    return f"family {fam.group(1)}, model {mod.group(1)}" if fam and mod else ""
 
 
 # ------------------------------------------------------------------------------------ parsing
@@ -262,6 +288,10 @@ def report(data, json_path, wall_s, baseline=None, baseline_path=None):
     renderer = gpu_rows[0]["b"].get("label", "") if gpu_rows else None
     triad1, triadN = R.find("BM_Triad", threads=1), R.find("BM_Triad", threads=0)
     nthreads = int(triadN["threads"]) if triadN else (facts.get("cores") or 1)
+    float_rows = [r for r in R.all("BM_Eval") if not r["kv"].get("double")]
+    kernel = float_rows[0]["b"].get("label") if float_rows else None
+    if facts.get("cpu_simd"):
+        kernel = (kernel or "?") + f" (CPU flags: {facts['cpu_simd']})"
 
     w(f"# mbi benchmarks: {stem}" + (" (quick mode)" if quick else ""))
     w("")
@@ -272,12 +302,14 @@ def report(data, json_path, wall_s, baseline=None, baseline_path=None):
     w(table(["", ""], [
         ["date", ctx.get("date", "?")],
         ["host", ctx.get("host_name", "?")],
-        ["CPU", f"{facts.get('cpu_model', '?')}, {ctx.get('num_cpus', '?')} logical cores at "
-                f"{ctx.get('mhz_per_cpu', '?')} MHz"],
+        ["CPU", f"{facts.get('cpu_model', '?')}"
+                + (f" ({facts['cpu_family_model']})" if facts.get("cpu_family_model") else "")
+                + f", {ctx.get('num_cpus', '?')} logical cores at {ctx.get('mhz_per_cpu', '?')} MHz"],
         ["caches", ", ".join(f"L{c['level']} {c['type'].lower()} {c['size'] // 1024} KiB"
                              + (f" (x{ctx['num_cpus'] // c['num_sharing']})" if c.get('num_sharing') else "")
-                             for c in ctx.get("caches", []))],
+                             for c in ctx.get("caches", [])) or facts.get("caches_getconf", "?")],
         ["memory", f"{facts.get('memory_gib', '?')} GiB"],
+        ["float kernel (picked at run time)", kernel or "?"],
         ["OpenGL renderer", renderer or "none (GPU rows skipped)"],
         ["commit", f"`{facts.get('commit', '?')}`" + (" (with local changes)" if facts.get("commit_dirty") else "")
                    + f" on `{facts.get('branch', '?')}`"],
@@ -307,8 +339,18 @@ def report(data, json_path, wall_s, baseline=None, baseline_path=None):
     w("")
     w("Each measured in this run; ratios are between benchmarks of this same run.")
     if baseline is not None:
+        bc = baseline["context"]
+        same = (bctx.get("cpu_family_model") and bctx.get("cpu_family_model") == facts.get("cpu_family_model")
+                and bc.get("mhz_per_cpu") == ctx.get("mhz_per_cpu"))
+        where = ("same machine" if same else
+                 f"measured on {bctx.get('cpu_model', 'a CPU it did not record')}"
+                 + (f" ({bctx['cpu_family_model']})" if bctx.get("cpu_family_model") else "")
+                 + f", {bc.get('num_cpus', '?')} cores at {bc.get('mhz_per_cpu', '?')} MHz, "
+                 + (", ".join(f"L{c['level']} {c['type'].lower()} {c['size'] // 1024} KiB" for c in bc.get("caches", [])
+                              if c.get("level") in (1, 2) and c.get("type") != "Instruction") or "caches not recorded")
+                 + ": not this machine, so compare its ratios, not its times")
         w(f"'before' = the same rows from [{os.path.basename(baseline_path)}]({os.path.basename(baseline_path)}), "
-          f"commit `{bctx.get('commit', baseline['context'].get('mbi_commit', '?'))}`, same machine; its own ratios "
+          f"commit `{bctx.get('commit', baseline['context'].get('mbi_commit', '?'))}`, {where}; its own ratios "
           "come from its own run.")
     w("")
     w(table(["target"] + (["before"] if baseline is not None else []) + ["measured", "target", "met?", "how"], rows))
@@ -409,6 +451,32 @@ def report(data, json_path, wall_s, baseline=None, baseline_path=None):
     w(table(["peer", "what", "points", "control", "time", "Mpoints/s", "GB/s", "% triad (1 thread)",
              "max diff"], peers))
     w("")
+    kern = R.all("BM_EvalKernels")
+    if kern:
+        names = {1: "AVX-512", 2: "AVX2", 3: "portable"}
+        w(f"The float kernels side by side (`BM_EvalKernels`, `interp::Simd`): {int(kern[0]['b']['points']):,} "
+          f"random points, modified-BI, 448 control vertices; % triad = of the triad on as many threads as the "
+          "kernel used (fewer than 65,536 points run on one); normals ratio = positions + "
+          "normals over positions alone, same kernel and threads:")
+        w("")
+        krows = []
+        for simd in (1, 2, 3):
+            for threads in (1, 0):
+                pos = R.find("BM_EvalKernels", simd=simd, threads=threads, normals=0)
+                nrm = R.find("BM_EvalKernels", simd=simd, threads=threads, normals=1)
+                if not pos and not nrm:
+                    continue
+                used = int((pos or nrm).get("threads_used", (pos or nrm)["threads"]))
+                tri = triad1 if used == 1 else triadN  # the triad on as many threads as ran
+                cell = lambda b: (f"{f_ms(ms(b))} ({100 * gbs(b) / gbs(tri):.0f}%)" if tri else f_ms(ms(b))) if b else "n/a"
+                krows.append([names[simd], "1" if threads == 1 else f"all ({used} used)",
+                              cell(pos), cell(nrm), f"{ms(nrm) / ms(pos):.2f}x" if pos and nrm else "n/a"])
+        w(table(["kernel", "threads", "positions (% triad)", "positions + normals (% triad)", "normals ratio"], krows))
+        w("")
+        skipped = sorted({m for n, m in R.errors() if n.startswith("BM_EvalKernels")})
+        if skipped:
+            w("Not run: " + "; ".join(skipped) + ".")
+            w("")
     w("### The machine's limit")
     w("")
     w(table(["STREAM-style triad a = b + s c", "GB/s", "array size"],
