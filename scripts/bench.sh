@@ -8,8 +8,8 @@
 #   bash scripts/bench.sh --quick    small sizes, short runs, no 10K precompute (under a minute);
 #                                    writes to build/bench-quick/ unless --out is given (CI)
 #   bash scripts/bench.sh --out DIR  write into DIR instead
-#   MBI_BENCH_BASELINE=OLD.json      an earlier run (e.g. before a change; the report says whether it ran on this machine): the
-#                                    report's target table gets its figures as a 'before' column
+#   MBI_BENCH_BASELINE=OLD.json      an earlier run (e.g. before a change): its target figures as
+#                                    a 'before' column (the report says if it ran elsewhere)
 #   MBI_BENCH_REPETITIONS=N          repetitions of each benchmark (default 3; --quick: 1)
 #
 # Installs missing Debian packages and builds mbi-bench with the release preset first (set
