@@ -6,7 +6,8 @@
 --machine records this machine (CPU model, cores, memory, commit) into the JSON's context first
 (bench.sh does it right after the run), so that a JSON file carries its own description.
 Writes RESULT.md beside the JSON and RESULT-<plot>.png. Exit status 1 when a benchmark failed
-for a reason other than "no OpenGL" or "MBI_MODELS_DIR is not set" (the report is still written).
+for a reason other than "no OpenGL", "MBI_MODELS_DIR is not set" or a float kernel this CPU cannot
+run (the report is still written).
 """
 import argparse
 import json
@@ -37,7 +38,8 @@ def read(path):
 
 
 def machine_facts(repo):
-    cpu = re.search(r"^model name\s*:\s*(.*)$", read("/proc/cpuinfo"), re.M)
+    cpuinfo = read("/proc/cpuinfo")
+    cpu = re.search(r"^model name\s*:\s*(.*)$", cpuinfo, re.M)
     mem = re.search(r"^MemTotal:\s*(\d+) kB", read("/proc/meminfo"), re.M)
 
     def git(*args):
@@ -58,8 +60,8 @@ def machine_facts(repo):
         "branch": git("rev-parse", "--abbrev-ref", "HEAD"),
         "kernel": os.uname().release,
         "cpu_simd": " ".join(f for f in ("avx2", "fma", "avx512f", "avx512dq", "avx512vl")
-                             if re.search(r"^flags\s*:.*\b" + f + r"\b", read("/proc/cpuinfo"), re.M)),
-        "cpu_family_model": cpu_family_model(),
+                             if re.search(r"^flags\s*:.*\b" + f + r"\b", cpuinfo, re.M)),
+        "cpu_family_model": cpu_family_model(cpuinfo),
         "caches_getconf": caches_getconf(),
     }
 
@@ -78,9 +80,8 @@ def caches_getconf():
     return ", ".join(out) + " (getconf)" if out else ""
 
 
-def cpu_family_model():
-    """'family 26, model 2' from /proc/cpuinfo (x86), or ''."""
-    info = read("/proc/cpuinfo")
+def cpu_family_model(info):
+    """'family 26, model 2' from /proc/cpuinfo's text (x86), or ''."""
     fam = re.search(r"^cpu family\s*:\s*(\d+)", info, re.M)
     mod = re.search(r"^model\s*:\s*(\d+)", info, re.M)
     return f"family {fam.group(1)}, model {mod.group(1)}" if fam and mod else ""
@@ -342,13 +343,16 @@ def report(data, json_path, wall_s, baseline=None, baseline_path=None):
         bc = baseline["context"]
         same = (bctx.get("cpu_family_model") and bctx.get("cpu_family_model") == facts.get("cpu_family_model")
                 and bc.get("mhz_per_cpu") == ctx.get("mhz_per_cpu"))
+        known = bool(bctx.get("cpu_family_model"))  # older reports did not record the CPU's family
         where = ("same machine" if same else
                  f"measured on {bctx.get('cpu_model', 'a CPU it did not record')}"
                  + (f" ({bctx['cpu_family_model']})" if bctx.get("cpu_family_model") else "")
                  + f", {bc.get('num_cpus', '?')} cores at {bc.get('mhz_per_cpu', '?')} MHz, "
                  + (", ".join(f"L{c['level']} {c['type'].lower()} {c['size'] // 1024} KiB" for c in bc.get("caches", [])
                               if c.get("level") in (1, 2) and c.get("type") != "Instruction") or "caches not recorded")
-                 + ": not this machine, so compare its ratios, not its times")
+                 + (": not this machine, so compare its ratios, not its times" if known or
+                    bc.get("mhz_per_cpu") != ctx.get("mhz_per_cpu") else
+                    ": whether on this machine is not recorded, so compare its ratios, not its times"))
         w(f"'before' = the same rows from [{os.path.basename(baseline_path)}]({os.path.basename(baseline_path)}), "
           f"commit `{bctx.get('commit', baseline['context'].get('mbi_commit', '?'))}`, {where}; its own ratios "
           "come from its own run.")
@@ -467,8 +471,10 @@ def report(data, json_path, wall_s, baseline=None, baseline_path=None):
                 if not pos and not nrm:
                     continue
                 used = int((pos or nrm).get("threads_used", (pos or nrm)["threads"]))
-                tri = triad1 if used == 1 else triadN  # the triad on as many threads as ran
-                cell = lambda b: (f"{f_ms(ms(b))} ({100 * gbs(b) / gbs(tri):.0f}%)" if tri else f_ms(ms(b))) if b else "n/a"
+                # the triad on as many threads as ran (none measured for other counts)
+                tri = triad1 if used == 1 else triadN if triadN and used == int(triadN["threads"]) else None
+                cell = lambda b: (f"{f_ms(ms(b))} ({100 * gbs(b) / gbs(tri):.0f}%)" if tri and gbs(tri) > 0
+                                  else f_ms(ms(b))) if b else "n/a"
                 krows.append([names[simd], "1" if threads == 1 else f"all ({used} used)",
                               cell(pos), cell(nrm), f"{ms(nrm) / ms(pos):.2f}x" if pos and nrm else "n/a"])
         w(table(["kernel", "threads", "positions (% triad)", "positions + normals (% triad)", "normals ratio"], krows))

@@ -185,7 +185,7 @@ void eval_scalar(const std::int32_t* rec, const float* coef, const Layout& L, co
 
 #ifdef MBI_FAST_X86
 // ------------------------------------------------------------------------ x86 kernels (3D)
-// Two kernels, FMA on 256-bit vectors: positions only (pairs layout, eval_x86_pairs: one point
+// The AVX2 kernels, FMA on 256-bit vectors: positions only (pairs layout, eval_x86_pairs: one point
 // and two terms to a vector, 4 aligned 32-byte loads a point) and positions with normals
 // (packed layout, eval_x86: two points to a vector (x, y, z, * | x, y, z, *), each term loaded
 // 16 bytes at a time). An element's 2 cache lines are prefetched kPrefetch points ahead when the
@@ -607,9 +607,10 @@ struct Normals16 {
 template <bool Scaled, bool Prefetch>
 // Positions and normals, pairs layout, two points to a 512-bit vector, 16 points an iteration:
 // the positions 4 at a time (exactly as eval_x86_pairs512), and after each group of 4 one phase
-// of the normals of the 16 points before (Normals16), then the last groups of 4 (normals4). All in
-// registers: a scratch block for the derivatives cost more in L1 misses (its lines evicted by the
-// element terms of random points) and 4K aliasing than the normals themselves.
+// of the normals of the 16 points before (Normals16), then the last groups of 4 (normals4). No
+// scratch block: the derivatives stay in registers (the compiler spills some to the stack); a
+// block of them for 128 points cost more in L1 misses (its lines evicted by the element terms of
+// random points) and 4K aliasing than the normals themselves.
 MBI_TARGET512 void eval_x86_normals512(const std::int32_t* rec, const float* coef, const float* mrest, float sigma,
                                        float* pos, float* nout, long long begin, long long end) {
   const Idx512 I;
@@ -879,28 +880,32 @@ void FastEvaluator::prepare(const BezierPoints& B, bool normals) {
 }
 
 // The rest-normal block is read 12 bytes a point in step with the two outputs written 12 bytes a
-// point (the normals 8 points, 96 bytes, behind: the kernel finishes a normal two groups later,
-// which the window below also covers). When the block starts just before an output modulo 4 KiB
-// (or at the same offset, as
+// point. When the block starts just before an output modulo 4 KiB (or at the same offset, as
 // large blocks that are all page-aligned alike do), each load finds a recent store with the same
 // low 12 address bits and waits on it ("4K aliasing"; 1.3x the time of the whole pass measured
-// on this project's Zen 4 machine). So (block - output) modulo 4 KiB is kept within [64, 3072]
-// bytes for both outputs: the block is moved once when an output buffer first breaks that, then
-// never again for the same buffers; callers that alternate buffers needing different places get
-// at most two moves, then the block stays where it is (a slower pass, not a copy every frame).
+// on this project's Zen 4 machine). So (block - output) modulo 4 KiB is kept within [lo, 3072]
+// bytes for both outputs: stores up to 1024 bytes behind the loads are clear of them (the AVX2
+// kernel's normals lag 8 points, 96 bytes; the AVX-512 kernel's m loads and normal stores lag
+// the positions by 16 to 32 points), and stores ahead of them by less than lo: 64 bytes for the
+// AVX2 kernel, 384 (32 points) for the AVX-512 one, whose m loads for a group of 16 come after
+// the positions of up to 24 points more were stored. The block is moved once when an output
+// buffer first breaks that, then never again for the same buffers; callers that alternate
+// buffers needing different places get at most two moves, then the block stays where it is (a
+// slower pass, not a copy every frame).
 const float* FastEvaluator::rest_normals_for(const float* positions, const float* normals) {
+  const std::uintptr_t lo = simd_ == Simd::Avx512 ? 384 : 64;
   auto clear = [&](std::size_t off) {
     const auto at = reinterpret_cast<std::uintptr_t>(normals_.data() + off);
     for (const float* out : {positions, normals}) {
       const std::uintptr_t gap = (at - reinterpret_cast<std::uintptr_t>(out)) % 4096;
-      if (gap < 64 || gap > 4096 - 1024) return false;
+      if (gap < lo || gap > 4096 - 1024) return false;
     }
     return true;
   };
   if (!clear(moff_) && moves_ < 2) {
     ++moves_;
     std::size_t off = 0;
-    while (off + 4 < kSlack && !clear(off)) off += 4;  // exists: each output rules out 1088 of 4096 bytes
+    while (off + 4 < kSlack && !clear(off)) off += 4;  // exists: each output rules out at most 1408 of 4096 bytes
     std::memmove(normals_.data() + off, normals_.data() + moff_, (static_cast<size_t>(p_) * d_ + 4) * sizeof(float));
     moff_ = off;
   }

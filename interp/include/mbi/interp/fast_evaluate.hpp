@@ -8,9 +8,9 @@
 // that is 16 B in and 12 B out, 28 B a point; with normals also the rest normal (12 B, kept as
 // cof(A)^T n, A the element's basis gradients) in and the mapped normal (12 B) out. Per call it
 // turns the element Bezier points into each element's quadratic in (b_1..b_d), in float, once
-// per element; a point then costs 10 multiply-adds in 3D (on x86 in 256-bit vectors: one point
-// and two terms to a vector, or two points with normals), and its normal 6 more for the
-// derivatives D_k = dx/db_k, then cof(D) (cof(A)^T n), renormalised.
+// per element; a point then costs 10 multiply-adds in 3D (on x86 two points to a 512-bit vector
+// (AVX-512), or one point and two terms to a 256-bit vector, two points with normals (AVX2)), and
+// its normal 6 more for the derivatives D_k = dx/db_k, then cof(D) (cof(A)^T n), renormalised.
 // Threads: OpenMP when the build has it. Kernels: picked once per evaluator from the vector
 // instructions the CPU has (Simd), or asked for.
 //
@@ -30,9 +30,10 @@ namespace mbi::interp {
 using RowMatrixXf = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
 /// The vector instructions of an evaluator's kernels (3D; 2D embeddings always run Portable).
-/// Every kernel sums in the same order, so each gives the same positions with and without normals;
-/// different kernels agree to float round-off (they differ in the sign of a zero and, with
-/// normals, in the last bits of the normals).
+/// Every kernel sums in the same order, so each gives the same positions with and without normals.
+/// The two x86 kernels give the same positions (up to the sign of a zero: the same fused
+/// multiply-adds); the portable loop (separate multiplies and adds) and, with normals, any two
+/// kernels differ by float round-off.
 enum class Simd {
   Auto,      ///< the widest the CPU has (what the constructor picks by default)
   Avx512,    ///< AVX-512 F, DQ and VL (with AVX2 and FMA): two points to a 512-bit vector
