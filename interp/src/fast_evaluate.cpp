@@ -517,59 +517,44 @@ MBI_TARGET512 inline Soa3 to_soa(__m512 P0, __m512 P1, __m512 P2, __m512 P3) {
           _mm512_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0))};
 }
 
-// Constants of normals16: which 128-bit lanes to merge, and where the m of each SoA lane lies.
+// Constants of Normals16: which 128-bit lanes to merge.
 struct Idx16 {
-  __m512i lo, hi, m[3][2];  // m[c]: component c of the point of lane 4 g + k, point 4 k + g: float 12 k + 3 g + c
+  __m512i lo, hi;
   MBI_TARGET512 Idx16()
       : lo(_mm512_setr_epi32(0, 1, 2, 3, 8, 9, 10, 11, 16, 17, 18, 19, 24, 25, 26, 27)),
-        hi(_mm512_setr_epi32(4, 5, 6, 7, 12, 13, 14, 15, 20, 21, 22, 23, 28, 29, 30, 31)) {
-    alignas(64) std::int32_t f[16];
-    for (int c = 0; c < 3; ++c) {
-      for (int l = 0; l < 16; ++l) f[l] = 12 * (l % 4) + 3 * (l / 4) + c;
-      m[c][0] = _mm512_load_si512(f);  // from floats 0..31 (2 registers)
-      for (int l = 0; l < 16; ++l) f[l] &= 15;
-      m[c][1] = _mm512_load_si512(f);  // from floats 32..47
-    }
-  }
-  static constexpr __mmask16 high(int c) {  // lanes whose float is 32 or more
-    __mmask16 k = 0;
-    for (int l = 0; l < 16; ++l) k |= (12 * (l % 4) + 3 * (l / 4) + c >= 32 ? 1 : 0) << l;
-    return k;
-  }
+        hi(_mm512_setr_epi32(4, 5, 6, 7, 12, 13, 14, 15, 20, 21, 22, 23, 28, 29, 30, 31)) {}
 };
 
 // The normals of 16 points in four phases, so that the kernel can interleave them with the
 // positions of the next 16 (each phase alone is a chain of dependent steps): the derivatives
-// of pair512 (X[j], Ad[j], j = 0..7) moved to one component a register (16 points a register,
-// lane 4 g + k holding point 4 k + g), cof(D) m = D_2 x (m_1 D_3 - m_3 D_1) + m_2 (D_3 x D_1)
-// with whole registers, the renormalisation, and back to interleaved xyz.
+// of pair512 moved to one component a register (16 points a register, lane 4 g + k holding
+// point 4 k + g; m is stored in that order by set_rest_normals), cof(D) m = D_2 x (m_1 D_3 -
+// m_3 D_1) + m_2 (D_3 x D_1) with whole registers, the renormalisation, and back to
+// interleaved xyz.
 struct Normals16 {
   Soa3 D1, D2, D3;
   __m512 m1, m2, m3, wx, wy, wz;
 
-  // 1: D_1 and D_2 of the 16 points
-  MBI_TARGET512 void phase1(const __m512* X, const __m512* Ad, const Idx16& I) {
-    __m512 P1[4], P2[4];
-    for (int j = 0; j < 4; ++j) {  // P[j]: the vectors of points 4 j .. 4 j + 3, one to a 128-bit lane
-      P1[j] = _mm512_permutex2var_ps(X[2 * j], I.lo, X[2 * j + 1]);
-      P2[j] = _mm512_permutex2var_ps(Ad[2 * j], I.lo, Ad[2 * j + 1]);
-    }
-    D1 = to_soa(P1[0], P1[1], P1[2], P1[3]);
-    D2 = to_soa(P2[0], P2[1], P2[2], P2[3]);
+  // 0: the derivatives of 4 points (two pair512 results) as D_1, D_2, D_3 each one point to a
+  // 128-bit lane, right after their positions (12 registers for 16 points instead of 16)
+  MBI_TARGET512 static void gather4(const __m512* X, const __m512* Ad, const Idx16& I, __m512* G) {
+    G[0] = _mm512_permutex2var_ps(X[0], I.lo, X[1]);
+    G[1] = _mm512_permutex2var_ps(Ad[0], I.lo, Ad[1]);
+    G[2] = _mm512_permutex2var_ps(Ad[0], I.hi, Ad[1]);
   }
-  // 2: D_3, the scale, m (48 floats at mr)
+  // 1: D_1 and D_2 of the 16 points (G[3 j + k]: D_(k+1) of points 4 j .. 4 j + 3)
+  MBI_TARGET512 void phase1(const __m512* G) {
+    D1 = to_soa(G[0], G[3], G[6], G[9]);
+    D2 = to_soa(G[1], G[4], G[7], G[10]);
+    D3 = to_soa(G[2], G[5], G[8], G[11]);
+  }
+  // 2: the scale, m (48 floats at mr)
   template <bool Scaled>
-  MBI_TARGET512 void phase2(const __m512* Ad, const float* mr, __m512 sig, const Idx16& I) {
-    __m512 P3[4];
-    for (int j = 0; j < 4; ++j) P3[j] = _mm512_permutex2var_ps(Ad[2 * j], I.hi, Ad[2 * j + 1]);
-    D3 = to_soa(P3[0], P3[1], P3[2], P3[3]);
+  MBI_TARGET512 void phase2(const float* mr, __m512 sig) {
     if constexpr (Scaled)
       for (Soa3* D : {&D1, &D2, &D3})
         D->x = _mm512_mul_ps(sig, D->x), D->y = _mm512_mul_ps(sig, D->y), D->z = _mm512_mul_ps(sig, D->z);
-    const __m512 M0 = _mm512_loadu_ps(mr), M1 = _mm512_loadu_ps(mr + 16), M2 = _mm512_loadu_ps(mr + 32);
-    m1 = _mm512_mask_permutexvar_ps(_mm512_permutex2var_ps(M0, I.m[0][0], M1), Idx16::high(0), I.m[0][1], M2);
-    m2 = _mm512_mask_permutexvar_ps(_mm512_permutex2var_ps(M0, I.m[1][0], M1), Idx16::high(1), I.m[1][1], M2);
-    m3 = _mm512_mask_permutexvar_ps(_mm512_permutex2var_ps(M0, I.m[2][0], M1), Idx16::high(2), I.m[2][1], M2);
+    m1 = _mm512_loadu_ps(mr), m2 = _mm512_loadu_ps(mr + 16), m3 = _mm512_loadu_ps(mr + 32);
   }
   // 3: E = m1 D3 - m3 D1, w = D2 x E + m2 (D3 x D1), renormalised (0 where |w|^2 <= FLT_MIN)
   MBI_TARGET512 void phase3() {
@@ -608,9 +593,11 @@ template <bool Scaled, bool Prefetch>
 // Positions and normals, pairs layout, two points to a 512-bit vector, 16 points an iteration:
 // the positions 4 at a time (exactly as eval_x86_pairs512), and after each group of 4 one phase
 // of the normals of the 16 points before (Normals16), then the last groups of 4 (normals4). No
-// scratch block: the derivatives stay in registers (the compiler spills some to the stack); a
-// block of them for 128 points cost more in L1 misses (its lines evicted by the element terms of
-// random points) and 4K aliasing than the normals themselves.
+// scratch block: each group's derivatives go, one point to a 128-bit lane, into 12 registers
+// (gather4), which phase 1 of the next group reads whole before they are overwritten (no copy
+// between groups; the compiler spills some to the stack). A block of derivatives for 128 points
+// cost more in L1 misses (its lines evicted by the element terms of random points) and 4K
+// aliasing than the normals themselves.
 MBI_TARGET512 void eval_x86_normals512(const std::int32_t* rec, const float* coef, const float* mrest, float sigma,
                                        float* pos, float* nout, long long begin, long long end) {
   const Idx512 I;
@@ -619,7 +606,7 @@ MBI_TARGET512 void eval_x86_normals512(const std::int32_t* rec, const float* coe
   const bool aligned = reinterpret_cast<std::uintptr_t>(pos + 3 * begin) % 16 == 0 &&
                        reinterpret_cast<std::uintptr_t>(nout + 3 * begin) % 16 == 0;
   const long long end16 = begin + (end - begin) / 16 * 16;
-  __m512 X[8], Ad[8], Xp[8], Ap[8];
+  __m512 X[2], Ad[2], G[12];
   Normals16 N;
   long long p = begin;
   for (; p < end16; p += 16) {
@@ -629,21 +616,21 @@ MBI_TARGET512 void eval_x86_normals512(const std::int32_t* rec, const float* coe
       prefetch_at(rec + 4 * g, 4LL * 4 * kStreamAhead);
       prefetch_at(mrest + 3 * g, 4LL * 3 * kStreamAhead);
       if constexpr (Prefetch) prefetch_terms(rec, coef, g);
-      const __m512 W0 = pair512<true>(rec + 4 * g, coef, I, X[2 * q], Ad[2 * q]);
-      const __m512 W1 = pair512<true>(rec + 4 * (g + 2), coef, I, X[2 * q + 1], Ad[2 * q + 1]);
+      const __m512 W0 = pair512<true>(rec + 4 * g, coef, I, X[0], Ad[0]);
+      const __m512 W1 = pair512<true>(rec + 4 * (g + 2), coef, I, X[1], Ad[1]);
       store4(pos + 3 * g, aligned, I, W0, W1);
-      if (prev) {
-        if (q == 0) N.phase1(Xp, Ap, I16);
-        if (q == 1) N.phase2<Scaled>(Ap, mrest + 3 * (p - 16), sig, I16);
+      if (prev) {  // phase 1 reads all of the previous group's G before gather4 overwrites it
+        if (q == 0) N.phase1(G);
+        if (q == 1) N.phase2<Scaled>(mrest + 3 * (p - 16), sig);
         if (q == 2) N.phase3();
         if (q == 3) N.phase4(nout + 3 * (p - 16), aligned);
       }
+      Normals16::gather4(X, Ad, I16, G + 3 * q);
     }
-    for (int j = 0; j < 8; ++j) Xp[j] = X[j], Ap[j] = Ad[j];
   }
   if (p > begin) {
-    N.phase1(Xp, Ap, I16);
-    N.phase2<Scaled>(Ap, mrest + 3 * (p - 16), sig, I16);
+    N.phase1(G);
+    N.phase2<Scaled>(mrest + 3 * (p - 16), sig);
     N.phase3();
     N.phase4(nout + 3 * (p - 16), aligned);
   }
@@ -844,6 +831,19 @@ void FastEvaluator::set_rest_normals(const Eigen::Ref<const Eigen::MatrixXd>& no
     if (std::isfinite(big) && big > 0) std::frexp(big, &ex);
     for (int c = 0; c < d; ++c)
       normals_[static_cast<size_t>(i) * d + c] = static_cast<float>(std::ldexp(m[c], -ex));
+  }
+  // The AVX-512 kernel takes each whole group of 16 points (groups start at multiples of 16:
+  // every thread's block does) as three registers, one component each, lane 4 g + k holding
+  // point 4 k + g (Normals16): stored in that order, it loads them without a permute. The last,
+  // partial group stays point by point (the 4-point and portable tails read it so).
+  if (simd_ == Simd::Avx512 && d == 3) {
+    float g[48];
+    for (long long q = 0; q + 16 <= p_; q += 16) {
+      float* block = normals_.data() + 3 * q;
+      for (int c = 0; c < 3; ++c)
+        for (int l = 0; l < 16; ++l) g[16 * c + l] = block[3 * (4 * (l % 4) + l / 4) + c];
+      std::copy(g, g + 48, block);
+    }
   }
 }
 

@@ -95,7 +95,7 @@ class FastEvaluator {
   long long p_ = 0;
   std::vector<std::int32_t> records_;  // (p + padding) (d+1) words: element id, then d float bit patterns
   std::vector<double> grads_;          // m d d: rows 1..d of each element's basis gradients
-  std::vector<float> normals_;         // p d from moff_ (+ padding): per point m = cof(A)^T n (see fast_evaluate.cpp)
+  std::vector<float> normals_;         // p d from moff_ (+ padding): m = cof(A)^T n per point (AVX-512: 16-point groups by component)
   std::size_t moff_ = 0;               // where normals_'s block starts, in floats
   int moves_ = 0;                      // times the block was moved (at most 2)
   std::vector<float> coef_;            // m x 32 (3D; 2D: 16): position terms, cache-line aligned, per call (layout: see fast_evaluate.cpp)
