@@ -65,9 +65,11 @@ constexpr int kPrefetch = 16;
 // alongside (measured: 1M random points, 2 threads, 1.85 -> 1.55 ms).
 constexpr int kStreamAhead = 128;
 
-// Points a thread takes at a time (a multiple of 4); also the fewest points a thread is given.
+// Points a thread takes at a time (a multiple of 16); also the fewest points a thread is given.
 constexpr long long kBlock = 32768;
 static_assert(kBlock % 4 == 0, "blocks must keep each thread's first output float 16-byte aligned");
+static_assert(kBlock % 16 == 0, "the AVX-512 kernel's 16-point groups of rest normals (set_rest_normals) "
+                                "must start at each block's first point");
 
 // Index of c_k (lin) and c_kl, k <= l (quad), 1-based k, l, in an element's terms (c_0 is term 0).
 // 3D: 0 c0, 1 c1, 2 c11, 3 c12, 4 c13, 5 c2, 6 c22, 7 c23, 8 c3, 9 c33.
@@ -542,7 +544,7 @@ struct Normals16 {
     G[1] = _mm512_permutex2var_ps(Ad[0], I.lo, Ad[1]);
     G[2] = _mm512_permutex2var_ps(Ad[0], I.hi, Ad[1]);
   }
-  // 1: D_1 and D_2 of the 16 points (G[3 j + k]: D_(k+1) of points 4 j .. 4 j + 3)
+  // 1: D_1, D_2 and D_3 of the 16 points (G[3 j + k]: D_(k+1) of points 4 j .. 4 j + 3)
   MBI_TARGET512 void phase1(const __m512* G) {
     D1 = to_soa(G[0], G[3], G[6], G[9]);
     D2 = to_soa(G[1], G[4], G[7], G[10]);
