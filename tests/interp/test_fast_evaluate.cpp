@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cfloat>
+#include <cstdint>
 
 using namespace mbi::interp;
 using namespace mbi::test;
@@ -37,6 +38,11 @@ Setup make(int d, int points, double lo, double hi, Eigen::RowVectorXd offset = 
   s.normals = random_matrix(points, d, 53);
   s.normals.rowwise().normalize();
   return s;
+}
+
+// the first 64-byte boundary at or after p
+float* align64(float* p) {
+  return reinterpret_cast<float*>((reinterpret_cast<std::uintptr_t>(p) + 63) & ~std::uintptr_t(63));
 }
 
 // Float round-off bound for a position: 32 ulp of the largest control-point coordinate (the
@@ -169,6 +175,48 @@ TEST_CASE("FastEvaluator: thread counts, caller memory and repeated calls give i
   FastEvaluator ref(s.emb, 1);
   CHECK(ref.bytes_per_point(false) == 28);
   CHECK(ref.bytes_per_point(true) == 52);
+}
+
+// The vector kernels write 16-byte streaming stores where both outputs are 16-byte aligned and
+// plain stores otherwise, in groups of 4 points, each thread its blocks, with the last points of
+// a range written one by one: at every offset from a 64-byte boundary the same values come out,
+// and nothing before or after the outputs changes.
+TEST_CASE("FastEvaluator: outputs at every offset within a cache line, nothing written outside them", "[fast_evaluate]") {
+  const Setup s = make(3, 70013, 0.0, 1.0);  // 3 blocks, the last one partial, then a tail
+  const long long n = 3 * 70013;
+  for (Simd v : kernels()) {
+    FastEvaluator ref(s.emb, 1, v);
+    ref.set_rest_normals(s.normals);
+    RowMatrixXf p1, n1;
+    ref.evaluate(s.B, p1, n1);
+    const Eigen::Map<const Eigen::VectorXf> pv(p1.data(), n), nv(n1.data(), n);
+    for (int threads : {1, 2, 3}) {
+      FastEvaluator fe(s.emb, threads, v);
+      fe.set_rest_normals(s.normals);
+      std::vector<float> pbuf(n + 64, -7.0f), nbuf(n + 64, -7.0f);
+      for (int off = 0; off < 16; ++off) {
+        INFO("kernel " << FastEvaluator::name(v) << ", threads " << threads << ", offset " << off << " floats");
+        float* pos = align64(pbuf.data()) + off;
+        float* nor = align64(nbuf.data()) + (off + 4) % 16;  // another offset, 16-byte aligned when pos is
+        // buf holds out's n floats and -7 everywhere else
+        auto only = [n](const std::vector<float>& buf, const float* out) {
+          for (const float* f = buf.data(); f < buf.data() + buf.size(); ++f)
+            if (f < out || f >= out + n) REQUIRE(*f == -7.0f);
+        };
+        fe.evaluate(s.B, pos, nor);
+        CHECK((Eigen::Map<const Eigen::VectorXf>(pos, n) - pv).cwiseAbs().maxCoeff() == 0.0f);
+        CHECK((Eigen::Map<const Eigen::VectorXf>(nor, n) - nv).cwiseAbs().maxCoeff() == 0.0f);
+        only(pbuf, pos);
+        only(nbuf, nor);
+        std::fill(pbuf.begin(), pbuf.end(), -7.0f);
+        fe.evaluate(s.B, pos, nullptr);  // positions alone: the other kernel
+        CHECK((Eigen::Map<const Eigen::VectorXf>(pos, n) - pv).cwiseAbs().maxCoeff() == 0.0f);
+        only(pbuf, pos);
+        std::fill(pbuf.begin(), pbuf.end(), -7.0f);
+        std::fill(nbuf.begin(), nbuf.end(), -7.0f);
+      }
+    }
+  }
 }
 
 // The vector kernels take groups of 4 points; with normals the AVX2 kernel finishes each group
