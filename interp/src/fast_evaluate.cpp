@@ -417,7 +417,7 @@ struct Idx512 {
 
 // Two points whose records start at r (A in the low 256 bits, B in the high), pairs layout: each
 // half computes what one_point computes, in the same order (masks for its blends). Returns
-// (x_A, ., x_B, .) in 128-bit lanes 0 and 2. With Derivs also X = (D_1 | .) and Ad = (D_2 | D_3)
+// (x_A, ., x_B, .) in 128-bit lanes 0 and 2. With Derivs also X = (D_1 | D_2) and Ad = (. | D_3)
 // in each point's 256 bits (D_k = dx/db_k; summed in another order than the packed kernel's).
 template <bool Derivs>
 MBI_TARGET512 inline __m512 pair512(const std::int32_t* r, const float* coef, const Idx512& I, __m512& X, __m512& Ad) {
@@ -440,10 +440,14 @@ MBI_TARGET512 inline __m512 pair512(const std::int32_t* r, const float* coef, co
   const __m512 U = _mm512_fmadd_ps(L3, b3hi, c03);                        // (c0 | t3)
   const __m512 V = _mm512_fmadd_ps(b12, T, _mm512_mul_ps(U, ob3));
   if constexpr (Derivs) {
-    X = _mm512_fmadd_ps(L1, b12, T);                                      // (t1 + b1 c11 | t2 + b2 c22) = (D1 | .)
-    const __m512 Z = _mm512_fmadd_ps(L2, b12, _mm512_mask_blend_ps(0xF0F0, MBI_SWAP512(X), U));  // (D2 | t3 + b2 c23)
-    const __m512 R = _mm512_fmadd_ps(L3, _mm512_mask_blend_ps(0xF0F0, b12, b3hi), _mm512_maskz_mov_ps(0xF0F0, Z));
-    Ad = _mm512_mask_add_ps(Z, 0xF0F0, R, MBI_SWAP512(R));               // (D2 | . + b3 c33 + b1 c13) = (D2 | D3)
+    // (0 | b1); then every lane computed holds a sum of finite terms (v2's e is an integer)
+    const __m512 b1hi = _mm512_maskz_permute_ps(0xF0F0, v2, 0x00);
+    // (t1 + b1 c11 | t2 + b2 c22), then b1 c12 added to the high half: (D1 | D2). Neither
+    // chain waits on the other (D_2 | D_3 from X through a swap and blends took 1.06x the time
+    // of the whole pass with normals).
+    X = _mm512_mask3_fmadd_ps(MBI_SWAP512(L2), b1hi, _mm512_fmadd_ps(L1, b12, T), 0xF0F0);
+    // (. | t3 + b3 c33 + b2 c23 + b1 c13) = (. | D3)
+    Ad = _mm512_fmadd_ps(MBI_SWAP512(L3), b1hi, _mm512_fmadd_ps(L2, b12, _mm512_fmadd_ps(L3, b3hi, U)));
   }
   return _mm512_add_ps(V, MBI_SWAP512(V));  // (c0 + b1 t1) + (b2 t2 + b3 t3)
 }
@@ -494,7 +498,7 @@ MBI_TARGET512 inline __m512 normals4(const __m512* X, const __m512* Ad, __m512 M
                           _mm512_setr_epi32(8, 8, 8, 8, 8, 8, 8, 8, 11, 11, 11, 11, 11, 11, 11, 11)};
   __m512 O[2];
   for (int h = 0; h < 2; ++h) {
-    __m512 D1 = X[h], D23 = Ad[h];
+    __m512 D1 = X[h], D23 = _mm512_mask_blend_ps(0xF0F0, MBI_SWAP512(X[h]), Ad[h]);  // (D1 | D2), (D2 | D3)
     if constexpr (Scaled) D1 = _mm512_mul_ps(sig, D1), D23 = _mm512_mul_ps(sig, D23);
     const __m512 m12 = _mm512_permutexvar_ps(im12[h], M), m30 = _mm512_maskz_permutexvar_ps(0x0F0F, im3[h], M);
     const __m512 D31 = MBI_SWAP512(_mm512_mask_blend_ps(0xF0F0, D1, D23));                 // (D3 | D1)
@@ -541,7 +545,7 @@ struct Normals16 {
   // 128-bit lane, right after their positions (12 registers for 16 points instead of 16)
   MBI_TARGET512 static void gather4(const __m512* X, const __m512* Ad, const Idx16& I, __m512* G) {
     G[0] = _mm512_permutex2var_ps(X[0], I.lo, X[1]);
-    G[1] = _mm512_permutex2var_ps(Ad[0], I.lo, Ad[1]);
+    G[1] = _mm512_permutex2var_ps(X[0], I.hi, X[1]);
     G[2] = _mm512_permutex2var_ps(Ad[0], I.hi, Ad[1]);
   }
   // 1: D_1, D_2 and D_3 of the 16 points (G[3 j + k]: D_(k+1) of points 4 j .. 4 j + 3)
