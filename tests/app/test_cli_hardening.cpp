@@ -1,4 +1,4 @@
-// Issue 14 part C and issue 13 (2D, relative pokes, metrics keys) through the mbi executable:
+// Hostile use, 2D models, relative pokes and metrics keys through the mbi executable:
 // output confinement, one overwrite rule, inputs never overwritten, all-or-nothing commands, the
 // run's exit-3 contract, a run killed with SIGKILL, flat models as 2D, metrics.json keys.
 #include <catch2/catch.hpp>
@@ -524,7 +524,7 @@ TEST_CASE("poke offset_relative: a small and a large model are poked alike", "[c
 // ---------------------------------------------------------------------------- metrics.json keys
 
 namespace {
-// README "metrics.json": the keys of every mode
+// docs/scene-format.md "metrics.json": the keys of every mode
 const std::set<std::string> kTop = {"alpha", "beta", "control_vertices", "dense_vertices", "dim",
                                     "elements", "evaluator", "failure", "frames", "frames_completed",
                                     "last_disc", "method", "mode", "outside_points", "pin_boundary",

@@ -1,4 +1,4 @@
-// Issue 13 through the mbi executable: what users give us survives (UVs, groups, materials,
+// Interoperability through the mbi executable: what users give us survives (UVs, groups, materials,
 // normals deformed), file formats follow the output's extension.
 #include <catch2/catch.hpp>
 

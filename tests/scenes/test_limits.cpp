@@ -1,4 +1,4 @@
-// Resource caps and physical ranges of scenes (issue 14): refused at load, quickly, with the
+// Resource caps and physical ranges of scenes: refused at load, quickly, with the
 // estimate and the key in the message; the memory estimate against the machine's memory.
 #include <mbi/scenes/limits.hpp>
 #include <mbi/scenes/scene.hpp>

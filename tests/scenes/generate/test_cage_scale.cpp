@@ -1,4 +1,4 @@
-// Cage generation on hostile geometry (issue 14): scale-free results for tiny, huge and far-offset
+// Cage generation on hostile geometry: scale-free results for tiny, huge and far-offset
 // models; degenerate and mostly-empty models refused quickly with a clear message; TetGen fenced.
 #include <mbi/generate/cage.hpp>
 #include <mbi/interp/embed.hpp>

@@ -1,4 +1,4 @@
-// Attribute pass-through of the surface formats (issue 13): whatever a file holds besides
+// Attribute pass-through of the surface formats: whatever a file holds besides
 // positions is written back unchanged, normals are replaced by the ones given, binary stays
 // binary with its endianness, and a mesh without faces writes a vertices-only file.
 #include <mbi/io/io.hpp>
