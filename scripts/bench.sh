@@ -12,9 +12,10 @@
 #                                    a 'before' column (the report says if it ran elsewhere)
 #   MBI_BENCH_REPETITIONS=N          repetitions of each benchmark (default 3; --quick: 1)
 #
-# Installs missing Debian packages and builds mbi-bench with the release preset first (set
-# MBI_BENCH_NO_BUILD=1 to skip both). Uses the scanned models beside the clone (../shared/models)
-# or $MBI_MODELS_DIR for the bunny row of Table 1. Fails when mbi-bench or the report fails.
+# Installs missing Debian packages (scripts/install-deps.sh test) and builds mbi-bench with the
+# release preset first (set MBI_BENCH_NO_BUILD=1 to skip both). Uses the scanned models beside
+# the clone (../shared/models) or $MBI_MODELS_DIR for the bunny row of Table 1. Fails when
+# mbi-bench or the report fails.
 # Run nothing else meanwhile: the numbers are only as quiet as the machine.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -25,7 +26,7 @@ while [ $# -gt 0 ]; do
   case "$1" in
     --quick) quick=1 ;;
     --out) out="$2"; shift ;;
-    -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,19p' "$0"; exit 0 ;;
     *) echo "bench.sh: error: unknown option $1" >&2; exit 2 ;;
   esac
   shift
@@ -35,7 +36,7 @@ if [ -z "$out" ]; then
 fi
 
 if [ "${MBI_BENCH_NO_BUILD:-0}" != 1 ]; then
-  bash scripts/install-deps.sh
+  bash scripts/install-deps.sh test
   cmake --preset release >/dev/null
   cmake --build --preset release -j "${MBI_JOBS:-$(nproc)}" --target mbi-bench
 fi

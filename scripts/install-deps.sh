@@ -1,31 +1,43 @@
 #!/usr/bin/env bash
-# Installs every build and test dependency of mbi from Debian 12 packages.
-# Idempotent: packages already present are skipped; nothing is downloaded outside apt.
-# Run as root (or with sudo).
+# Installs mbi's dependencies from Debian 12 packages, in two sets:
+#   bash scripts/install-deps.sh run    what building and running `mbi` needs (scripts/run.sh)
+#   bash scripts/install-deps.sh test   the run set and what the tests, the benchmarks and the
+#                                       fuzz targets need (scripts/test.sh, bench.sh, fuzz.sh)
+# Without an argument: test. Idempotent: packages already present are skipped; nothing is
+# downloaded outside apt. Run as root (or with sudo).
 set -euo pipefail
 
-# Only what the build uses: Eigen (interp, sim, pipeline), TetGen and OpenMesh (control meshes,
-# subdivision), stb (PNG), toml11 (scenes), CLI11 (command line), nlohmann-json (reports),
-# Catch2 (tests), Google Benchmark (mbi-bench); OpenGL for the GPU evaluator and renderer: libepoxy
-# (the one GL loader), EGL/GL headers, and Mesa's EGL and llvmpipe driver so that the GPU path runs
-# headless on machines without a GPU (CI); GLFW, Dear ImGui and Xvfb (with xauth, which
-# xvfb-run needs) for the viewer and its tests; matplotlib for the plots of the benchmark report
-# (scripts/bench.sh); SuiteSparse for CHOLMOD, the optional faster factorization of the
-# modified-BI precompute (interp builds without it: MBI_WITH_CHOLMOD=OFF), and OpenBLAS, which
-# CHOLMOD's supernodal factorization runs on (Debian's reference BLAS is several times slower;
-# the package takes over libblas.so.3 through update-alternatives); clang with its libFuzzer runtime for the fuzz targets of the readers
-# (scripts/fuzz.sh, docs/hardening.md).
-packages=(
-  build-essential cmake ninja-build pkg-config git
+# Building and running mbi: the compiler, CMake and Ninja; Eigen (interp, sim, pipeline); TetGen
+# and OpenMesh (control meshes, subdivision); toml11 (scenes), CLI11 (command line),
+# nlohmann-json (reports), stb (PNG); OpenGL for the GPU evaluator, the renderer and the viewer:
+# libepoxy (the one GL loader), EGL/GL headers, Mesa's EGL, GLX and llvmpipe driver (so that the
+# GPU path runs on machines without a GPU), GLFW and Dear ImGui; SuiteSparse for CHOLMOD, the
+# faster factorization of the modified-BI precompute (optional: MBI_WITH_CHOLMOD), and OpenBLAS,
+# which CHOLMOD's supernodal factorization runs on (Debian's reference BLAS is several times
+# slower; the package takes over libblas.so.3 through update-alternatives).
+run_packages=(
+  build-essential cmake ninja-build pkg-config
   libeigen3-dev libtet1.5-dev libopenmesh-dev
   libtoml11-dev libcli11-dev nlohmann-json3-dev libstb-dev
-  catch2 libbenchmark-dev
-  libepoxy-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
-  libglfw3-dev libimgui-dev libglx-mesa0 xvfb xauth
-  python3-matplotlib
+  libepoxy-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libglx-mesa0
+  libglfw3-dev libimgui-dev
   libsuitesparse-dev libopenblas0-pthread
+)
+# Testing: Catch2 (the test suite), Xvfb with xauth (the viewer's tests run under xvfb-run),
+# Python (scripts/test.sh --sanitizers), Google Benchmark (mbi-bench), matplotlib and git (the
+# benchmark report's plots and commit), clang with its libFuzzer runtime (scripts/fuzz.sh).
+test_packages=(
+  catch2 xvfb xauth python3
+  libbenchmark-dev python3-matplotlib git
   clang libclang-rt-14-dev
 )
+
+case "${1:-test}" in
+  run) packages=("${run_packages[@]}") ;;
+  test) packages=("${run_packages[@]}" "${test_packages[@]}") ;;
+  -h|--help) sed -n '2,7p' "$0"; exit 0 ;;
+  *) echo "install-deps: error: unknown set '$1' (run or test)" >&2; exit 2 ;;
+esac
 
 missing=()
 for p in "${packages[@]}"; do

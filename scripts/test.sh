@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Quick start, command 2: install dependencies, build, and run the whole test suite.
+# Quick start, command 2: install every dependency (the run and test sets), build everything and
+# run the whole test suite.
 #
 #   bash scripts/test.sh [CTEST ARGS...]               release preset (build/release)
 #   bash scripts/test.sh --sanitizers [CTEST ARGS...]  debug preset, ASan + UBSan (build/debug):
@@ -16,7 +17,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ "${1:-}" = "--sanitizers" ]; then
   shift
-  bash scripts/install-deps.sh
+  bash scripts/install-deps.sh test
   cmake --preset debug >/dev/null
   cmake --build --preset debug -j "${MBI_JOBS:-$(nproc)}"
   export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
