@@ -199,7 +199,7 @@ def loglog_fit(xs, ys):
 
 # ------------------------------------------------------------------------------------ report
 def targets(R, nthreads):
-    """Rows [name, measured, goal, met, how] of the speed issue's targets, from one run."""
+    """Rows [name, measured, goal, met, how] of the speed targets, from one run."""
     ev = lambda **kv: R.find("BM_Eval", **kv)
     P = 1000000
     triad1, triadN = R.find("BM_Triad", threads=1), R.find("BM_Triad", threads=0)
@@ -336,7 +336,7 @@ def report(data, json_path, wall_s, baseline=None, baseline_path=None):
         before = targets(B, nthreads)
         bctx = baseline["context"].get("mbi", {})
         rows = [r[:1] + [b[1]] + r[1:] for r, b in zip(rows, before)]
-    w("## Targets of the speed issue")
+    w("## Speed targets")
     w("")
     w("Each measured in this run; ratios are between benchmarks of this same run.")
     if baseline is not None:
