@@ -31,7 +31,8 @@ int run_view(const ViewArgs& a) {
   o.split = !a.no_split;
   o.wireframe = a.wireframe;
   o.panel = !a.no_panel;
-  return viewer::view_scene(sc, a.mesh, o);
+  viewer::view_scene(sc, a.mesh, o);
+  return 0;
 }
 
 const Registrar reg{

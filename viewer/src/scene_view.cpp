@@ -4,8 +4,7 @@
 
 namespace mbi::viewer {
 
-int view_scene(const scenes::Scene& scene_in, const std::filesystem::path& mesh_override,
-               ViewerOptions options) {
+void view_scene(const scenes::Scene& scene_in, const std::filesystem::path& mesh_override, ViewerOptions options) {
   scenes::Scene scene = scene_in;
   const scenes::SceneModels models = scenes::load_models(scene, mesh_override);  // before the window
   options.up = scene.output.up;
@@ -14,15 +13,17 @@ int view_scene(const scenes::Scene& scene_in, const std::filesystem::path& mesh_
   pipeline::FramePipeline pipe = scenes::make_pipeline(
       scene, models, interp::embed(models.U, models.T, models.dense.V), viewer.evaluator());
   const io::Image pattern = models.image ? *models.image : generate::test_pattern(512, 384);
-  auto rebuild = [&](double young, double poisson) {
-    scenes::Scene changed = scene;
-    changed.material.young = young;
-    changed.material.poisson = poisson;
-    return scenes::make_driver(changed, models);
-  };
-  return viewer.show(pipe, models.dense.F, {}, models.dim() == 2 ? &pattern : nullptr,
-                     scene.mode == scenes::Mode::Simulate ? Viewer::Rebuild(rebuild) : Viewer::Rebuild(),
-                     scene.material.young, scene.material.poisson);
+  Shown shown{.pipe = pipe, .faces = models.dense.F, .image = models.dim() == 2 ? &pattern : nullptr};
+  shown.material = {.youngs_modulus = scene.material.young, .poisson_ratio = scene.material.poisson,
+                    .density = scene.material.density};
+  if (scene.mode == scenes::Mode::Simulate)
+    shown.rebuild = [&](const sim::Material& m) {
+      scenes::Scene changed = scene;
+      changed.material.young = m.youngs_modulus;
+      changed.material.poisson = m.poisson_ratio;
+      return scenes::make_driver(changed, models);
+    };
+  viewer.show(shown);
 }
 
 }  // namespace mbi::viewer

@@ -6,9 +6,8 @@
 
 namespace mbi::viewer {
 
-/// Opens the viewer on a scene (mesh_override replaces its dense model). Returns the exit code.
+/// Opens the viewer on a scene (mesh_override replaces its dense model) until it closes.
 /// Throws ViewerError (no display), mbi::Error (bad scene or models).
-int view_scene(const scenes::Scene& scene, const std::filesystem::path& mesh_override,
-               ViewerOptions options);
+void view_scene(const scenes::Scene& scene, const std::filesystem::path& mesh_override, ViewerOptions options);
 
 }  // namespace mbi::viewer

@@ -9,7 +9,8 @@
 //   mbi::viewer::Viewer viewer;                        // window + OpenGL context
 //   mbi::pipeline::FramePipeline pipe(U, T, mbi::interp::embed(U, T, P), std::move(driver),
 //                                     {.normals = true}, viewer.evaluator(), rest_normals);
-//   viewer.show(pipe, F, [&](mbi::viewer::Viewer&) { given.set(next_positions()); });
+//   viewer.show({.pipe = pipe, .faces = F,
+//                .per_frame = [&](mbi::viewer::Viewer&) { given.set(next_positions()); }});
 //
 // Input replay: `script` lines "FRAME EVENT ARGS" (window coordinates, y down):
 //   FRAME press X Y BUTTON | FRAME move X Y | FRAME release X Y BUTTON | FRAME scroll DY |
@@ -19,6 +20,7 @@
 #include <mbi/gpu/evaluator.hpp>
 #include <mbi/io/image.hpp>
 #include <mbi/pipeline/frame_pipeline.hpp>
+#include <mbi/sim/corotational.hpp>
 
 #include <filesystem>
 #include <functional>
@@ -51,6 +53,21 @@ struct ViewerOptions {
   double poke_response = 0.15;           ///< s, natural period of a poke spring
 };
 
+class Viewer;
+
+/// What Viewer::show displays: a frame pipeline and the surface it deforms; in 2D the picture
+/// drawn on it; the simulation's material, editable in the panel when `rebuild` is given.
+struct Shown {
+  pipeline::FramePipeline& pipe;      ///< built with Viewer::evaluator()
+  const Eigen::MatrixXi& faces;       ///< t x 3: 3D the dense surface; 2D the triangles drawn textured
+  const io::Image* image = nullptr;   ///< 2D: the picture (required); 3D: unused
+  std::function<void(Viewer&)> per_frame = {};  ///< runs before each step; may be empty
+  sim::Material material = {};        ///< Young's modulus (Pa) and Poisson ratio shown in the panel
+  /// A new simulation driver for an edited material (the simulation restarts); empty: the
+  /// material is not editable.
+  std::function<std::unique_ptr<pipeline::Driver>(const sim::Material&)> rebuild = {};
+};
+
 class Viewer {
  public:
   /// Opens the window and its OpenGL context. Throws ViewerError (no display: one line).
@@ -62,14 +79,10 @@ class Viewer {
   /// A GPU evaluator in the viewer's context, for the pipeline to show.
   std::unique_ptr<gpu::GpuEvaluator> evaluator();
 
-  /// Shows `pipe` (3D: faces F of the dense surface; 2D: triangles, drawn textured with
-  /// `image`) until the window closes or options.frames pass. `per_frame` runs before each
-  /// step. `rebuild` (optional) makes a new simulation driver when the material changes
-  /// (Young's modulus Pa, Poisson ratio). Returns 0.
-  using Callback = std::function<void(Viewer&)>;
-  using Rebuild = std::function<std::unique_ptr<pipeline::Driver>(double young, double poisson)>;
-  int show(pipeline::FramePipeline& pipe, const Eigen::MatrixXi& F, Callback per_frame = {},
-           const io::Image* image = nullptr, Rebuild rebuild = {}, double young = 0, double poisson = 0);
+  /// Shows `shown` until the window closes or options.frames pass, then writes the screenshot
+  /// and report the options ask for. Throws ViewerError (a pipeline not built with
+  /// Viewer::evaluator(), 2D without an image).
+  void show(const Shown& shown);
 
   /// The last frame's picture of the window (RGB).
   io::Image screenshot();

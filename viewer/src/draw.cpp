@@ -1,0 +1,82 @@
+#include "draw.hpp"
+
+#include <epoxy/gl.h>
+
+#include <algorithm>
+#include <chrono>
+
+namespace mbi::viewer {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+// The markers of direct mode (handles big, every control vertex small) and of the poke target.
+void draw_markers(gpu::Renderer& renderer, const Interaction& in, const ViewerOptions& options,
+                  const Eigen::MatrixXd& X3, const Eigen::Matrix4d& vp) {
+  if (options.handles && in.direct() && !in.handles().empty()) {
+    Eigen::MatrixXd H(static_cast<Eigen::Index>(in.handles().size()), 3);
+    for (size_t h = 0; h < in.handles().size(); ++h) H.row(static_cast<Eigen::Index>(h)) = X3.row(in.handles()[h]);
+    renderer.draw_points(H, vp, {0.1, 0.35, 0.9}, 9.0f);
+  }
+  if (options.handles && in.direct()) renderer.draw_points(X3, vp, {0.3, 0.3, 0.3}, 4.0f);
+  if (in.poke().handle >= 0) {
+    Eigen::MatrixXd P(1, 3);
+    P.row(0) = in.poke().target.transpose();
+    renderer.draw_points(P, vp, {0.85, 0.1, 0.1}, 8.0f);
+  }
+}
+
+}  // namespace
+
+void draw_views(gpu::Renderer& renderer, Stage& stage, const Interaction& in, const Camera& camera,
+                const ViewerOptions& options, const Eigen::MatrixXd& X3, int fb_width, int fb_height,
+                FrameTimes& times) {
+  const auto started = Clock::now();
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  glViewport(0, 0, fb_width, fb_height);
+  glClearColor(1, 1, 1, 1);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  const Eigen::Vector3d color(0.85, 0.62, 0.35);
+  const int n = static_cast<int>(stage.views.size());
+  double gpu_ms = 0;
+  for (int k = 0; k < n; ++k) {
+    const int x0 = fb_width * k / n, x1 = fb_width * (k + 1) / n;
+    glViewport(x0, 0, x1 - x0, fb_height);
+    stage.gpu.evaluate(stage.pipe.bezier_with(stage.views[static_cast<size_t>(k)]), stage.d == 3);
+    gpu_ms += stage.gpu.timings().upload_ms + stage.gpu.timings().pass_ms;
+    const Eigen::Matrix4d vp = camera.view_projection(static_cast<double>(x1 - x0) / std::max(fb_height, 1));
+    if (stage.d == 3)
+      renderer.draw(stage.gpu, vp, camera.direction(), color, options.wireframe ? &X3 : nullptr,
+                    options.wireframe ? &stage.T : nullptr);
+    else
+      renderer.draw_textured(stage.gpu, vp, *stage.image);
+    draw_markers(renderer, in, options, X3, vp);
+  }
+  glViewport(0, 0, fb_width, fb_height);
+  glFinish();
+  times.interpolation_ms = gpu_ms;
+  times.drawing_ms = ms_since(started) - gpu_ms;
+  const double dt = ms_since(times.last_frame);
+  times.last_frame = Clock::now();
+  times.fps = dt > 0 ? 0.9 * times.fps + 0.1 * 1000.0 / dt : times.fps;
+}
+
+io::Image read_framebuffer(int width, int height) {
+  std::vector<std::uint8_t> rgba(static_cast<size_t>(width) * height * 4);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadBuffer(GL_BACK);
+  glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+  io::Image img(width, height);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const std::uint8_t* s = rgba.data() + (static_cast<size_t>(height - 1 - y) * width + x) * 4;
+      std::uint8_t* d = img.at(x, y);
+      d[0] = s[0], d[1] = s[1], d[2] = s[2];
+    }
+  return img;
+}
+
+}  // namespace mbi::viewer

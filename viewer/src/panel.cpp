@@ -1,0 +1,146 @@
+#include "panel.hpp"
+
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+#include <imgui.h>
+
+#include <algorithm>
+
+namespace mbi::viewer {
+namespace {
+
+const char* kHelp =
+    "Mouse (left button):\n"
+    "  on the model      poke: grab the surface, a spring pulls it to the cursor\n"
+    "  direct mode       click a control vertex: it becomes a handle; drag it\n"
+    "  on the background orbit (2D: pan)\n"
+    "  right drag        pan; right click on a handle removes it\n"
+    "  wheel / pinch     zoom\n"
+    "Keys:\n"
+    "  space  play / pause      n  one step        r  reset\n"
+    "  d      direct mode on/off (drag handles, no physics)\n"
+    "  m      next method       s  split view (BI | method)\n"
+    "  w      control wireframe h  handle markers\n"
+    "  f      frame the model   p  screenshot (mbi-screenshot-NNNN.png)\n"
+    "  ?      this help         q / escape  quit";
+
+void statistics(const Stage& stage, const FrameTimes& times) {
+  const pipeline::FrameTimings& tm = stage.pipe.timings();
+  ImGui::Text("%.1f fps   frame %d", times.fps, stage.pipe.frame());
+  ImGui::Text("simulation %.2f ms  solve %.2f ms", tm.drive_ms, tm.solve_ms);
+  ImGui::Text("interpolation %.2f ms  drawing %.2f ms", times.interpolation_ms, times.drawing_ms);
+  ImGui::TextDisabled("%s", stage.gpu.name().c_str());
+  ImGui::Text("%lld dense vertices, %lld control vertices, %lld elements",
+              static_cast<long long>(stage.pipe.embedding().size()), static_cast<long long>(stage.U.rows()),
+              static_cast<long long>(stage.T.rows()));
+}
+
+void playback(Interaction& in, ViewerOptions& options, Controls& controls) {
+  if (ImGui::Button(options.playing ? "pause" : "play")) options.playing = !options.playing;
+  ImGui::SameLine();
+  if (ImGui::Button("step")) controls.step_once = true;
+  ImGui::SameLine();
+  if (ImGui::Button("reset")) in.reset();
+  bool direct = in.direct();
+  if (ImGui::Checkbox("direct mode (drag handles)", &direct)) in.set_direct(direct);
+}
+
+void view_switches(Stage& stage, ViewerOptions& options) {
+  const std::vector<pipeline::Method>& all = pipeline::all_methods();
+  int method = static_cast<int>(std::find(all.begin(), all.end(), stage.pipe.method()) - all.begin());
+  std::string names;
+  for (pipeline::Method m : all) names += std::string(pipeline::method_name(m)) + '\0';
+  if (ImGui::Combo("method", &method, names.c_str())) stage.set_method(all[static_cast<size_t>(method)], options.split);
+  if (ImGui::Checkbox("split view (BI | method)", &options.split)) stage.set_views(options.split);
+  ImGui::Checkbox("control wireframe", &options.wireframe);
+  ImGui::Checkbox("handle markers", &options.handles);
+  float a = static_cast<float>(stage.alpha);
+  if (ImGui::SliderFloat("alpha", &a, 0.001f, 1.0f, "%.3f", ImGuiSliderFlags_Logarithmic) && a > 0) {
+    stage.alpha = a;
+    stage.pipe.set_alpha(stage.alpha);
+  }
+}
+
+// Time stepping, damping and gravity: the running simulation takes them at once.
+void simulation_parameters(pipeline::SimulatorDriver& sd, Controls& controls) {
+  sim::Parameters p = sd.simulator().params();
+  float dt = static_cast<float>(p.dt), md = static_cast<float>(p.mass_damping),
+        sdmp = static_cast<float>(p.stiffness_damping);
+  float g[3] = {static_cast<float>(p.gravity.x()), static_cast<float>(p.gravity.y()),
+                static_cast<float>(p.gravity.z())};
+  bool changed = ImGui::SliderFloat("time step (s)", &dt, 1e-4f, 0.1f, "%.4f", ImGuiSliderFlags_Logarithmic);
+  changed |= ImGui::SliderInt("substeps", &p.substeps, 1, 16);
+  changed |= ImGui::SliderFloat("mass damping (1/s)", &md, 0.0f, 10.0f);
+  changed |= ImGui::SliderFloat("stiffness damping (s)", &sdmp, 0.0f, 0.1f);
+  changed |= ImGui::InputFloat3("gravity (m/s^2)", g);
+  if (!changed) return;
+  p.dt = dt, p.mass_damping = md, p.stiffness_damping = sdmp;
+  p.gravity = Eigen::Vector3d(g[0], g[1], g[2]);
+  try {
+    sd.simulator().set_params(p);
+  } catch (const std::exception& ex) {
+    controls.message = ex.what();
+  }
+}
+
+// Young's modulus and Poisson ratio: a new simulation, restarted.
+void material(Stage& stage, Interaction& in) {
+  float E = static_cast<float>(stage.material.youngs_modulus), nu = static_cast<float>(stage.material.poisson_ratio);
+  bool changed = ImGui::SliderFloat("Young's modulus (Pa)", &E, 1e2f, 1e9f, "%.3g", ImGuiSliderFlags_Logarithmic);
+  changed |= ImGui::SliderFloat("Poisson ratio", &nu, 0.0f, 0.49f);
+  if (!changed) return;
+  stage.material.youngs_modulus = E, stage.material.poisson_ratio = nu;
+  in.release_poke();
+  stage.pipe.set_driver(stage.rebuild(stage.material));
+  in.reset();
+}
+
+void simulation(Stage& stage, Interaction& in, ViewerOptions& options, Controls& controls) {
+  pipeline::SimulatorDriver* sd = stage.simulation();
+  if (!sd) return;
+  simulation_parameters(*sd, controls);
+  if (stage.rebuild) material(stage, in);
+  float response = static_cast<float>(options.poke_response);
+  if (ImGui::SliderFloat("poke response (s)", &response, 0.02f, 1.0f, "%.2f")) options.poke_response = response;
+  if (in.poke().handle >= 0) ImGui::Text("poke: stiffness %.3g N/m", in.poke().stiffness);
+}
+
+void panel(Stage& stage, Interaction& in, ViewerOptions& options, Controls& controls, const FrameTimes& times) {
+  ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_Once);
+  ImGui::SetNextWindowBgAlpha(0.85f);
+  ImGui::Begin("mbi", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
+  statistics(stage, times);
+  ImGui::Separator();
+  playback(in, options, controls);
+  view_switches(stage, options);
+  simulation(stage, in, options, controls);
+  if (!controls.message.empty()) ImGui::TextWrapped("%s", controls.message.c_str());
+  ImGui::TextDisabled("? for help");
+  const ImVec2 pos = ImGui::GetWindowPos(), sz = ImGui::GetWindowSize();
+  in.panel_min = Eigen::Vector2d(pos.x, pos.y);
+  in.panel_max = Eigen::Vector2d(pos.x + sz.x, pos.y + sz.y);
+  ImGui::End();
+}
+
+void help(bool& open, const WindowSize& window) {
+  ImGui::SetNextWindowPos(ImVec2(static_cast<float>(window.width) * 0.5f, static_cast<float>(window.height) * 0.5f),
+                          ImGuiCond_Always, ImVec2(0.5f, 0.5f));
+  ImGui::Begin("help", &open, ImGuiWindowFlags_AlwaysAutoResize);
+  ImGui::TextUnformatted(kHelp);
+  ImGui::End();
+}
+
+}  // namespace
+
+void draw_gui(Stage& stage, Interaction& in, ViewerOptions& options, Controls& controls, const FrameTimes& times,
+              const WindowSize& window) {
+  ImGui_ImplOpenGL3_NewFrame();
+  ImGui_ImplGlfw_NewFrame();
+  ImGui::NewFrame();
+  if (options.panel) panel(stage, in, options, controls, times);
+  if (controls.help) help(controls.help, window);
+  ImGui::Render();
+  ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+}
+
+}  // namespace mbi::viewer

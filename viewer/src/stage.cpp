@@ -1,0 +1,78 @@
+#include "stage.hpp"
+
+#include <mbi/interp/embed.hpp>
+
+#include <cmath>
+
+namespace mbi::viewer {
+namespace {
+
+gpu::GpuEvaluator& gpu_evaluator(pipeline::FramePipeline& pipe) {
+  auto* gpu = dynamic_cast<gpu::GpuEvaluator*>(&pipe.evaluator());
+  if (!gpu) throw ViewerError("the viewer shows pipelines built with Viewer::evaluator()");
+  return *gpu;
+}
+
+const io::Image* checked_image(const Shown& shown) {
+  if (shown.pipe.dim() == 2 && !shown.image) throw ViewerError("a 2D pipeline needs an image to draw");
+  return shown.image;
+}
+
+}  // namespace
+
+Stage::Stage(const Shown& shown)
+    : pipe(shown.pipe),
+      gpu(gpu_evaluator(shown.pipe)),
+      F(shown.faces),
+      image(checked_image(shown)),
+      d(pipe.dim()),
+      U(pipe.rest_positions()),
+      T(pipe.elements()),
+      rest_dense(interp::embedded_positions(U, T, pipe.embedding())),
+      material(shown.material),
+      rebuild(shown.rebuild) {
+  lo = hi = Eigen::Vector3d::Zero();
+  lo.head(d) = U.colwise().minCoeff().transpose();
+  hi.head(d) = U.colwise().maxCoeff().transpose();
+  size = (hi - lo).norm();
+  alpha = pipe.options().interp.alpha > 0 ? pipe.options().interp.alpha : (d == 3 ? 0.1 : 0.2);
+}
+
+void Stage::set_views(bool split) {
+  views.clear();
+  if (split && pipe.method() != pipeline::Method::BI) views.push_back(pipeline::Method::BI);
+  views.push_back(pipe.method());
+}
+
+void Stage::set_method(pipeline::Method method, bool split) {
+  pipe.set_method(method);
+  set_views(split);
+}
+
+void Stage::frame(Camera& camera, const Eigen::Vector3d& up) const {
+  if (d == 2) {
+    camera.frame(lo, hi, Eigen::Vector3d(0, -1, 0));
+    camera.yaw = std::acos(-1.0);
+    camera.pitch = 0;
+  } else {
+    camera.frame(lo, hi, up);
+    camera.yaw = 0.6;
+    camera.pitch = 0.35;
+  }
+}
+
+pipeline::SimulatorDriver* Stage::simulation() const {
+  return dynamic_cast<pipeline::SimulatorDriver*>(&pipe.driver());
+}
+
+Eigen::MatrixXd Stage::control_positions_3d() const {
+  Eigen::MatrixXd X3 = Eigen::MatrixXd::Zero(U.rows(), 3);
+  X3.leftCols(d) = pipe.control_positions();
+  return X3;
+}
+
+double Stage::view_width(const WindowSize& window) const {
+  return static_cast<double>(window.width) / static_cast<int>(views.size());
+}
+
+}  // namespace mbi::viewer

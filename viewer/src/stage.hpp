@@ -1,0 +1,69 @@
+#pragma once
+// What one Viewer::show displays and how (internal): the pipeline, the views side by side (BI |
+// the pipeline's method), the model's bounds for the camera; and the small state the parts of
+// the viewer share (window size, run flags, frame times).
+#include <mbi/viewer/camera.hpp>
+#include <mbi/viewer/viewer.hpp>
+
+#include <chrono>
+#include <string>
+#include <vector>
+
+namespace mbi::viewer {
+
+/// The window's size in logical pixels (what GLFW reports; at least 1 x 1).
+struct WindowSize {
+  int width = 1, height = 1;
+};
+
+/// What keys and the panel ask of the frame loop, and the line the panel shows.
+struct Controls {
+  bool step_once = false, help = false, close = false;
+  std::string message;  ///< shown in the panel (errors, screenshots)
+};
+
+/// The last frame's times (ms) and the smoothed frame rate (the panel and the report show them).
+struct FrameTimes {
+  double interpolation_ms = 0, drawing_ms = 0, fps = 0;
+  std::chrono::steady_clock::time_point last_frame = std::chrono::steady_clock::now();
+};
+
+/// A row of d <= 3 coordinates as a 3D point (z = 0 in 2D).
+inline Eigen::Vector3d pad3(const Eigen::RowVectorXd& r) {
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  p.head(r.size()) = r.transpose();
+  return p;
+}
+
+struct Stage {
+  /// Throws ViewerError: a pipeline not built with Viewer::evaluator(), 2D without an image.
+  explicit Stage(const Shown& shown);
+
+  pipeline::FramePipeline& pipe;
+  gpu::GpuEvaluator& gpu;
+  const Eigen::MatrixXi& F;
+  const io::Image* image;
+  const int d;                     ///< 2 or 3
+  const Eigen::MatrixXd& U;        ///< rest control positions, n x d
+  const Eigen::MatrixXi& T;        ///< control elements
+  const Eigen::MatrixXd rest_dense;  ///< the dense points at rest
+  Eigen::Vector3d lo, hi;          ///< the control mesh's bounds (z = 0 in 2D)
+  double size;                     ///< their diagonal
+  double alpha;                    ///< interpolation weight shown in the panel
+  sim::Material material;          ///< edited in the panel
+  std::function<std::unique_ptr<pipeline::Driver>(const sim::Material&)> rebuild;
+  std::vector<pipeline::Method> views;  ///< left to right
+
+  void set_views(bool split);
+  void set_method(pipeline::Method method, bool split);
+  /// The camera framing the control mesh; 2D looks at the picture from the front (y down).
+  void frame(Camera& camera, const Eigen::Vector3d& up) const;
+  /// The pipeline's driver when it is a simulation, else nullptr.
+  pipeline::SimulatorDriver* simulation() const;
+  /// The current control positions, n x 3 (z = 0 in 2D).
+  Eigen::MatrixXd control_positions_3d() const;
+  /// Width (logical pixels) of one view in a window of `window`.
+  double view_width(const WindowSize& window) const;
+};
+
+}  // namespace mbi::viewer
