@@ -2,6 +2,7 @@
 #include <mbi/interp/embed.hpp>
 
 #include "detail.hpp"
+#include "threads.hpp"
 
 #include <algorithm>
 #include <array>
@@ -303,7 +304,7 @@ Embedding embed(const Eigen::Ref<const Eigen::MatrixXd>& U,
   emb.element.resize(np);
   emb.bary.resize(np, d + 1);
   Eigen::VectorXd dist(np);
-  const int threads = detail::thread_count(0, np, 2048);
+  const int threads = detail::thread_count(np, 2048);
   detail::parallel_for(np, threads, [&](long long b, long long e) {
     std::vector<int> stamp(m, -1);
     std::array<double, 4> bb{};

@@ -2,7 +2,7 @@
 #include "factor.hpp"
 
 #include "cpu.hpp"
-#include "omp.hpp"
+#include "threads.hpp"
 
 #include <mbi/error.hpp>
 
@@ -293,17 +293,13 @@ void sweep_plain(const CholeskyFactor& F, const std::vector<int>* list, bool for
   sweep_body<S>(F, list, forward, X, rmap);
 }
 
-#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
-#define MBI_FACTOR_X86 1
+#ifdef MBI_INTERP_X86
 template <int S>
 __attribute__((target("avx2,fma"))) void sweep_avx2(const CholeskyFactor& F, const std::vector<int>* list,
                                                     bool forward, double* X, const int* rmap) {
   sweep_body<S>(F, list, forward, X, rmap);
 }
 
-#endif
-
-#ifdef MBI_FACTOR_X86
 template <int S>
 __attribute__((target("avx2,fma"))) void top_avx2(const CholeskyFactor& F, double* X, double* partial, int t, int T) {
   top_body<S>(F, X, partial, t, T);
@@ -311,7 +307,7 @@ __attribute__((target("avx2,fma"))) void top_avx2(const CholeskyFactor& F, doubl
 #endif
 
 void top_w(int S, const CholeskyFactor& F, double* X, double* partial, int t, int T) {
-#ifdef MBI_FACTOR_X86
+#ifdef MBI_INTERP_X86
   if (have_avx2_fma()) {
     switch (S) {
       case 1: return top_avx2<1>(F, X, partial, t, T);
@@ -331,7 +327,7 @@ void top_w(int S, const CholeskyFactor& F, double* X, double* partial, int t, in
 
 template <int S>
 void sweep(const CholeskyFactor& F, const std::vector<int>* list, bool forward, double* X, const int* rmap) {
-#ifdef MBI_FACTOR_X86
+#ifdef MBI_INTERP_X86
   if (have_avx2_fma()) return sweep_avx2<S>(F, list, forward, X, rmap);
 #endif
   sweep_plain<S>(F, list, forward, X, rmap);

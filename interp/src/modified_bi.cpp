@@ -4,16 +4,12 @@
 #include "detail.hpp"
 #include "factor.hpp"
 #include "cpu.hpp"
-#include "omp.hpp"
+#include "threads.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <numeric>
-
-#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
-#include <immintrin.h>
-#endif
 
 namespace mbi::interp {
 
@@ -419,7 +415,7 @@ void dense_rows_portable(const double* K, std::ptrdiff_t n, const double* xs, co
   }
 }
 
-#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+#ifdef MBI_INTERP_X86
 __attribute__((target("avx2,fma"))) inline double hsum(__m256d v) {
   const __m128d s = _mm_add_pd(_mm256_castpd256_pd128(v), _mm256_extractf128_pd(v, 1));
   return _mm_cvtsd_f64(_mm_add_sd(s, _mm_unpackhi_pd(s, s)));
@@ -456,13 +452,11 @@ __attribute__((target("avx2,fma"))) void dense_rows_avx2(const double* K, std::p
   }
   if (r < r1) dense_rows_portable(K, n, xs, ys, zs, sol, r, r1);
 }
-
-#define MBI_DENSE_X86 1
 #endif
 
 void dense_rows(const double* K, std::ptrdiff_t n, const double* xs, const double* ys, const double* zs,
                 double* sol, std::ptrdiff_t r0, std::ptrdiff_t r1) {
-#ifdef MBI_DENSE_X86
+#ifdef MBI_INTERP_X86
   if (detail::have_avx2_fma()) return dense_rows_avx2(K, n, xs, ys, zs, sol, r0, r1);
 #endif
   dense_rows_portable(K, n, xs, ys, zs, sol, r0, r1);
