@@ -10,12 +10,12 @@
 namespace mbi::interp::detail {
 
 /// Throws Error unless U is n x d (d in {2,3}) and T is m x (d+1) with indices in [0, n).
-/// Cheaper than validate_mesh (no degeneracy test); `who` prefixes the message.
-void check_shapes(const char* who, const Eigen::Ref<const Eigen::MatrixXd>& U,
+/// Cheaper than validate_mesh (no degeneracy test).
+void check_shapes(const Eigen::Ref<const Eigen::MatrixXd>& U,
                   const Eigen::Ref<const Eigen::MatrixXi>& T);
 
 /// Throws Error naming the first non-finite entry of A (row `what` r).
-void check_finite(const char* who, const char* what, const Eigen::Ref<const Eigen::MatrixXd>& A);
+void check_finite(const char* what, const Eigen::Ref<const Eigen::MatrixXd>& A);
 
 /// Per-component quadratic forms (method.md facts 1-3), unweighted, energy = z^T H z:
 /// vibr_mm (dn x dn), disc_mm (dn x dn), disc_mx (dn x n), disc_xx (n x n); m index i d + r.

@@ -448,7 +448,7 @@ void CholeskyFactor::schedule(int threads, std::ptrdiff_t min_nonzeros) {
 }
 
 void CholeskyFactor::solve(double* B, int w) const {
-  if (w < 1 || w > 8) throw Error("CholeskyFactor::solve: 1 to 8 right-hand sides at a time");
+  if (w < 1 || w > 8) throw Error("1 to 8 right-hand sides at a time");
   // padded width of the sweeps: 1, 2, 4 or 8 doubles a row
   const int S = w == 1 ? 1 : w == 2 ? 2 : w <= 4 ? 4 : 8;
   const std::ptrdiff_t nS = static_cast<std::ptrdiff_t>(n) * S;
@@ -517,10 +517,10 @@ bool cholmod_available() {
 
 namespace {
 
-CholeskyFactor eigen_factor(const Eigen::SparseMatrix<double>& A, const char* who) {
+CholeskyFactor eigen_factor(const Eigen::SparseMatrix<double>& A) {
   Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> llt(A);
   if (llt.info() != Eigen::Success)
-    throw Error(std::string(who) + ": Cholesky factorisation failed: the reduced system is not positive definite");
+    throw Error("Cholesky factorisation failed: the reduced system is not positive definite");
   CholeskyFactor F;
   F.method = "Eigen SimplicialLLT (AMD)";
   F.n = static_cast<int>(A.rows());
@@ -543,12 +543,12 @@ CholeskyFactor eigen_factor(const Eigen::SparseMatrix<double>& A, const char* wh
   }
   for (int j = 0; j < F.n; ++j)
     if (F.rowp[j] == F.rowp[j + 1] || F.rows[F.rowp[j]] != j)
-      throw Error(std::string(who) + ": unexpected layout of Eigen's Cholesky factor");
+      throw Error("unexpected layout of Eigen's Cholesky factor");
   return F;
 }
 
 #ifdef MBI_HAVE_CHOLMOD
-CholeskyFactor factor_with_cholmod(const Eigen::SparseMatrix<double>& A, const char* who) {
+CholeskyFactor factor_with_cholmod(const Eigen::SparseMatrix<double>& A) {
   cholmod_common c;
   cholmod_start(&c);
   c.supernodal = CHOLMOD_SUPERNODAL;
@@ -577,7 +577,7 @@ CholeskyFactor factor_with_cholmod(const Eigen::SparseMatrix<double>& A, const c
   if (!why.empty()) {
     if (L) cholmod_free_factor(&L, &c);
     cholmod_finish(&c);
-    throw Error(std::string(who) + ": Cholesky factorisation (CHOLMOD) failed: " + why);
+    throw Error("Cholesky factorisation (CHOLMOD) failed: " + why);
   }
   CholeskyFactor F;
   F.method = L->ordering == CHOLMOD_METIS ? "CHOLMOD supernodal (METIS)" : "CHOLMOD supernodal (AMD)";
@@ -603,22 +603,22 @@ CholeskyFactor factor_with_cholmod(const Eigen::SparseMatrix<double>& A, const c
 
 }  // namespace
 
-CholeskyFactor cholesky(const Eigen::SparseMatrix<double>& A, bool use_cholmod, const char* who) {
+CholeskyFactor cholesky(const Eigen::SparseMatrix<double>& A, bool use_cholmod) {
   CholeskyFactor F;
   if (use_cholmod) {
 #ifdef MBI_HAVE_CHOLMOD
-    F = factor_with_cholmod(A, who);
+    F = factor_with_cholmod(A);
 #else
-    throw Error(std::string(who) + ": this build has no CHOLMOD (configure with MBI_WITH_CHOLMOD=ON and libsuitesparse-dev)");
+    throw Error("this build has no CHOLMOD (configure with MBI_WITH_CHOLMOD=ON and libsuitesparse-dev)");
 #endif
   } else {
-    F = eigen_factor(A, who);
+    F = eigen_factor(A);
   }
   // the sweeps rely on it: each supernode's first rows are its own columns, in order
   for (size_t q = 0; q + 1 < F.super.size(); ++q)
     for (int k = F.super[q]; k < F.super[q + 1]; ++k)
       if (F.rows[F.rowp[q] + (k - F.super[q])] != k)
-        throw Error(std::string(who) + ": unexpected layout of the Cholesky factor (supernode " +
+        throw Error("unexpected layout of the Cholesky factor (supernode " +
                     std::to_string(q) + ")");
   F.schedule(omp_threads(1LL << 30, 1));
   return F;

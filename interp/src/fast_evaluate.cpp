@@ -126,29 +126,29 @@ const char* FastEvaluator::name(Simd s) {
 FastEvaluator::FastEvaluator(const Embedding& emb, int threads, Simd simd) : threads_(threads) {
   d_ = emb.dim();
   if (d_ != 2 && d_ != 3)
-    throw Error("FastEvaluator: the embedding must be 2D or 3D (bary with 3 or 4 columns), got " +
+    throw Error("the embedding must be 2D or 3D (bary with 3 or 4 columns), got " +
                 std::to_string(emb.bary.cols()) + " columns");
   if (simd != Simd::Auto && !supported(simd))
-    throw Error(std::string("FastEvaluator: this CPU cannot run the ") + name(simd) + " kernels");
+    throw Error(std::string("this CPU cannot run the ") + name(simd) + " kernels");
   if (simd == Simd::Auto) simd = supported(Simd::Avx512) ? Simd::Avx512 : supported(Simd::Avx2) ? Simd::Avx2 : Simd::Portable;
   simd_ = d_ == 3 ? simd : Simd::Portable;
   if (emb.bary.rows() != emb.element.size())
-    throw Error("FastEvaluator: embedding has " + std::to_string(emb.element.size()) + " elements but " +
+    throw Error("embedding has " + std::to_string(emb.element.size()) + " elements but " +
                 std::to_string(emb.bary.rows()) + " coordinate rows");
-  if (threads < 0) throw Error("FastEvaluator: threads must be >= 0 (0 = all cores)");
+  if (threads < 0) throw Error("threads must be >= 0 (0 = all cores)");
   p_ = emb.size();
   const int d = d_;
   m_ = 0;
   for (long long i = 0; i < p_; ++i) {
     if (emb.element(i) < 0)
-      throw Error("FastEvaluator: point " + std::to_string(i) + " refers to element " +
+      throw Error("point " + std::to_string(i) + " refers to element " +
                   std::to_string(emb.element(i)));
     m_ = std::max(m_, emb.element(i) + 1);
   }
   if (emb.gradients.rows() > 0) {
     if (emb.gradients.cols() != d || emb.gradients.rows() % (d + 1) != 0 ||
         emb.gradients.rows() / (d + 1) < m_)
-      throw Error("FastEvaluator: the embedding's basis gradients are " +
+      throw Error("the embedding's basis gradients are " +
                   std::to_string(emb.gradients.rows()) + " x " + std::to_string(emb.gradients.cols()) +
                   ", expected (m (d+1)) x d with m >= " + std::to_string(m_));
     m_ = static_cast<int>(emb.gradients.rows() / (d + 1));
@@ -176,10 +176,10 @@ FastEvaluator::FastEvaluator(const Embedding& emb, int threads, Simd simd) : thr
 
 void FastEvaluator::set_rest_normals(const Eigen::Ref<const Eigen::MatrixXd>& normals) {
   if (normals.rows() != p_ || normals.cols() != d_)
-    throw Error("FastEvaluator: rest normals must be " + std::to_string(p_) + " x " + std::to_string(d_) +
+    throw Error("rest normals must be " + std::to_string(p_) + " x " + std::to_string(d_) +
                 ", got " + std::to_string(normals.rows()) + " x " + std::to_string(normals.cols()));
   if (grads_.empty() && p_ > 0)
-    throw Error("FastEvaluator: normals need the embedding's basis gradients (filled by embed())");
+    throw Error("normals need the embedding's basis gradients (filled by embed())");
   // m = cof(A)^T n per point, A = [a_1 .. a_d] (the element's basis gradients as columns):
   // m_k = n . (column k of cof(A)); in 3D column k is a_{k+1} x a_{k+2}.
   // padding: 16-byte loads of the last one, and room to move the block (rest_normals_for())
@@ -234,10 +234,10 @@ void FastEvaluator::prepare(const BezierPoints& B, bool normals) {
   const int d = d_;
   const int K = (d + 1) * (d + 2) / 2;
   if (B.cols() != d || B.rows() % K != 0 || B.rows() / K < m_)
-    throw Error("FastEvaluator: Bezier points must be (m " + std::to_string(K) + ") x " +
+    throw Error("Bezier points must be (m " + std::to_string(K) + ") x " +
                 std::to_string(d) + " with m >= " + std::to_string(m_) + ", got " +
                 std::to_string(B.rows()) + " x " + std::to_string(B.cols()));
-  if (normals && !has_rest_normals()) throw Error("FastEvaluator: normals asked for, but no rest normals were set");
+  if (normals && !has_rest_normals()) throw Error("normals asked for, but no rest normals were set");
   coef_.resize(static_cast<size_t>(m_) * coef_stride(d) + 16);
   float* const coef = align64(coef_.data());
   const int nt = threads();
