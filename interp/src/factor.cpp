@@ -68,7 +68,7 @@ __attribute__((always_inline)) inline void store(double* p, const Vec<S>& v) {
 // each such row of X is loaded and stored once per panel, and the backward sums run in 4
 // independent accumulators. `rmap` is F.rows, or F.prow for a group of the threaded forward
 // sweep (the supernode's own columns come first in both).
-constexpr int kPanel = 4;  // columns of a panel (8 was slower at 1,331 vertices, 1.85 against 1.44 ms)
+constexpr int kPanel = 4;  // columns of a panel (wider panels ran slower)
 
 template <int S, int W>
 __attribute__((always_inline)) inline void forward_panel(const double* L, std::ptrdiff_t nsrow, int j,

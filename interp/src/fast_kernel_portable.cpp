@@ -68,7 +68,7 @@ void eval_d(const std::int32_t* rec, const float* coef, const Layout& L, const f
     float sq = 0;
     for (int c = 0; c < D; ++c) sq += o[c] * o[c];
     const float len = std::sqrt(sq);
-    // 0 where J is singular: the x86 kernels' threshold, so that both give the same points 0
+    // 0 where J is singular: the x86 kernels' threshold, so that all give the same points 0
     for (int c = 0; c < D; ++c) nout[p * D + c] = sq > FLT_MIN ? o[c] / len : 0.0f;
   }
 }
