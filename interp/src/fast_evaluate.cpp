@@ -307,10 +307,12 @@ void FastEvaluator::evaluate(const BezierPoints& B, float* positions, float* nor
   const Layout& L = layout_for(d, with_normals, simd_);
   detail::Kernel x86 = nullptr;
 #ifdef MBI_INTERP_X86
-  // sigma within 2^+-16 leaves |cof(D) m|^2 within 2^+-64 (m: [0.5, 1)): no scaling needed
-  const bool scaled = !(sigma >= 0x1p-16f && sigma <= 0x1p16f), prefetch = !coherent_;
-  if (simd_ == Simd::Avx512) x86 = detail::avx512_kernel(with_normals, scaled, prefetch);
-  if (simd_ == Simd::Avx2) x86 = detail::avx2_kernel(with_normals, scaled, prefetch);
+  if (simd_ == Simd::Avx512 || simd_ == Simd::Avx2) {
+    const detail::KernelTable& kernels = simd_ == Simd::Avx512 ? detail::avx512_kernels : detail::avx2_kernels;
+    // sigma within 2^+-16 leaves |cof(D) m|^2 within 2^+-64 (m: [0.5, 1)): no scaling needed
+    const bool scaled = !(sigma >= 0x1p-16f && sigma <= 0x1p16f);
+    x86 = kernels[with_normals ? (scaled ? 2 : 1) : 0][coherent_ ? 0 : 1];
+  }
 #endif
   // kBlock points a block, a multiple of 4 (each block's first output float stays 16-byte aligned)
   detail::parallel_blocks(p, kBlock, threads(), [&](long long begin, long long end) {

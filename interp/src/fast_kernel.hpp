@@ -81,11 +81,12 @@ void eval_portable(int d, const std::int32_t* rec, const float* coef, const Layo
                    float sigma, float* pos, float* nout, long long begin, long long end);
 
 #ifdef MBI_INTERP_X86
-// The 3D kernels of an instruction set for: normals or not, D scaled or not (only with normals),
-// prefetches of the element terms or not. They take end - begin a multiple of 4 (the caller
-// runs the rest portably) and read the pairs layout, or with AVX2 and normals the packed one.
-Kernel avx2_kernel(bool normals, bool scaled, bool prefetch);
-Kernel avx512_kernel(bool normals, bool scaled, bool prefetch);
+// The 3D kernels of an instruction set: [positions only, normals, normals with D scaled]
+// [without, with prefetches of the element terms]. They take end - begin a multiple of 4 (the
+// caller runs the rest portably) and read the pairs layout, or with AVX2 and normals the packed
+// one.
+using KernelTable = Kernel[3][2];
+extern const KernelTable avx2_kernels, avx512_kernels;
 #endif
 
 }  // namespace mbi::interp::detail

@@ -180,14 +180,11 @@ MBI_TARGET_AVX2 void eval_positions(const std::int32_t* rec, const float* coef, 
 
 }  // namespace
 
-Kernel avx2_kernel(bool normals, bool scaled, bool prefetch) {
-  static constexpr Kernel table[3][2] = {
-      {eval_positions<false>, eval_positions<true>},
-      {eval_normals<false, false>, eval_normals<false, true>},
-      {eval_normals<true, false>, eval_normals<true, true>},
-  };
-  return table[normals ? (scaled ? 2 : 1) : 0][prefetch ? 1 : 0];
-}
+const KernelTable avx2_kernels = {
+    {eval_positions<false>, eval_positions<true>},
+    {eval_normals<false, false>, eval_normals<false, true>},
+    {eval_normals<true, false>, eval_normals<true, true>},
+};
 
 }  // namespace mbi::interp::detail
 #endif

@@ -270,14 +270,11 @@ MBI_TARGET_AVX512 void eval_normals(const std::int32_t* rec, const float* coef, 
 
 }  // namespace
 
-Kernel avx512_kernel(bool normals, bool scaled, bool prefetch) {
-  static constexpr Kernel table[3][2] = {
-      {eval_positions<false>, eval_positions<true>},
-      {eval_normals<false, false>, eval_normals<false, true>},
-      {eval_normals<true, false>, eval_normals<true, true>},
-  };
-  return table[normals ? (scaled ? 2 : 1) : 0][prefetch ? 1 : 0];
-}
+const KernelTable avx512_kernels = {
+    {eval_positions<false>, eval_positions<true>},
+    {eval_normals<false, false>, eval_normals<false, true>},
+    {eval_normals<true, false>, eval_normals<true, true>},
+};
 
 }  // namespace mbi::interp::detail
 #pragma GCC diagnostic pop
