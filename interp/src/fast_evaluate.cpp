@@ -98,6 +98,7 @@ double prepare_terms(const BezierPoints& B, float* coef, int m, int threads) {
       }
     }
   }
+  (void)threads;  // without OpenMP
   return dmax;
 }
 
