@@ -37,31 +37,31 @@ HandleSolver::HandleSolver(const Eigen::Ref<const Eigen::MatrixXd>& U,
   I.n = static_cast<int>(U.rows());
   I.opt = options;
   const int d = I.d, n = I.n;
-  if (handles.empty()) throw Error("HandleSolver: the handle set is empty");
+  if (handles.empty()) throw Error("the handle set is empty");
   std::vector<char> is_handle(n, 0);
   for (size_t h = 0; h < handles.size(); ++h) {
     const int v = handles[h];
     if (v < 0 || v >= n)
-      throw Error("HandleSolver: handle " + std::to_string(h) + " is vertex " + std::to_string(v) +
+      throw Error("handle " + std::to_string(h) + " is vertex " + std::to_string(v) +
                   ", outside [0, " + std::to_string(n) + ")");
-    if (is_handle[v]) throw Error("HandleSolver: vertex " + std::to_string(v) + " is a handle twice");
+    if (is_handle[v]) throw Error("vertex " + std::to_string(v) + " is a handle twice");
     is_handle[v] = 1;
   }
   I.handles = std::move(handles);
   const Options& io = options.interp;
   if (!(io.alpha >= 0) || !std::isfinite(io.alpha))
-    throw Error("HandleSolver: alpha must be > 0 (0 selects the default), got " + std::to_string(io.alpha));
+    throw Error("alpha must be > 0 (0 selects the default), got " + std::to_string(io.alpha));
   if (!(io.beta >= 0) || !std::isfinite(io.beta))
-    throw Error("HandleSolver: beta must be > 0 (0 selects the automatic rule), got " + std::to_string(io.beta));
+    throw Error("beta must be > 0 (0 selects the automatic rule), got " + std::to_string(io.beta));
   if (!(options.gamma >= 0) || !std::isfinite(options.gamma))
-    throw Error("HandleSolver: gamma must be >= 0 (0 selects the automatic rule), got " + std::to_string(options.gamma));
+    throw Error("gamma must be >= 0 (0 selects the automatic rule), got " + std::to_string(options.gamma));
   if (!(options.regularization >= 0) || !std::isfinite(options.regularization))
-    throw Error("HandleSolver: regularization must be >= 0, got " + std::to_string(options.regularization));
+    throw Error("regularization must be >= 0, got " + std::to_string(options.regularization));
   I.alpha = io.alpha > 0 ? io.alpha : default_alpha(d);
 
   const detail::Hessians Hs = detail::assemble(I.U, I.T);
   if (Hs.disc_mm.nonZeros() == 0)
-    throw Error("HandleSolver: the control mesh has no interior faces (a single element?)");
+    throw Error("the control mesh has no interior faces (a single element?)");
   I.beta = io.beta > 0 ? io.beta : Hs.vibr_mm.norm() / Hs.disc_mm.norm();
 
   // Full per-component Hessian of E_total over z = [m (d n); x (n)].
@@ -104,7 +104,7 @@ HandleSolver::HandleSolver(const Eigen::Ref<const Eigen::MatrixXd>& U,
   I.reg_mask = Eigen::VectorXd::Zero(n);
   if (lu.rank() < d + 1 && n_pos > 0) {
     if (options.regularization <= 0)
-      throw Error("HandleSolver: fewer than d+1 affinely independent handles need regularization > 0");
+      throw Error("fewer than d+1 affinely independent handles need regularization > 0");
     I.lambda = options.regularization * pos_norm / std::sqrt(static_cast<double>(n_pos));
     for (int v = 0; v < n; ++v)
       if (!hard || !is_handle[v]) {
@@ -134,7 +134,7 @@ HandleSolver::HandleSolver(const Eigen::Ref<const Eigen::MatrixXd>& U,
     if (free_vertex[a / d] && !pinned[a]) I.m_index[a] = ny++;
   for (int v = 0; v < n; ++v) {
     if (!used[v])
-      throw Error("HandleSolver: vertex " + std::to_string(v) + " belongs to no element");
+      throw Error("vertex " + std::to_string(v) + " belongs to no element");
     if (!(hard && is_handle[v])) I.x_index[v] = ny++;
   }
   std::vector<Eigen::Triplet<double>> tr, th;
@@ -154,7 +154,7 @@ HandleSolver::HandleSolver(const Eigen::Ref<const Eigen::MatrixXd>& U,
   }
   I.llt.compute(Hyy);
   if (I.llt.info() != Eigen::Success)
-    throw Error("HandleSolver: Cholesky factorisation failed: the handle problem is not positive definite");
+    throw Error("Cholesky factorisation failed: the handle problem is not positive definite");
   I.M = VertexMatrices::Zero(static_cast<Eigen::Index>(d) * n, d);
 }
 
@@ -167,15 +167,15 @@ Eigen::MatrixXd HandleSolver::solve(const Eigen::Ref<const Eigen::MatrixXd>& tar
   Impl& I = *impl_;
   const int d = I.d, n = I.n, h = static_cast<int>(I.handles.size());
   if (targets.rows() != h || targets.cols() != d)
-    throw Error("HandleSolver::solve: targets must be " + std::to_string(h) + " x " + std::to_string(d) +
+    throw Error("targets must be " + std::to_string(h) + " x " + std::to_string(d) +
                 ", got " + std::to_string(targets.rows()) + " x " + std::to_string(targets.cols()));
-  detail::check_finite("HandleSolver::solve", "target", targets);
+  detail::check_finite("target", targets);
   const Eigen::MatrixXd& prev = previous.size() == 0 ? I.U : previous;
   if (prev.rows() != n || prev.cols() != d)
-    throw Error("HandleSolver::solve: previous pose must be " + std::to_string(n) + " x " +
+    throw Error("previous pose must be " + std::to_string(n) + " x " +
                 std::to_string(d) + " or empty, got " + std::to_string(prev.rows()) + " x " +
                 std::to_string(prev.cols()));
-  detail::check_finite("HandleSolver::solve", "previous vertex", prev);
+  detail::check_finite("previous vertex", prev);
   const bool hard = I.opt.mode == HandleMode::Hard;
   // right-hand side on the full vector z = [m; x], then restricted
   Eigen::MatrixXd bz = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(d) * n + n, d);

@@ -1,9 +1,12 @@
 #pragma once
-// Run-time CPU features of mbi::interp (internal): the AVX2/FMA kernels (evaluation, dense
-// operator, factor sweeps) are picked with have_avx2_fma(), the AVX-512 evaluation kernels with
+// Run-time CPU features of mbi::interp (internal). MBI_INTERP_X86 is the one guard of the x86
+// code: where it is defined, functions compiled for AVX2/FMA or AVX-512 with
+// __attribute__((target(...))) (never per-file flags: Eigen templates compiled wider would leave
+// copies the linker may keep for every CPU) are picked at run time with have_avx2_fma() and
 // have_avx512(); other CPUs run portable loops.
 #if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
 #define MBI_INTERP_X86 1
+#include <immintrin.h>
 
 namespace mbi::interp::detail {
 

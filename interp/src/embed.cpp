@@ -2,6 +2,7 @@
 #include <mbi/interp/embed.hpp>
 
 #include "detail.hpp"
+#include "threads.hpp"
 
 #include <algorithm>
 #include <array>
@@ -106,7 +107,7 @@ Locator build_locator(const Eigen::Ref<const Eigen::MatrixXd>& U0,
     Eigen::MatrixXd E(d, d);
     for (int k = 0; k < d; ++k) E.col(k) = (U0.row(T(e, k + 1)) - U0.row(T(e, 0))).transpose();
     Eigen::FullPivLU<Eigen::MatrixXd> lu(E);
-    if (!lu.isInvertible()) throw Error("embed: element " + std::to_string(e) + " is degenerate");
+    if (!lu.isInvertible()) throw Error("element " + std::to_string(e) + " is degenerate");
     L.inv[e].setZero();
     L.inv[e].topLeftCorner(d, d) = lu.inverse();
   }
@@ -268,13 +269,13 @@ std::string format_g(double x) {
 Embedding embed(const Eigen::Ref<const Eigen::MatrixXd>& U,
                 const Eigen::Ref<const Eigen::MatrixXi>& T,
                 const Eigen::Ref<const Eigen::MatrixXd>& P) {
-  detail::check_shapes("embed", U, T);
-  detail::check_finite("embed", "control vertex", U);
+  detail::check_shapes(U, T);
+  detail::check_finite("control vertex", U);
   const int d = static_cast<int>(U.cols());
   if (P.cols() != d)
-    throw Error("embed: points must be p x " + std::to_string(d) + " like the control mesh, got p x " +
+    throw Error("points must be p x " + std::to_string(d) + " like the control mesh, got p x " +
                 std::to_string(P.cols()));
-  detail::check_finite("embed", "point", P);
+  detail::check_finite("point", P);
   // Scale-free: the control mesh and the points are moved to the centre of the mesh's bounding
   // box and scaled by its largest extent s (halves first: no overflow even at +-1e308). The
   // coordinates are affine invariants; distances and gradients are mapped back below.
@@ -282,7 +283,7 @@ Embedding embed(const Eigen::Ref<const Eigen::MatrixXd>& U,
   const Eigen::RowVectorXd center = 0.5 * lo + 0.5 * hi;
   const double s = 2.0 * (0.5 * hi - 0.5 * lo).maxCoeff();
   if (!(s > 0) || !std::isfinite(s))
-    throw Error("embed: the control mesh has no extent (every vertex at the same point)");
+    throw Error("the control mesh has no extent (every vertex at the same point)");
   const Eigen::MatrixXd Un = (U.rowwise() - center) / s;
   Eigen::MatrixXd Pn = (P.rowwise() - center) / s;
   for (Eigen::Index i = 0; i < Pn.rows(); ++i) {
@@ -290,7 +291,7 @@ Embedding embed(const Eigen::Ref<const Eigen::MatrixXd>& U,
     if (!(far <= kFarLimit)) {  // also NaN/inf from (p - centre) / s overflowing
       std::string at;
       for (int c = 0; c < d; ++c) at += (c ? ", " : "") + format_g(P(i, c));
-      throw Error("embed: point " + std::to_string(i) + " (" + at + ") lies more than " +
+      throw Error("point " + std::to_string(i) + " (" + at + ") lies more than " +
                   format_g(kFarLimit) + " times the control mesh's size (" + format_g(s) +
                   ") away from it: too far to extrapolate");
     }
@@ -303,7 +304,7 @@ Embedding embed(const Eigen::Ref<const Eigen::MatrixXd>& U,
   emb.element.resize(np);
   emb.bary.resize(np, d + 1);
   Eigen::VectorXd dist(np);
-  const int threads = detail::thread_count(0, np, 2048);
+  const int threads = detail::thread_count(np, 2048);
   detail::parallel_for(np, threads, [&](long long b, long long e) {
     std::vector<int> stamp(m, -1);
     std::array<double, 4> bb{};
@@ -320,7 +321,7 @@ Embedding embed(const Eigen::Ref<const Eigen::MatrixXd>& U,
   });
   for (int i = 0; i < np; ++i) {
     if (emb.element(i) < 0 || !emb.bary.row(i).allFinite())  // never index element -1
-      throw Error("embed: point " + std::to_string(i) + ": no element found (distance overflow)");
+      throw Error("point " + std::to_string(i) + ": no element found (distance overflow)");
     if (dist(i) > 0 || emb.bary.row(i).minCoeff() < -kInsideTol) {
       emb.outside.push_back(i);
       emb.max_outside_distance = std::max(emb.max_outside_distance, dist(i) * s);
@@ -333,7 +334,7 @@ Embedding embed(const Eigen::Ref<const Eigen::MatrixXd>& U,
     emb.gradients.row(e * (d + 1)) = -inv.topLeftCorner(d, d).colwise().sum();
   }
   if (!emb.gradients.allFinite())
-    throw Error("embed: the control mesh is too small (size " + format_g(s) +
+    throw Error("the control mesh is too small (size " + format_g(s) +
                 "): its basis gradients overflow");
   return emb;
 }
@@ -341,16 +342,16 @@ Embedding embed(const Eigen::Ref<const Eigen::MatrixXd>& U,
 Eigen::MatrixXd embedded_positions(const Eigen::Ref<const Eigen::MatrixXd>& U,
                                    const Eigen::Ref<const Eigen::MatrixXi>& T,
                                    const Embedding& emb) {
-  detail::check_shapes("embedded_positions", U, T);
+  detail::check_shapes(U, T);
   const int d = static_cast<int>(U.cols());
   if (emb.bary.cols() != d + 1 || emb.bary.rows() != emb.element.size())
-    throw Error("embedded_positions: embedding has " + std::to_string(emb.bary.cols()) +
+    throw Error("embedding has " + std::to_string(emb.bary.cols()) +
                 " coordinates per point, expected " + std::to_string(d + 1));
   Eigen::MatrixXd out(emb.size(), d);
   for (int i = 0; i < emb.size(); ++i) {
     const int e = emb.element(i);
     if (e < 0 || e >= T.rows())
-      throw Error("embedded_positions: point " + std::to_string(i) + " refers to element " +
+      throw Error("point " + std::to_string(i) + " refers to element " +
                   std::to_string(e) + " outside [0, " + std::to_string(T.rows()) + ")");
     out.row(i).setZero();
     for (int k = 0; k <= d; ++k) out.row(i) += emb.bary(i, k) * U.row(T(e, k));

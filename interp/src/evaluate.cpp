@@ -2,6 +2,7 @@
 #include <mbi/interp/evaluate.hpp>
 
 #include "detail.hpp"
+#include "threads.hpp"
 
 #include <array>
 #include <cmath>
@@ -13,20 +14,20 @@ template <typename Scalar>
 using MatX = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
 
 // Checks B / emb consistency; returns d.
-int check_inputs(const char* who, const BezierPoints& B, const Embedding& emb) {
+int check_inputs(const BezierPoints& B, const Embedding& emb) {
   const int d = static_cast<int>(B.cols());
-  if (d != 2 && d != 3) throw Error(std::string(who) + ": Bezier points must have 2 or 3 columns");
+  if (d != 2 && d != 3) throw Error("Bezier points must have 2 or 3 columns");
   const int K = (d + 1) * (d + 2) / 2;
   if (B.rows() % K != 0)
-    throw Error(std::string(who) + ": Bezier points have " + std::to_string(B.rows()) +
+    throw Error("Bezier points have " + std::to_string(B.rows()) +
                 " rows, not a multiple of " + std::to_string(K));
   if (emb.bary.cols() != d + 1 || emb.bary.rows() != emb.element.size())
-    throw Error(std::string(who) + ": embedding has " + std::to_string(emb.bary.cols()) +
+    throw Error("embedding has " + std::to_string(emb.bary.cols()) +
                 " coordinates per point, expected " + std::to_string(d + 1));
   const long long m = B.rows() / K;
   for (int i = 0; i < emb.size(); ++i)
     if (emb.element(i) < 0 || emb.element(i) >= m)
-      throw Error(std::string(who) + ": point " + std::to_string(i) + " refers to element " +
+      throw Error("point " + std::to_string(i) + " refers to element " +
                   std::to_string(emb.element(i)) + " outside [0, " + std::to_string(m) + ")");
   return d;
 }
@@ -66,7 +67,7 @@ void kernel(const MatX<Scalar>& Prow /* D x (m K), column per control point */, 
             MatX<Scalar>& pos, MatX<Scalar>* normals_out, int threads) {
   constexpr int K = (D + 1) * (D + 2) / 2;
   const long long np = emb.size();
-  const int nt = detail::thread_count(threads, np, 8192);
+  const int nt = detail::thread_count(np, 8192, threads);
   detail::parallel_for(np, nt, [&](long long begin, long long end) {
     Scalar b[D + 1], x[D], g[D + 1][D];
     for (long long p = begin; p < end; ++p) {
@@ -118,18 +119,18 @@ void kernel(const MatX<Scalar>& Prow /* D x (m K), column per control point */, 
 template <typename Scalar>
 void run(const BezierPoints& B, const Embedding& emb, const MatX<Scalar>* normals_rest,
          MatX<Scalar>& positions, MatX<Scalar>* normals_out, int threads) {
-  const int d = check_inputs("evaluate", B, emb);
+  const int d = check_inputs(B, emb);
   // control points as D x (m K) so that each element's points are contiguous
   const MatX<Scalar> Prow = B.transpose().template cast<Scalar>();
   MatX<Scalar> grads;
   if (normals_out) {
     const long long m = B.rows() / ((d + 1) * (d + 2) / 2);
     if (emb.gradients.rows() != m * (d + 1) || emb.gradients.cols() != d)
-      throw Error("evaluate: normals need the embedding's basis gradients (" + std::to_string(m * (d + 1)) +
+      throw Error("normals need the embedding's basis gradients (" + std::to_string(m * (d + 1)) +
                   " x " + std::to_string(d) + ", filled by embed()), got " +
                   std::to_string(emb.gradients.rows()) + " x " + std::to_string(emb.gradients.cols()));
     if (normals_rest->rows() != emb.size() || normals_rest->cols() != d)
-      throw Error("evaluate: rest normals must be " + std::to_string(emb.size()) + " x " +
+      throw Error("rest normals must be " + std::to_string(emb.size()) + " x " +
                   std::to_string(d) + ", got " + std::to_string(normals_rest->rows()) + " x " +
                   std::to_string(normals_rest->cols()));
     grads = emb.gradients.transpose().template cast<Scalar>();
@@ -170,8 +171,8 @@ Eigen::MatrixXd jacobian(const Eigen::Ref<const Eigen::MatrixXd>& U,
   const int d = static_cast<int>(U.cols());
   const int K = (d + 1) * (d + 2) / 2;
   if (B.cols() != d || B.rows() != T.rows() * K)
-    throw Error("jacobian: Bezier points must be " + std::to_string(T.rows() * K) + " x " + std::to_string(d));
-  if (bary.size() != d + 1) throw Error("jacobian: bary must have " + std::to_string(d + 1) + " entries");
+    throw Error("Bezier points must be " + std::to_string(T.rows() * K) + " x " + std::to_string(d));
+  if (bary.size() != d + 1) throw Error("bary must have " + std::to_string(d + 1) + " entries");
   // g_k = dx/dphi_k = 2 phi_k x_k + sum_{edges (k, j)} 2 phi_j P_kj
   Eigen::MatrixXd g(d, d + 1);
   for (int k = 0; k <= d; ++k) g.col(k) = 2 * bary(k) * B.row(e * K + k).transpose();

@@ -2,7 +2,7 @@
 #include "factor.hpp"
 
 #include "cpu.hpp"
-#include "omp.hpp"
+#include "threads.hpp"
 
 #include <mbi/error.hpp>
 
@@ -68,7 +68,7 @@ __attribute__((always_inline)) inline void store(double* p, const Vec<S>& v) {
 // each such row of X is loaded and stored once per panel, and the backward sums run in 4
 // independent accumulators. `rmap` is F.rows, or F.prow for a group of the threaded forward
 // sweep (the supernode's own columns come first in both).
-constexpr int kPanel = 4;  // columns of a panel (8 was slower at 1,331 vertices, 1.85 against 1.44 ms)
+constexpr int kPanel = 4;  // columns of a panel (wider panels ran slower)
 
 template <int S, int W>
 __attribute__((always_inline)) inline void forward_panel(const double* L, std::ptrdiff_t nsrow, int j,
@@ -293,17 +293,13 @@ void sweep_plain(const CholeskyFactor& F, const std::vector<int>* list, bool for
   sweep_body<S>(F, list, forward, X, rmap);
 }
 
-#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
-#define MBI_FACTOR_X86 1
+#ifdef MBI_INTERP_X86
 template <int S>
 __attribute__((target("avx2,fma"))) void sweep_avx2(const CholeskyFactor& F, const std::vector<int>* list,
                                                     bool forward, double* X, const int* rmap) {
   sweep_body<S>(F, list, forward, X, rmap);
 }
 
-#endif
-
-#ifdef MBI_FACTOR_X86
 template <int S>
 __attribute__((target("avx2,fma"))) void top_avx2(const CholeskyFactor& F, double* X, double* partial, int t, int T) {
   top_body<S>(F, X, partial, t, T);
@@ -311,7 +307,7 @@ __attribute__((target("avx2,fma"))) void top_avx2(const CholeskyFactor& F, doubl
 #endif
 
 void top_w(int S, const CholeskyFactor& F, double* X, double* partial, int t, int T) {
-#ifdef MBI_FACTOR_X86
+#ifdef MBI_INTERP_X86
   if (have_avx2_fma()) {
     switch (S) {
       case 1: return top_avx2<1>(F, X, partial, t, T);
@@ -331,7 +327,7 @@ void top_w(int S, const CholeskyFactor& F, double* X, double* partial, int t, in
 
 template <int S>
 void sweep(const CholeskyFactor& F, const std::vector<int>* list, bool forward, double* X, const int* rmap) {
-#ifdef MBI_FACTOR_X86
+#ifdef MBI_INTERP_X86
   if (have_avx2_fma()) return sweep_avx2<S>(F, list, forward, X, rmap);
 #endif
   sweep_plain<S>(F, list, forward, X, rmap);
@@ -452,7 +448,7 @@ void CholeskyFactor::schedule(int threads, std::ptrdiff_t min_nonzeros) {
 }
 
 void CholeskyFactor::solve(double* B, int w) const {
-  if (w < 1 || w > 8) throw Error("CholeskyFactor::solve: 1 to 8 right-hand sides at a time");
+  if (w < 1 || w > 8) throw Error("1 to 8 right-hand sides at a time");
   // padded width of the sweeps: 1, 2, 4 or 8 doubles a row
   const int S = w == 1 ? 1 : w == 2 ? 2 : w <= 4 ? 4 : 8;
   const std::ptrdiff_t nS = static_cast<std::ptrdiff_t>(n) * S;
@@ -521,10 +517,10 @@ bool cholmod_available() {
 
 namespace {
 
-CholeskyFactor eigen_factor(const Eigen::SparseMatrix<double>& A, const char* who) {
+CholeskyFactor eigen_factor(const Eigen::SparseMatrix<double>& A) {
   Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> llt(A);
   if (llt.info() != Eigen::Success)
-    throw Error(std::string(who) + ": Cholesky factorisation failed: the reduced system is not positive definite");
+    throw Error("Cholesky factorisation failed: the reduced system is not positive definite");
   CholeskyFactor F;
   F.method = "Eigen SimplicialLLT (AMD)";
   F.n = static_cast<int>(A.rows());
@@ -547,12 +543,12 @@ CholeskyFactor eigen_factor(const Eigen::SparseMatrix<double>& A, const char* wh
   }
   for (int j = 0; j < F.n; ++j)
     if (F.rowp[j] == F.rowp[j + 1] || F.rows[F.rowp[j]] != j)
-      throw Error(std::string(who) + ": unexpected layout of Eigen's Cholesky factor");
+      throw Error("unexpected layout of Eigen's Cholesky factor");
   return F;
 }
 
 #ifdef MBI_HAVE_CHOLMOD
-CholeskyFactor factor_with_cholmod(const Eigen::SparseMatrix<double>& A, const char* who) {
+CholeskyFactor factor_with_cholmod(const Eigen::SparseMatrix<double>& A) {
   cholmod_common c;
   cholmod_start(&c);
   c.supernodal = CHOLMOD_SUPERNODAL;
@@ -581,7 +577,7 @@ CholeskyFactor factor_with_cholmod(const Eigen::SparseMatrix<double>& A, const c
   if (!why.empty()) {
     if (L) cholmod_free_factor(&L, &c);
     cholmod_finish(&c);
-    throw Error(std::string(who) + ": Cholesky factorisation (CHOLMOD) failed: " + why);
+    throw Error("Cholesky factorisation (CHOLMOD) failed: " + why);
   }
   CholeskyFactor F;
   F.method = L->ordering == CHOLMOD_METIS ? "CHOLMOD supernodal (METIS)" : "CHOLMOD supernodal (AMD)";
@@ -607,22 +603,22 @@ CholeskyFactor factor_with_cholmod(const Eigen::SparseMatrix<double>& A, const c
 
 }  // namespace
 
-CholeskyFactor cholesky(const Eigen::SparseMatrix<double>& A, bool use_cholmod, const char* who) {
+CholeskyFactor cholesky(const Eigen::SparseMatrix<double>& A, bool use_cholmod) {
   CholeskyFactor F;
   if (use_cholmod) {
 #ifdef MBI_HAVE_CHOLMOD
-    F = factor_with_cholmod(A, who);
+    F = factor_with_cholmod(A);
 #else
-    throw Error(std::string(who) + ": this build has no CHOLMOD (configure with MBI_WITH_CHOLMOD=ON and libsuitesparse-dev)");
+    throw Error("this build has no CHOLMOD (configure with MBI_WITH_CHOLMOD=ON and libsuitesparse-dev)");
 #endif
   } else {
-    F = eigen_factor(A, who);
+    F = eigen_factor(A);
   }
   // the sweeps rely on it: each supernode's first rows are its own columns, in order
   for (size_t q = 0; q + 1 < F.super.size(); ++q)
     for (int k = F.super[q]; k < F.super[q + 1]; ++k)
       if (F.rows[F.rowp[q] + (k - F.super[q])] != k)
-        throw Error(std::string(who) + ": unexpected layout of the Cholesky factor (supernode " +
+        throw Error("unexpected layout of the Cholesky factor (supernode " +
                     std::to_string(q) + ")");
   F.schedule(omp_threads(1LL << 30, 1));
   return F;

@@ -49,8 +49,8 @@ struct CholeskyFactor {
 };
 
 /// Factor of the SPD matrix A (full symmetric storage). Throws Error when A is not positive
-/// definite (`who` prefixes the message). use_cholmod needs cholmod_available().
-CholeskyFactor cholesky(const Eigen::SparseMatrix<double>& A, bool use_cholmod, const char* who);
+/// definite. use_cholmod needs cholmod_available().
+CholeskyFactor cholesky(const Eigen::SparseMatrix<double>& A, bool use_cholmod);
 
 bool cholmod_available();
 

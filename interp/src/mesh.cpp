@@ -10,29 +10,29 @@
 namespace mbi::interp {
 namespace detail {
 
-void check_shapes(const char* who, const Eigen::Ref<const Eigen::MatrixXd>& U,
+void check_shapes(const Eigen::Ref<const Eigen::MatrixXd>& U,
                   const Eigen::Ref<const Eigen::MatrixXi>& T) {
   const auto d = U.cols();
   if (d != 2 && d != 3)
-    throw Error(std::string(who) + ": rest positions must be n x 2 or n x 3, got " +
+    throw Error("rest positions must be n x 2 or n x 3, got " +
                 std::to_string(U.rows()) + " x " + std::to_string(d));
   if (T.cols() != d + 1)
-    throw Error(std::string(who) + ": elements must be m x " + std::to_string(d + 1) +
+    throw Error("elements must be m x " + std::to_string(d + 1) +
                 " for d = " + std::to_string(d) + ", got m x " + std::to_string(T.cols()));
-  if (T.rows() == 0) throw Error(std::string(who) + ": the control mesh has no elements");
+  if (T.rows() == 0) throw Error("the control mesh has no elements");
   const auto n = U.rows();
   for (Eigen::Index e = 0; e < T.rows(); ++e)
     for (Eigen::Index k = 0; k < T.cols(); ++k)
       if (T(e, k) < 0 || T(e, k) >= n)
-        throw Error(std::string(who) + ": element " + std::to_string(e) + " has vertex index " +
+        throw Error("element " + std::to_string(e) + " has vertex index " +
                     std::to_string(T(e, k)) + " outside [0, " + std::to_string(n) + ")");
 }
 
-void check_finite(const char* who, const char* what, const Eigen::Ref<const Eigen::MatrixXd>& A) {
+void check_finite(const char* what, const Eigen::Ref<const Eigen::MatrixXd>& A) {
   for (Eigen::Index i = 0; i < A.rows(); ++i)
     for (Eigen::Index c = 0; c < A.cols(); ++c)
       if (!std::isfinite(A(i, c)))
-        throw Error(std::string(who) + ": " + what + " " + std::to_string(i) +
+        throw Error(std::string(what) + " " + std::to_string(i) +
                     " has a non-finite coordinate (column " + std::to_string(c) + ")");
 }
 
@@ -91,15 +91,15 @@ std::string face_name(const FaceKey& key, int d) {
 
 void validate_mesh(const Eigen::Ref<const Eigen::MatrixXd>& U,
                    const Eigen::Ref<const Eigen::MatrixXi>& T, double rel_tol) {
-  detail::check_shapes("validate_mesh", U, T);
-  detail::check_finite("validate_mesh", "vertex", U);
-  if (!(rel_tol >= 0)) throw Error("validate_mesh: rel_tol must be >= 0");
+  detail::check_shapes(U, T);
+  detail::check_finite("vertex", U);
+  if (!(rel_tol >= 0)) throw Error("rel_tol must be >= 0");
   const int d = static_cast<int>(U.cols());
   for (Eigen::Index e = 0; e < T.rows(); ++e) {
     for (int a = 0; a <= d; ++a)
       for (int b = a + 1; b <= d; ++b)
         if (T(e, a) == T(e, b))
-          throw Error("validate_mesh: element " + std::to_string(e) + " repeats vertex " +
+          throw Error("element " + std::to_string(e) + " repeats vertex " +
                       std::to_string(T(e, a)));
     double h = 0;
     int edges = 0;
@@ -108,47 +108,47 @@ void validate_mesh(const Eigen::Ref<const Eigen::MatrixXd>& U,
     h /= edges;
     const double vol = element_volume(U, T, static_cast<int>(e));
     if (!(std::abs(vol) > rel_tol * std::pow(h, d)))
-      throw Error("validate_mesh: element " + std::to_string(e) + " is degenerate (volume " +
+      throw Error("element " + std::to_string(e) + " is degenerate (volume " +
                   std::to_string(vol) + ", mean edge length " + std::to_string(h) + ")");
   }
 }
 
 namespace {
 // Checks dimensions and element e's indices only (O(1), unlike check_shapes).
-void check_element(const char* who, const Eigen::Ref<const Eigen::MatrixXd>& U,
+void check_element(const Eigen::Ref<const Eigen::MatrixXd>& U,
                    const Eigen::Ref<const Eigen::MatrixXi>& T, int e) {
   const auto d = U.cols();
   if ((d != 2 && d != 3) || T.cols() != d + 1)
-    throw Error(std::string(who) + ": expected U n x d (d = 2, 3) and T m x (d+1), got U " +
+    throw Error("expected U n x d (d = 2, 3) and T m x (d+1), got U " +
                 std::to_string(U.rows()) + " x " + std::to_string(d) + ", T " +
                 std::to_string(T.rows()) + " x " + std::to_string(T.cols()));
   if (e < 0 || e >= T.rows())
-    throw Error(std::string(who) + ": element " + std::to_string(e) + " out of range [0, " +
+    throw Error("element " + std::to_string(e) + " out of range [0, " +
                 std::to_string(T.rows()) + ")");
   for (Eigen::Index k = 0; k <= d; ++k)
     if (T(e, k) < 0 || T(e, k) >= U.rows())
-      throw Error(std::string(who) + ": element " + std::to_string(e) + " has vertex index " +
+      throw Error("element " + std::to_string(e) + " has vertex index " +
                   std::to_string(T(e, k)) + " outside [0, " + std::to_string(U.rows()) + ")");
 }
 }  // namespace
 
 double element_volume(const Eigen::Ref<const Eigen::MatrixXd>& U,
                       const Eigen::Ref<const Eigen::MatrixXi>& T, int e) {
-  check_element("element_volume", U, T, e);
+  check_element(U, T, e);
   const Eigen::MatrixXd E = edge_matrix(U, T, e);
   return E.determinant() / factorial(static_cast<int>(U.cols()));
 }
 
 Eigen::MatrixXi interior_faces(const Eigen::Ref<const Eigen::MatrixXi>& T) {
   const int d = static_cast<int>(T.cols()) - 1;
-  if (d != 2 && d != 3) throw Error("interior_faces: elements must have 3 or 4 vertices");
+  if (d != 2 && d != 3) throw Error("elements must have 3 or 4 vertices");
   const auto faces = sorted_faces(T);
   std::vector<std::array<int, 5>> rows;
   for (size_t i = 0; i < faces.size();) {
     size_t j = i;
     while (j < faces.size() && faces[j].key == faces[i].key) ++j;
     if (j - i > 2)
-      throw Error("interior_faces: face " + face_name(faces[i].key, d) + " is shared by " +
+      throw Error("face " + face_name(faces[i].key, d) + " is shared by " +
                   std::to_string(j - i) + " elements (non-manifold), e.g. element " +
                   std::to_string(faces[i].element));
     if (j - i == 2) {
@@ -168,7 +168,7 @@ Eigen::MatrixXi interior_faces(const Eigen::Ref<const Eigen::MatrixXi>& T) {
 
 Eigen::MatrixXi boundary_faces(const Eigen::Ref<const Eigen::MatrixXd>& U,
                                const Eigen::Ref<const Eigen::MatrixXi>& T) {
-  detail::check_shapes("boundary_faces", U, T);
+  detail::check_shapes(U, T);
   const int d = static_cast<int>(U.cols());
   const auto faces = sorted_faces(T);
   std::vector<std::array<int, 3>> rows;
@@ -211,12 +211,12 @@ Eigen::MatrixXi boundary_faces(const Eigen::Ref<const Eigen::MatrixXd>& U,
 
 Eigen::VectorXi boundary_vertices(int n, const Eigen::Ref<const Eigen::MatrixXi>& T) {
   const int d = static_cast<int>(T.cols()) - 1;
-  if (d != 2 && d != 3) throw Error("boundary_vertices: elements must have 3 or 4 vertices");
-  if (n < 0) throw Error("boundary_vertices: n must be >= 0");
+  if (d != 2 && d != 3) throw Error("elements must have 3 or 4 vertices");
+  if (n < 0) throw Error("n must be >= 0");
   for (Eigen::Index e = 0; e < T.rows(); ++e)
     for (int k = 0; k <= d; ++k)
       if (T(e, k) < 0 || T(e, k) >= n)
-        throw Error("boundary_vertices: element " + std::to_string(e) + " has vertex index " +
+        throw Error("element " + std::to_string(e) + " has vertex index " +
                     std::to_string(T(e, k)) + " outside [0, " + std::to_string(n) + ")");
   Eigen::VectorXi flag = Eigen::VectorXi::Zero(n);
   const auto faces = sorted_faces(T);
@@ -232,12 +232,12 @@ Eigen::VectorXi boundary_vertices(int n, const Eigen::Ref<const Eigen::MatrixXi>
 
 Eigen::MatrixXd basis_gradients(const Eigen::Ref<const Eigen::MatrixXd>& U,
                                 const Eigen::Ref<const Eigen::MatrixXi>& T, int e) {
-  check_element("basis_gradients", U, T, e);
+  check_element(U, T, e);
   const auto d = U.cols();
   const Eigen::MatrixXd E = edge_matrix(U, T, e);
   Eigen::FullPivLU<Eigen::MatrixXd> lu(E);
   if (!lu.isInvertible())
-    throw Error("basis_gradients: element " + std::to_string(e) + " is degenerate");
+    throw Error("element " + std::to_string(e) + " is degenerate");
   const Eigen::MatrixXd Einv = lu.inverse();  // row k-1 = a_k^T for k >= 1
   Eigen::MatrixXd A(d + 1, d);
   A.bottomRows(d) = Einv;

@@ -17,14 +17,14 @@ double ratio_of(double a, double b) {
   return b > 0 ? a / b : (a > 0 ? std::numeric_limits<double>::infinity() : 1.0);
 }
 
-void check_xm(const char* who, const Eigen::Ref<const Eigen::MatrixXd>& U,
+void check_xm(const Eigen::Ref<const Eigen::MatrixXd>& U,
               const Eigen::Ref<const Eigen::MatrixXd>* X, const VertexMatrices& M) {
   const auto n = U.rows(), d = U.cols();
   if (X && (X->rows() != n || X->cols() != d))
-    throw Error(std::string(who) + ": X must be " + std::to_string(n) + " x " + std::to_string(d) +
+    throw Error("X must be " + std::to_string(n) + " x " + std::to_string(d) +
                 ", got " + std::to_string(X->rows()) + " x " + std::to_string(X->cols()));
   if (M.rows() != n * d || M.cols() != d)
-    throw Error(std::string(who) + ": M must be " + std::to_string(n * d) + " x " + std::to_string(d) +
+    throw Error("M must be " + std::to_string(n * d) + " x " + std::to_string(d) +
                 ", got " + std::to_string(M.rows()) + " x " + std::to_string(M.cols()));
 }
 std::string magnitude(const Eigen::Ref<const Eigen::MatrixXd>& A) {
@@ -42,7 +42,7 @@ void check_finite_table(const DiscontinuityTable& t, const Eigen::Ref<const Eige
   if (t.phong) ok = ok && std::isfinite(t.phong->mean) && std::isfinite(t.phong->std) &&
                     std::isfinite(t.phong->max);
   if (!ok)
-    throw OverflowError("discontinuity_table: the energies overflow a double (control positions up "
+    throw OverflowError("the energies overflow a double (control positions up "
                         "to " + magnitude(X) + ", matrices M up to " + magnitude(M) +
                         "; the energies grow with their square)");
 }
@@ -52,8 +52,8 @@ Eigen::VectorXd face_discontinuity(const Eigen::Ref<const Eigen::MatrixXd>& U,
                                    const Eigen::Ref<const Eigen::MatrixXi>& T,
                                    const Eigen::Ref<const Eigen::MatrixXd>& X,
                                    const VertexMatrices& M) {
-  detail::check_shapes("face_discontinuity", U, T);
-  check_xm("face_discontinuity", U, &X, M);
+  detail::check_shapes(U, T);
+  check_xm(U, &X, M);
   const int d = static_cast<int>(U.cols());
   const Eigen::MatrixXi F = interior_faces(T);
   Eigen::VectorXd E(F.rows());
@@ -150,13 +150,13 @@ Accuracy accuracy(const BezierPoints& B, const Embedding& emb,
   const int K = (d + 1) * (d + 2) / 2;
   const Eigen::Index m = emb.gradients.rows() / (d + 1);
   if (emb.gradients.rows() != m * (d + 1) || emb.gradients.cols() != d || m == 0)
-    throw Error("accuracy: the embedding has no basis gradients (use embed())");
+    throw Error("the embedding has no basis gradients (use embed())");
   if (B.rows() != m * K || B.cols() != d)
-    throw Error("accuracy: Bezier points must be " + std::to_string(m * K) + " x " + std::to_string(d));
+    throw Error("Bezier points must be " + std::to_string(m * K) + " x " + std::to_string(d));
   if (rest.rows() != p || rest.cols() != d || exact.rows() != p || exact.cols() != d)
-    throw Error("accuracy: rest and exact must be " + std::to_string(p) + " x " + std::to_string(d));
+    throw Error("rest and exact must be " + std::to_string(p) + " x " + std::to_string(d));
   if (exact_gradients.rows() != static_cast<Eigen::Index>(p) * d || exact_gradients.cols() != d)
-    throw Error("accuracy: exact_gradients must be " + std::to_string(p * d) + " x " + std::to_string(d));
+    throw Error("exact_gradients must be " + std::to_string(p * d) + " x " + std::to_string(d));
   Accuracy a;
   if (p == 0) return a;
   a.size = (rest.colwise().maxCoeff() - rest.colwise().minCoeff()).norm();
@@ -195,8 +195,8 @@ Accuracy accuracy(const BezierPoints& B, const Embedding& emb,
 
 double vibration_energy(const Eigen::Ref<const Eigen::MatrixXd>& U,
                         const Eigen::Ref<const Eigen::MatrixXi>& T, const VertexMatrices& M) {
-  detail::check_shapes("vibration_energy", U, T);
-  check_xm("vibration_energy", U, nullptr, M);
+  detail::check_shapes(U, T);
+  check_xm(U, nullptr, M);
   const int d = static_cast<int>(U.cols());
   double E = 0;
   for (int e = 0; e < T.rows(); ++e) {

@@ -4,16 +4,12 @@
 #include "detail.hpp"
 #include "factor.hpp"
 #include "cpu.hpp"
-#include "omp.hpp"
+#include "threads.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <numeric>
-
-#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
-#include <immintrin.h>
-#endif
 
 namespace mbi::interp {
 
@@ -291,7 +287,7 @@ Hessians assemble_fixed(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T) {
 Hessians assemble(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T) {
   if (U.cols() == 2) return assemble_fixed<2>(U, T);
   if (U.cols() == 3) return assemble_fixed<3>(U, T);
-  throw Error("assemble: dimension must be 2 or 3");
+  throw Error("dimension must be 2 or 3");
 }
 
 std::vector<char> gauge_pins(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T,
@@ -321,7 +317,7 @@ std::vector<char> gauge_pins(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T,
         comp_of_vertex[v] = c;
         comps[c].push_back(v);
       } else if (comp_of_vertex[v] != c) {
-        throw Error("ModifiedBI: vertex " + std::to_string(v) + " (of element " + std::to_string(e) +
+        throw Error("vertex " + std::to_string(v) + " (of element " + std::to_string(e) +
                     ") joins two parts of the control mesh that share no face; split the mesh "
                     "into separate objects");
       }
@@ -372,7 +368,7 @@ std::vector<char> gauge_pins(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T,
     Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(Nr.transpose());
     const Eigen::MatrixXd R = qr.matrixR().template triangularView<Eigen::Upper>();
     if (!(std::abs(R(kk - 1, kk - 1)) > 1e-8 * std::abs(R(0, 0))))
-      throw Error("ModifiedBI: cannot fix the gauge of the component containing vertex " +
+      throw Error("cannot fix the gauge of the component containing vertex " +
                   std::to_string(verts[0]) + " (its vertices are too close to collinear)");
     for (int i = 0; i < kk; ++i) {
       const int row = free_rows[qr.colsPermutation().indices()(i)];
@@ -388,7 +384,7 @@ std::vector<char> gauge_pins(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T,
 double default_alpha(int d) {
   if (d == 3) return 0.1;
   if (d == 2) return 0.2;
-  throw Error("default_alpha: dimension must be 2 or 3, got " + std::to_string(d));
+  throw Error("dimension must be 2 or 3, got " + std::to_string(d));
 }
 
 const std::vector<std::pair<int, int>>& bezier_edges(int d) {
@@ -396,7 +392,7 @@ const std::vector<std::pair<int, int>>& bezier_edges(int d) {
   static const std::vector<std::pair<int, int>> e3{{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
   if (d == 2) return e2;
   if (d == 3) return e3;
-  throw Error("bezier_edges: dimension must be 2 or 3, got " + std::to_string(d));
+  throw Error("dimension must be 2 or 3, got " + std::to_string(d));
 }
 
 namespace {
@@ -419,7 +415,7 @@ void dense_rows_portable(const double* K, std::ptrdiff_t n, const double* xs, co
   }
 }
 
-#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+#ifdef MBI_INTERP_X86
 __attribute__((target("avx2,fma"))) inline double hsum(__m256d v) {
   const __m128d s = _mm_add_pd(_mm256_castpd256_pd128(v), _mm256_extractf128_pd(v, 1));
   return _mm_cvtsd_f64(_mm_add_sd(s, _mm_unpackhi_pd(s, s)));
@@ -456,13 +452,11 @@ __attribute__((target("avx2,fma"))) void dense_rows_avx2(const double* K, std::p
   }
   if (r < r1) dense_rows_portable(K, n, xs, ys, zs, sol, r, r1);
 }
-
-#define MBI_DENSE_X86 1
 #endif
 
 void dense_rows(const double* K, std::ptrdiff_t n, const double* xs, const double* ys, const double* zs,
                 double* sol, std::ptrdiff_t r0, std::ptrdiff_t r1) {
-#ifdef MBI_DENSE_X86
+#ifdef MBI_INTERP_X86
   if (detail::have_avx2_fma()) return dense_rows_avx2(K, n, xs, ys, zs, sol, r0, r1);
 #endif
   dense_rows_portable(K, n, xs, ys, zs, sol, r0, r1);
@@ -527,7 +521,7 @@ struct ModifiedBI::Impl {
       return;
     }
     const SpMat A = a * Hmm_vibr_red + beta * Hmm_disc_red;
-    detail::CholeskyFactor Fa = detail::cholesky(A, use_cholmod(), "ModifiedBI");
+    detail::CholeskyFactor Fa = detail::cholesky(A, use_cholmod());
     std::vector<double> Ka;
     if (dense) {
       // K = -beta A^-1 H_mx, 8 columns (vertices) per pass over the factor
@@ -565,14 +559,14 @@ ModifiedBI::ModifiedBI(const Eigen::Ref<const Eigen::MatrixXd>& U,
   I.opt = options;
   const int d = I.d, n = I.n;
   if (!(options.alpha >= 0) || !std::isfinite(options.alpha))
-    throw Error("ModifiedBI: alpha must be > 0 (0 selects the default), got " + std::to_string(options.alpha));
+    throw Error("alpha must be > 0 (0 selects the default), got " + std::to_string(options.alpha));
   if (!(options.beta >= 0) || !std::isfinite(options.beta))
-    throw Error("ModifiedBI: beta must be > 0 (0 selects the automatic rule), got " + std::to_string(options.beta));
+    throw Error("beta must be > 0 (0 selects the automatic rule), got " + std::to_string(options.beta));
   I.alpha = options.alpha > 0 ? options.alpha : default_alpha(d);
 
   I.H = detail::assemble(I.U, I.T);
   if (I.H.disc_mm.nonZeros() == 0)
-    throw Error("ModifiedBI: the control mesh has no interior faces (a single element?); "
+    throw Error("the control mesh has no interior faces (a single element?); "
                 "modified-BI needs at least two face-adjacent elements");
   // beta: equal Frobenius norms of the m-blocks of E_vibr and beta E_disc (fact 7).
   I.beta = options.beta > 0 ? options.beta : I.H.vibr_mm.norm() / I.H.disc_mm.norm();
@@ -604,10 +598,10 @@ ModifiedBI::ModifiedBI(const Eigen::Ref<const Eigen::MatrixXd>& U,
   }
   if (!I.dense) I.rhs_op = -I.beta * I.Hmx_red;
   if (I.dense && static_cast<long long>(I.n_red) * n > (1LL << 28))
-    throw Error("ModifiedBI: the dense operator would need " + std::to_string(I.n_red) + " x " +
+    throw Error("the dense operator would need " + std::to_string(I.n_red) + " x " +
                 std::to_string(n) + " doubles; use SolvePath::Sparse or Automatic");
   if (options.factorization == Factorization::Cholmod && !detail::cholmod_available())
-    throw Error("ModifiedBI: Factorization::Cholmod asked for, but this build has no CHOLMOD "
+    throw Error("Factorization::Cholmod asked for, but this build has no CHOLMOD "
                 "(configure with MBI_WITH_CHOLMOD=ON and libsuitesparse-dev)");
   I.factor(I.alpha);
 }
@@ -618,7 +612,7 @@ ModifiedBI& ModifiedBI::operator=(ModifiedBI&&) noexcept = default;
 
 void ModifiedBI::set_alpha(double alpha) {
   if (!(alpha > 0) || !std::isfinite(alpha))
-    throw Error("ModifiedBI::set_alpha: alpha must be a finite number > 0, got " + std::to_string(alpha));
+    throw Error("alpha must be a finite number > 0, got " + std::to_string(alpha));
   impl_->factor(alpha);
 }
 
@@ -656,9 +650,9 @@ VertexMatrices ModifiedBI::solve(const Eigen::Ref<const Eigen::MatrixXd>& X) con
   const Impl& I = *impl_;
   const int d = I.d, n = I.n;
   if (X.rows() != n || X.cols() != d)
-    throw Error("ModifiedBI::solve: X must be " + std::to_string(n) + " x " + std::to_string(d) +
+    throw Error("X must be " + std::to_string(n) + " x " + std::to_string(d) +
                 ", got " + std::to_string(X.rows()) + " x " + std::to_string(X.cols()));
-  detail::check_finite("ModifiedBI::solve", "control vertex", X);
+  detail::check_finite("control vertex", X);
   VertexMatrices M = VertexMatrices::Zero(static_cast<Eigen::Index>(d) * n, d);
   if (I.n_red == 0) return M;
   std::vector<double> sol;  // n_red x d row-major: row a = reduced m of every component
@@ -699,13 +693,13 @@ BezierPoints ModifiedBI::bezier(const Eigen::Ref<const Eigen::MatrixXd>& X, cons
 }
 
 namespace {
-void check_xm(const char* who, int n, int d, const Eigen::Ref<const Eigen::MatrixXd>& X,
+void check_xm(int n, int d, const Eigen::Ref<const Eigen::MatrixXd>& X,
               const VertexMatrices* M) {
   if (X.rows() != n || X.cols() != d)
-    throw Error(std::string(who) + ": X must be " + std::to_string(n) + " x " + std::to_string(d) +
+    throw Error("X must be " + std::to_string(n) + " x " + std::to_string(d) +
                 ", got " + std::to_string(X.rows()) + " x " + std::to_string(X.cols()));
   if (M && (M->rows() != static_cast<Eigen::Index>(n) * d || M->cols() != d))
-    throw Error(std::string(who) + ": M must be " + std::to_string(n * d) + " x " + std::to_string(d) +
+    throw Error("M must be " + std::to_string(n * d) + " x " + std::to_string(d) +
                 ", got " + std::to_string(M->rows()) + " x " + std::to_string(M->cols()));
 }
 }  // namespace
@@ -714,14 +708,14 @@ BezierPoints bezier_bi(const Eigen::Ref<const Eigen::MatrixXd>& X,
                        const Eigen::Ref<const Eigen::MatrixXi>& T) {
   const int d = static_cast<int>(X.cols());
   if ((d != 2 && d != 3) || T.cols() != d + 1)
-    throw Error("bezier_bi: X must be n x d (d = 2, 3) and T m x (d+1)");
+    throw Error("X must be n x d (d = 2, 3) and T m x (d+1)");
   const auto& edges = bezier_edges(d);
   const int K = (d + 1) * (d + 2) / 2;
   BezierPoints B(T.rows() * K, d);
   for (Eigen::Index e = 0; e < T.rows(); ++e) {
     for (int k = 0; k <= d; ++k) {
       if (T(e, k) < 0 || T(e, k) >= X.rows())
-        throw Error("bezier_bi: element " + std::to_string(e) + " has vertex index " +
+        throw Error("element " + std::to_string(e) + " has vertex index " +
                     std::to_string(T(e, k)) + " outside [0, " + std::to_string(X.rows()) + ")");
       B.row(e * K + k) = X.row(T(e, k));
     }
@@ -734,10 +728,10 @@ BezierPoints bezier_bi(const Eigen::Ref<const Eigen::MatrixXd>& X,
 BezierPoints bezier_points(const Eigen::Ref<const Eigen::MatrixXd>& U,
                            const Eigen::Ref<const Eigen::MatrixXi>& T,
                            const Eigen::Ref<const Eigen::MatrixXd>& X, const VertexMatrices& M) {
-  detail::check_shapes("bezier_points", U, T);
+  detail::check_shapes(U, T);
   const int d = static_cast<int>(U.cols());
   const int n = static_cast<int>(U.rows());
-  check_xm("bezier_points", n, d, X, &M);
+  check_xm(n, d, X, &M);
   const auto& edges = bezier_edges(d);
   const int K = (d + 1) * (d + 2) / 2;
   BezierPoints B(T.rows() * K, d);
@@ -762,8 +756,8 @@ Eigen::VectorXd evaluate_reference(const Eigen::Ref<const Eigen::MatrixXd>& U,
                                    const VertexMatrices& M, int e,
                                    const Eigen::Ref<const Eigen::VectorXd>& u) {
   const int d = static_cast<int>(U.cols());
-  check_xm("evaluate_reference", static_cast<int>(U.rows()), d, X, &M);
-  if (u.size() != d) throw Error("evaluate_reference: u must have " + std::to_string(d) + " entries");
+  check_xm(static_cast<int>(U.rows()), d, X, &M);
+  if (u.size() != d) throw Error("u must have " + std::to_string(d) + " entries");
   const Eigen::MatrixXd A = basis_gradients(U, T, e);  // checks e
   const Eigen::VectorXd r = u - U.row(T(e, 0)).transpose();
   Eigen::VectorXd phi(d + 1);

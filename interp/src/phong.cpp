@@ -66,9 +66,9 @@ Phong::Phong(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const 
 Eigen::MatrixXd Phong::element_gradients(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
   const int d = dim(), m = elements();
   if (X.rows() != U_.rows() || X.cols() != d)
-    throw Error("Phong: X must be " + std::to_string(U_.rows()) + " x " + std::to_string(d) +
+    throw Error("X must be " + std::to_string(U_.rows()) + " x " + std::to_string(d) +
                 ", got " + std::to_string(X.rows()) + " x " + std::to_string(X.cols()));
-  detail::check_finite("Phong", "deformed vertex", X);
+  detail::check_finite("deformed vertex", X);
   Eigen::MatrixXd F(static_cast<Eigen::Index>(m) * d, d);
   Eigen::MatrixXd Ds(d, d);
   for (int e = 0; e < m; ++e) {

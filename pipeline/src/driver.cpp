@@ -91,17 +91,17 @@ void HandleDriver::reset() { previous_ = rest_; }
 GivenDriver::GivenDriver(const Eigen::Ref<const Eigen::MatrixXd>& U) : current_(U) {}
 
 GivenDriver::GivenDriver(std::vector<Eigen::MatrixXd> sequence) : sequence_(std::move(sequence)) {
-  if (sequence_.empty()) throw Error("GivenDriver: the sequence of positions is empty");
+  if (sequence_.empty()) throw Error("the sequence of positions is empty");
   for (size_t k = 0; k < sequence_.size(); ++k)
     if (sequence_[k].rows() != sequence_[0].rows() || sequence_[k].cols() != sequence_[0].cols())
-      throw Error("GivenDriver: frame " + std::to_string(k) + " has " +
+      throw Error("frame " + std::to_string(k) + " has " +
                   std::to_string(sequence_[k].rows()) + " x " + std::to_string(sequence_[k].cols()) +
                   " positions, frame 0 has " + std::to_string(sequence_[0].rows()) + " x " +
                   std::to_string(sequence_[0].cols()));
 }
 
 void GivenDriver::set(const Eigen::Ref<const Eigen::MatrixXd>& X) {
-  if (!sequence_.empty()) throw Error("GivenDriver: set() on a driver that plays a sequence");
+  if (!sequence_.empty()) throw Error("set() on a driver that plays a sequence");
   current_ = X;
 }
 

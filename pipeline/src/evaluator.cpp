@@ -9,7 +9,7 @@ namespace mbi::pipeline {
 
 CpuEvaluator::CpuEvaluator(Precision precision, int threads)
     : precision_(precision), threads_(threads) {
-  if (threads < 0) throw Error("CpuEvaluator: threads must be >= 0 (0 = all cores)");
+  if (threads < 0) throw Error("threads must be >= 0 (0 = all cores)");
 }
 
 std::string CpuEvaluator::name() const {
@@ -21,10 +21,10 @@ std::string CpuEvaluator::name() const {
 void CpuEvaluator::set_points(const PointSet& points) {
   const auto& embedding = points.embedding;
   const Eigen::MatrixXd& rest_normals = points.rest_normals;
-  if (!embedding) throw Error("CpuEvaluator: no embedding");
+  if (!embedding) throw Error("no embedding");
   if (rest_normals.size() != 0 &&
       (rest_normals.rows() != embedding->size() || rest_normals.cols() != embedding->dim()))
-    throw Error("CpuEvaluator: rest normals must be " + std::to_string(embedding->size()) + " x " +
+    throw Error("rest normals must be " + std::to_string(embedding->size()) + " x " +
                 std::to_string(embedding->dim()));
   // everything built before anything is replaced: a throw leaves the evaluator as it was
   std::unique_ptr<interp::FastEvaluator> fast;
@@ -43,9 +43,9 @@ void CpuEvaluator::set_points(const PointSet& points) {
 }
 
 void CpuEvaluator::evaluate(const interp::BezierPoints& B, bool normals) {
-  if (!embedding_) throw Error("CpuEvaluator: evaluate() before set_points()");
+  if (!embedding_) throw Error("evaluate() before set_points()");
   if (normals && rest_normals_.size() == 0)
-    throw Error("CpuEvaluator: normals asked for, but no rest normals were given");
+    throw Error("normals asked for, but no rest normals were given");
   const auto t0 = std::chrono::steady_clock::now();
   if (precision_ == Precision::Double) {
     if (normals)
@@ -54,7 +54,7 @@ void CpuEvaluator::evaluate(const interp::BezierPoints& B, bool normals) {
       interp::evaluate<double>(B, *embedding_, positions_, threads_);
   } else {
     if (normals && !fast_->has_rest_normals())
-      throw Error("CpuEvaluator: normals need the embedding's basis gradients (filled by interp::embed())");
+      throw Error("normals need the embedding's basis gradients (filled by interp::embed())");
     if (normals) fast_->evaluate(B, positions_f_, normals_f_);
     else fast_->evaluate(B, positions_f_);
     float_normals_ = normals;

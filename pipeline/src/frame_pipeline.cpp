@@ -116,13 +116,13 @@ FramePipeline::FramePipeline(const Eigen::Ref<const Eigen::MatrixXd>& U,
     : impl_(std::make_unique<Impl>()) {
   const int d = static_cast<int>(U.cols());
   if ((d != 2 && d != 3) || T.cols() != d + 1)
-    throw Error("FramePipeline: the control mesh must be n x d (d = 2, 3) with m x (d+1) elements");
+    throw Error("the control mesh must be n x d (d = 2, 3) with m x (d+1) elements");
   if (embedding.size() > 0 && embedding.dim() != d)
-    throw Error("FramePipeline: the embedding is " + std::to_string(embedding.dim()) +
+    throw Error("the embedding is " + std::to_string(embedding.dim()) +
                 "D, the control mesh " + std::to_string(d) + "D");
-  if (!driver) throw Error("FramePipeline: no driver");
+  if (!driver) throw Error("no driver");
   if (options.normals && rest_normals.size() == 0)
-    throw Error("FramePipeline: normals asked for, but no rest normals were given");
+    throw Error("normals asked for, but no rest normals were given");
   Impl& s = *impl_;
   s.U = U;
   s.T = T;
@@ -156,7 +156,7 @@ FrameResult FramePipeline::step(bool evaluate_now) {
   s.timings = {};
   s.timings.drive_ms = ms_since(t0);
   if (X.rows() != s.U.rows() || X.cols() != s.U.cols())
-    throw Error("FramePipeline: the driver gave " + std::to_string(X.rows()) + " x " +
+    throw Error("the driver gave " + std::to_string(X.rows()) + " x " +
                 std::to_string(X.cols()) + " positions for a control mesh of " +
                 std::to_string(s.U.rows()) + " x " + std::to_string(s.U.cols()));
   s.X = std::move(X);
@@ -171,7 +171,7 @@ FrameResult FramePipeline::step(bool evaluate_now) {
 
 void FramePipeline::evaluate() {
   Impl& s = *impl_;
-  if (s.frame < 0) throw Error("FramePipeline: evaluate() before the first step()");
+  if (s.frame < 0) throw Error("evaluate() before the first step()");
   if (!s.evaluated) s.run_evaluator();
 }
 
@@ -204,18 +204,18 @@ const Eigen::MatrixXd& FramePipeline::normals() {
 const FrameTimings& FramePipeline::timings() const { return impl_->timings; }
 
 const interp::VertexMatrices& FramePipeline::modified_bi_M() {
-  if (impl_->frame < 0) throw Error("FramePipeline: modified_bi_M() before the first step()");
+  if (impl_->frame < 0) throw Error("modified_bi_M() before the first step()");
   return impl_->mbi_M();
 }
 
 const interp::VertexMatrices& FramePipeline::phong_M() {
-  if (impl_->frame < 0) throw Error("FramePipeline: phong_M() before the first step()");
+  if (impl_->frame < 0) throw Error("phong_M() before the first step()");
   return impl_->phong_M();
 }
 
 void FramePipeline::evaluate_with(Method method, Eigen::MatrixXd& out) {
   Impl& s = *impl_;
-  if (s.frame < 0) throw Error("FramePipeline: evaluate_with() before the first step()");
+  if (s.frame < 0) throw Error("evaluate_with() before the first step()");
   if (method == s.options.method) {
     out = positions();
     return;
@@ -225,7 +225,7 @@ void FramePipeline::evaluate_with(Method method, Eigen::MatrixXd& out) {
 
 interp::BezierPoints FramePipeline::bezier_with(Method method) {
   Impl& s = *impl_;
-  if (s.frame < 0) throw Error("FramePipeline: bezier_with() before the first step()");
+  if (s.frame < 0) throw Error("bezier_with() before the first step()");
   if (method == s.options.method) return s.B;
   switch (method) {
     case Method::BI: return interp::bezier_bi(s.X, s.T);
@@ -249,7 +249,7 @@ void FramePipeline::set_method(Method method) {
 
 void FramePipeline::set_alpha(double alpha) {
   Impl& s = *impl_;
-  if (!(alpha > 0)) throw Error("FramePipeline: alpha must be > 0");
+  if (!(alpha > 0)) throw Error("alpha must be > 0");
   s.options.interp.alpha = alpha;
   if (s.solver) {
     const auto t0 = Clock::now();
@@ -271,7 +271,7 @@ double FramePipeline::phong_precompute_ms() const { return impl_->phong_ms; }
 Driver& FramePipeline::driver() { return *impl_->driver; }
 
 std::unique_ptr<Driver> FramePipeline::set_driver(std::unique_ptr<Driver> driver) {
-  if (!driver) throw Error("FramePipeline: no driver");
+  if (!driver) throw Error("no driver");
   std::swap(impl_->driver, driver);
   impl_->have_mbi = false;
   if (needs_solve(impl_->options.method) && !impl_->driver->solved_M()) impl_->get_solver();

@@ -192,8 +192,8 @@ struct Simulator::Impl {
     for (int a = 0; a < 4; ++a) p += b(a) * node(q, elems[e].node[a]);
     return p;
   }
-  void check_element_bary(int element, const Eigen::Vector4d& bary, const char* what) const;
-  void check_nodes(const std::vector<int>& nodes, const char* what) const;
+  void check_element_bary(int element, const Eigen::Vector4d& bary) const;
+  void check_nodes(const std::vector<int>& nodes) const;
 
   // Assembles at positions xe: elastic forces into f_el, A = cM M + cK K_el + cP K_poke (lower,
   // constrained rows/cols zeroed), and, when vd is non-null, Kv = K_el vd. Returns elastic energy.
@@ -361,28 +361,25 @@ void Simulator::Impl::update_constraints() {
   constraints_dirty = false;
 }
 
-void Simulator::Impl::check_element_bary(int element, const Eigen::Vector4d& bary,
-                                         const char* what) const {
+void Simulator::Impl::check_element_bary(int element, const Eigen::Vector4d& bary) const {
   if (element < 0 || element >= static_cast<int>(elems.size()))
-    throw Error(std::string("mbi::sim: ") + what + ": element " + std::to_string(element) +
-                " outside [0, " + std::to_string(elems.size()) + ")");
+    throw Error("mbi::sim: element " + std::to_string(element) + " outside [0, " +
+                std::to_string(elems.size()) + ")");
   if (!bary.allFinite() || std::abs(bary.sum() - 1.0) > 1e-9)
-    throw Error(std::string("mbi::sim: ") + what + ": barycentric coordinates in element " +
-                std::to_string(element) + " must be finite and sum to 1");
+    throw Error("mbi::sim: barycentric coordinates in element " + std::to_string(element) +
+                " must be finite and sum to 1");
 }
 
-void Simulator::Impl::check_nodes(const std::vector<int>& nodes, const char* what) const {
-  if (nodes.empty()) throw Error(std::string("mbi::sim: ") + what + ": empty node set");
+void Simulator::Impl::check_nodes(const std::vector<int>& nodes) const {
+  if (nodes.empty()) throw Error("mbi::sim: empty node set");
   std::vector<char> seen(n, 0);
   for (int i : nodes) {
     if (i < 0 || i >= n)
-      throw Error(std::string("mbi::sim: ") + what + ": node " + std::to_string(i) +
-                  " outside [0, " + std::to_string(n) + ")");
+      throw Error("mbi::sim: node " + std::to_string(i) + " outside [0, " + std::to_string(n) + ")");
     if (owner[i] >= 0)
-      throw Error(std::string("mbi::sim: ") + what + ": node " + std::to_string(i) +
-                  " already belongs to handle " + std::to_string(owner[i]));
-    if (seen[i]) throw Error(std::string("mbi::sim: ") + what + ": node " + std::to_string(i) +
-                             " listed twice");
+      throw Error("mbi::sim: node " + std::to_string(i) + " already belongs to handle " +
+                  std::to_string(owner[i]));
+    if (seen[i]) throw Error("mbi::sim: node " + std::to_string(i) + " listed twice");
     seen[i] = 1;
   }
 }
@@ -670,15 +667,15 @@ int Simulator::fix(const std::vector<int>& nodes) { return add_kinematic(nodes, 
 
 int Simulator::add_kinematic(const std::vector<int>& nodes, const RigidMotion& motion) {
   Impl& s = *impl_;
-  s.check_nodes(nodes, "add_kinematic");
+  s.check_nodes(nodes);
   if (!motion.center.allFinite() || !motion.axis.allFinite() ||
       !std::isfinite(motion.angular_velocity) || !motion.velocity.allFinite() ||
       std::isnan(motion.start) || std::isnan(motion.stop))
-    throw Error("mbi::sim: add_kinematic: rigid motion has a non-finite field");
+    throw Error("mbi::sim: rigid motion has a non-finite field");
   if (motion.angular_velocity != 0.0 && motion.axis.norm() == 0.0)
-    throw Error("mbi::sim: add_kinematic: rotation axis is zero");
+    throw Error("mbi::sim: rotation axis is zero");
   if (motion.stop < motion.start)
-    throw Error("mbi::sim: add_kinematic: stop time is before start time");
+    throw Error("mbi::sim: stop time is before start time");
   Kinematic k;
   k.nodes = nodes;
   k.motion = motion;
@@ -693,9 +690,9 @@ int Simulator::add_kinematic(const std::vector<int>& nodes, const RigidMotion& m
 
 int Simulator::add_point_force(int element, const Eigen::Vector4d& bary,
                                const Eigen::Vector3d& force) {
-  impl_->check_element_bary(element, bary, "add_point_force");
+  impl_->check_element_bary(element, bary);
   if (!force.allFinite())
-    throw Error("mbi::sim: add_point_force: force " + vec_str(force) + " is not finite");
+    throw Error("mbi::sim: force " + vec_str(force) + " is not finite");
   const int id = impl_->next_id++;
   impl_->forces.emplace(id, PointForce{element, bary, force});
   return id;
@@ -704,20 +701,20 @@ int Simulator::add_point_force(int element, const Eigen::Vector4d& bary,
 void Simulator::set_point_force(int handle, const Eigen::Vector3d& force) {
   auto it = impl_->forces.find(handle);
   if (it == impl_->forces.end())
-    throw Error("mbi::sim: set_point_force: handle " + std::to_string(handle) +
+    throw Error("mbi::sim: handle " + std::to_string(handle) +
                 " is not a point force");
   if (!force.allFinite())
-    throw Error("mbi::sim: set_point_force: force " + vec_str(force) + " for handle " +
+    throw Error("mbi::sim: force " + vec_str(force) + " for handle " +
                 std::to_string(handle) + " is not finite");
   it->second.force = force;
 }
 
 int Simulator::add_poke(int element, const Eigen::Vector4d& bary, const Eigen::Vector3d& target,
                         double stiffness) {
-  impl_->check_element_bary(element, bary, "add_poke");
-  if (!target.allFinite()) throw Error("mbi::sim: add_poke: target " + vec_str(target) + " is not finite");
+  impl_->check_element_bary(element, bary);
+  if (!target.allFinite()) throw Error("mbi::sim: target " + vec_str(target) + " is not finite");
   if (!std::isfinite(stiffness) || stiffness <= 0)
-    throw Error("mbi::sim: add_poke: stiffness must be finite and > 0 N/m, got " +
+    throw Error("mbi::sim: stiffness must be finite and > 0 N/m, got " +
                 std::to_string(stiffness));
   const int id = impl_->next_id++;
   impl_->pokes.emplace(id, Poke{element, bary, target, stiffness});
@@ -727,9 +724,9 @@ int Simulator::add_poke(int element, const Eigen::Vector4d& bary, const Eigen::V
 void Simulator::set_poke_target(int handle, const Eigen::Vector3d& target) {
   auto it = impl_->pokes.find(handle);
   if (it == impl_->pokes.end())
-    throw Error("mbi::sim: set_poke_target: handle " + std::to_string(handle) + " is not a poke");
+    throw Error("mbi::sim: handle " + std::to_string(handle) + " is not a poke");
   if (!target.allFinite())
-    throw Error("mbi::sim: set_poke_target: target " + vec_str(target) + " for handle " +
+    throw Error("mbi::sim: target " + vec_str(target) + " for handle " +
                 std::to_string(handle) + " is not finite");
   it->second.target = target;
 }
@@ -741,7 +738,7 @@ void Simulator::remove(int handle) {
     s.kinematic.erase(it);
     s.constraints_dirty = true;
   } else if (!s.forces.erase(handle) && !s.pokes.erase(handle)) {
-    throw Error("mbi::sim: remove: no handle " + std::to_string(handle));
+    throw Error("mbi::sim: no handle " + std::to_string(handle));
   }
 }
 
@@ -784,9 +781,9 @@ StepResult Simulator::step() {
 StaticResult Simulator::solve_static(int max_iterations, double tolerance) {
   Impl& s = *impl_;
   StaticResult res;
-  if (max_iterations < 1) throw Error("mbi::sim: solve_static: max_iterations must be >= 1");
+  if (max_iterations < 1) throw Error("mbi::sim: max_iterations must be >= 1");
   if (!std::isfinite(tolerance) || tolerance < 0)
-    throw Error("mbi::sim: solve_static: tolerance must be finite and >= 0 N");
+    throw Error("mbi::sim: tolerance must be finite and >= 0 N");
   const Eigen::VectorXd x0 = s.x, v0 = s.v;
   s.prescribed(s.t, s.x);
   s.external_forces();
@@ -827,7 +824,7 @@ StaticResult Simulator::solve_static(int max_iterations, double tolerance) {
       }
     }
     if (!s.solve(why, dummy)) {
-      res.message = "mbi::sim: solve_static: iteration " + std::to_string(it) + ": " + why;
+      res.message = "mbi::sim: static solve iteration " + std::to_string(it) + ": " + why;
       break;
     }
     s.x += s.delta;
@@ -847,7 +844,7 @@ StaticResult Simulator::solve_static(int max_iterations, double tolerance) {
   if (res.converged && !s.x.allFinite()) res.converged = false;
   if (!res.converged) {
     if (res.message.empty())
-      res.message = "mbi::sim: solve_static: no convergence in " + std::to_string(max_iterations) +
+      res.message = "mbi::sim: no convergence in " + std::to_string(max_iterations) +
                     " iterations (residual " + std::to_string(res.residual) + " N, tolerance " +
                     std::to_string(tol) + " N)";
     s.x = x0;
@@ -898,10 +895,10 @@ const Eigen::MatrixXd& Simulator::velocities() const { return impl_->Vout; }
 void Simulator::set_positions(const Eigen::Ref<const Eigen::MatrixXd>& X) {
   Impl& s = *impl_;
   if (X.rows() != s.n || X.cols() != 3)
-    throw Error("mbi::sim: set_positions: expected " + std::to_string(s.n) + " x 3");
+    throw Error("mbi::sim: positions must be " + std::to_string(s.n) + " x 3");
   for (int i = 0; i < s.n; ++i) {
     if (!X.row(i).allFinite())
-      throw Error("mbi::sim: set_positions: node " + std::to_string(i) + " is not finite");
+      throw Error("mbi::sim: position of node " + std::to_string(i) + " is not finite");
     s.x.segment<3>(3 * i) = X.row(i).transpose();
   }
   s.sync_out();
@@ -910,10 +907,10 @@ void Simulator::set_positions(const Eigen::Ref<const Eigen::MatrixXd>& X) {
 void Simulator::set_velocities(const Eigen::Ref<const Eigen::MatrixXd>& V) {
   Impl& s = *impl_;
   if (V.rows() != s.n || V.cols() != 3)
-    throw Error("mbi::sim: set_velocities: expected " + std::to_string(s.n) + " x 3");
+    throw Error("mbi::sim: velocities must be " + std::to_string(s.n) + " x 3");
   for (int i = 0; i < s.n; ++i) {
     if (!V.row(i).allFinite())
-      throw Error("mbi::sim: set_velocities: node " + std::to_string(i) + " is not finite");
+      throw Error("mbi::sim: velocity of node " + std::to_string(i) + " is not finite");
     s.v.segment<3>(3 * i) = V.row(i).transpose();
   }
   s.sync_out();

@@ -71,7 +71,7 @@ TEST_CASE("sparse Cholesky sweeps equal a dense LLT for 1 to 8 right-hand sides,
   std::vector<bool> which{false};
   if (mbi::interp::detail::cholmod_available()) which.push_back(true);
   for (bool cholmod : which) {
-    CholeskyFactor F = mbi::interp::detail::cholesky(A, cholmod, "test");
+    CholeskyFactor F = mbi::interp::detail::cholesky(A, cholmod);
     CAPTURE(F.method);
     for (int threads : {1, 2, 3}) {
       F.schedule(threads, 0);
@@ -102,7 +102,7 @@ TEST_CASE("sparse Cholesky sweeps equal a dense LLT for 1 to 8 right-hand sides,
 TEST_CASE("sparse Cholesky: a matrix that is not positive definite is refused", "[factorization]") {
   Eigen::SparseMatrix<double> A = grid_spd(3, 3, 3, 92);
   A.coeffRef(5, 5) = -1.0;
-  CHECK_THROWS_WITH(mbi::interp::detail::cholesky(A, false, "test"), Catch::Contains("positive definite"));
+  CHECK_THROWS_WITH(mbi::interp::detail::cholesky(A, false), Catch::Contains("positive definite"));
   if (mbi::interp::detail::cholmod_available())
-    CHECK_THROWS_WITH(mbi::interp::detail::cholesky(A, true, "test"), Catch::Contains("positive definite"));
+    CHECK_THROWS_WITH(mbi::interp::detail::cholesky(A, true), Catch::Contains("positive definite"));
 }

@@ -359,6 +359,6 @@ TEST_CASE("FastEvaluator rejects inconsistent input", "[fast_evaluate]") {
   CHECK_THROWS_WITH(fg.set_rest_normals(s.normals), Catch::Contains("gradients"));
   Embedding bad = s.emb;
   bad.element(3) = -1;
-  CHECK_THROWS_WITH(FastEvaluator(bad), Catch::Contains("point 3"));
+  CHECK_THROWS_WITH(FastEvaluator(bad), Catch::StartsWith("point 3"));
   CHECK_THROWS_AS(FastEvaluator(s.emb, -1), mbi::Error);
 }

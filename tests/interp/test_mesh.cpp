@@ -38,7 +38,8 @@ TEST_CASE("validate_mesh names the offending element or vertex", "[mesh]") {
     Eigen::MatrixXd U2(U.rows() + 1, 3);
     U2 << U, c;
     T(e, 3) = static_cast<int>(U.rows());
-    CHECK_THROWS_WITH(validate_mesh(U2, T), Catch::Contains("element 5") && Catch::Contains("degenerate"));
+    // the message names the element, not the library function
+    CHECK_THROWS_WITH(validate_mesh(U2, T), Catch::StartsWith("element 5") && Catch::Contains("degenerate"));
   }
   SECTION("index out of range") {
     auto T = M.T;

@@ -269,6 +269,7 @@ TEST_CASE("pipeline: inconsistent inputs are refused", "[pipeline]") {
   const test::Mesh m = bar();
   const Eigen::MatrixXd P = points_in(m.U, 10, 1);
   CHECK_THROWS_AS(FramePipeline(m.U, m.T, interp::embed(m.U, m.T, P), nullptr), mbi::Error);
+  CHECK_THROWS_WITH(FramePipeline(m.U, m.T, interp::embed(m.U, m.T, P), nullptr), "no driver");
   pipeline::PipelineOptions o;
   o.normals = true;  // but no rest normals
   CHECK_THROWS_AS(FramePipeline(m.U, m.T, interp::embed(m.U, m.T, P),

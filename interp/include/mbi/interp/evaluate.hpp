@@ -7,7 +7,7 @@
 namespace mbi::interp {
 
 /// Positions of all embedded points: p x d. Scalar = float or double (control points are
-/// converted once). threads = 0: hardware concurrency.
+/// converted once). threads = 0: all cores.
 template <typename Scalar>
 void evaluate(const BezierPoints& B, const Embedding& emb,
               Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& positions, int threads = 0);

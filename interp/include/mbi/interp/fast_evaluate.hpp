@@ -1,6 +1,6 @@
 #pragma once
-// The compact float evaluation kernel (issue 11, target 1): the fewest bytes per point, every
-// core, no allocation per call.
+// The compact float evaluation kernel: the fewest bytes per point, every core, no allocation per
+// call.
 //
 // Per point it reads a packed record of 4 (d+1) bytes (element id as int32, then the barycentric
 // coordinates b_1..b_d as float; b_0 = 1 - b_1 - ... - b_d) and writes d floats, interleaved
@@ -98,7 +98,7 @@ class FastEvaluator {
   std::vector<float> normals_;         // p d from moff_ (+ padding): m = cof(A)^T n per point (AVX-512: 16-point groups by component)
   std::size_t moff_ = 0;               // where normals_'s block starts, in floats
   int moves_ = 0;                      // times the block was moved (at most 2)
-  std::vector<float> coef_;            // m x 32 (3D; 2D: 16): position terms, cache-line aligned, per call (layout: see fast_evaluate.cpp)
+  std::vector<float> coef_;            // m x 32 (3D; 2D: 16): position terms, cache-line aligned, per call (layout: see src/fast_kernel.hpp)
 };
 
 }  // namespace mbi::interp

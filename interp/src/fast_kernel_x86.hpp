@@ -1,0 +1,50 @@
+#pragma once
+// What the AVX2 and AVX-512 evaluation kernels share (internal; see fast_kernel.hpp): prefetches
+// and streaming stores. Functions compiled for AVX2/FMA by their target attribute, as the
+// kernels are, so that nothing here is built for a CPU the caller did not check.
+#include "fast_kernel.hpp"
+
+#ifdef MBI_INTERP_X86
+#include <cstdint>
+
+#define MBI_TARGET_AVX2 __attribute__((target("avx2,fma")))
+#define MBI_TARGET_AVX512 __attribute__((target("avx512f,avx512dq,avx512vl,avx2,fma")))
+
+namespace mbi::interp::detail {
+
+// The input streams (records, rest normals) are prefetched this many points ahead: the hardware
+// prefetcher alone falls behind once the element terms' L2 traffic runs alongside.
+constexpr int kStreamAhead = 128;
+
+// Prefetch the byte at p + bytes: integer arithmetic, so that an address past the end of a buffer
+// is never formed as a pointer (a prefetch does not fault).
+inline void prefetch_at(const void* p, long long bytes) {
+  _mm_prefetch(reinterpret_cast<const char*>(reinterpret_cast<std::uintptr_t>(p) + static_cast<std::uintptr_t>(bytes)),
+               _MM_HINT_T0);
+}
+
+// Prefetch the element terms (both lines) of the 4 points kPrefetch after p (records are padded:
+// those are always records).
+MBI_TARGET_AVX2 inline void prefetch_terms(const std::int32_t* rec, const float* coef, long long p) {
+  for (int k = 0; k < 4; ++k) {
+    const char* ahead = reinterpret_cast<const char*>(coef + static_cast<long long>(rec[4 * (p + k + kPrefetch)]) * coef_stride(3));
+    _mm_prefetch(ahead, _MM_HINT_T0);
+    _mm_prefetch(ahead + 64, _MM_HINT_T0);
+  }
+}
+
+// 12 floats to out: streaming when out is 16-byte aligned.
+MBI_TARGET_AVX2 inline void store12(float* out, bool aligned, __m128 o0, __m128 o1, __m128 o2) {
+  if (aligned) {
+    _mm_stream_ps(out, o0);
+    _mm_stream_ps(out + 4, o1);
+    _mm_stream_ps(out + 8, o2);
+  } else {
+    _mm_storeu_ps(out, o0);
+    _mm_storeu_ps(out + 4, o1);
+    _mm_storeu_ps(out + 8, o2);
+  }
+}
+
+}  // namespace mbi::interp::detail
+#endif
