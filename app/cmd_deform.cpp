@@ -53,7 +53,7 @@ bool is_point_list(const fs::path& p) {
 
 struct DeformArgs {
   std::string control, deformed, mesh, out, stats, example;
-  std::string method = "modified-bi";
+  std::string method = pipeline::method_name(pipeline::Method::ModifiedBI);
   double alpha = 0.0;
   bool alpha_given = false;
   bool pin_boundary = false;
@@ -329,7 +329,7 @@ const Registrar reg{
                      "REQUIRED (unless --example) output, format by extension: .obj/.ply/.off/.stl (keeping the input's "
                      "attributes when the format is the same) or points .txt/.xyz");
       sub.add_option("--method", a->method, "interpolation")
-          ->check(CLI::IsMember({"bi", "modified-bi", "phong"}));
+          ->check(CLI::IsMember(pipeline::kMethodNames.names()));
       sub.add_option_function<double>(
           "--alpha",
           [a](double v) {
