@@ -20,7 +20,8 @@ const mbi::cli::Registrar reg(
             "surface",
     [](CLI::App& sub) -> mbi::cli::Action {
       struct Args {
-        std::string dense, out, stats, vtk, mesher = "voxel";
+        std::string dense, out, stats, vtk;
+        mbi::generate::Mesher mesher = mbi::generate::Mesher::Voxel;
         int vertices = 200;
         bool force_3d = false, force = false;
       };
@@ -34,10 +35,9 @@ const mbi::cli::Registrar reg(
       sub.add_option("--stats", a->stats, "write statistics as JSON to this file");
       sub.add_option("--vtk", a->vtk, "also write the control mesh as legacy VTK");
       sub.add_flag("--force-3d", a->force_3d, "tetrahedra even for a planar input");
-      sub.add_option("--mesher", a->mesher,
-                     "voxel: 6 Kuhn tetrahedra per envelope cell (default); tetgen: the "
-                     "envelope's boundary tetrahedralised by TetGen (3D)")
-          ->check(CLI::IsMember({"voxel", "tetgen"}));
+      mbi::cli::add_choice(sub, "--mesher", a->mesher, mbi::generate::kMesherNames,
+                           "voxel: 6 Kuhn tetrahedra per envelope cell (default); tetgen: the "
+                           "envelope's boundary tetrahedralised by TetGen (3D)");
       sub.add_flag("--force", a->force,
                    "overwrite existing outputs (BASE.node/.ele, --stats, --vtk); inputs never");
       return [a]() {
@@ -59,7 +59,7 @@ const mbi::cli::Registrar reg(
         mbi::generate::CageOptions opt;
         opt.target_vertices = a->vertices;
         opt.force_3d = a->force_3d;
-        opt.mesher = mbi::generate::parse_mesher(a->mesher);
+        opt.mesher = a->mesher;
         if (opt.mesher == mbi::generate::Mesher::TetGen && !a->force_3d && mbi::generate::is_planar(dense.V))
           throw std::runtime_error(
               a->dense + ": the model is flat (every z = " + std::to_string(dense.V(0, 2)) +

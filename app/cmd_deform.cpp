@@ -53,7 +53,7 @@ bool is_point_list(const fs::path& p) {
 
 struct DeformArgs {
   std::string control, deformed, mesh, out, stats, example;
-  std::string method = "modified-bi";
+  std::string method = pipeline::method_name(pipeline::Method::ModifiedBI);
   double alpha = 0.0;
   bool alpha_given = false;
   bool pin_boundary = false;
@@ -138,6 +138,103 @@ Problem load_example(const std::string& name) {
   return pb;
 }
 
+// The dense points in the control mesh (a warning for points outside it); embed_ms: its time.
+interp::Embedding embed_points(const Problem& pb, double& embed_ms) {
+  const auto t0 = Clock::now();
+  interp::Embedding emb;
+  try {
+    emb = interp::embed(pb.U, pb.T, pb.P);
+  } catch (const interp::Error& e) {
+    throw std::runtime_error(pb.mesh_name + ": " + plain(e));
+  }
+  embed_ms = ms_since(t0);
+  if (!emb.outside.empty())
+    std::fprintf(stderr,
+                 "mbi deform: warning: %zu of %d points lie outside the control mesh (farthest "
+                 "%.3g); they follow the nearest element by extrapolation\n",
+                 emb.outside.size(), emb.size(), emb.max_outside_distance);
+  return emb;
+}
+
+// What the frame gave, for the statistics and the summary.
+struct Result {
+  const interp::ModifiedBI* solver = nullptr;
+  interp::DiscontinuityTable table;  // BI, Phong and modified-BI
+  std::vector<std::pair<std::string, interp::Accuracy>> accuracy;  // --example: BI, Phong, modified-BI
+  double embed_ms = 0, precompute_ms = 0, phong_ms = 0, solve_ms = 0, evaluate_ms = 0;
+};
+
+// Accuracy of BI, Phong and modified-BI against the closed-form deformation, when it is known
+// (--example); empty otherwise.
+std::vector<std::pair<std::string, interp::Accuracy>> accuracy_rows(const Problem& pb,
+                                                                    pipeline::FramePipeline& pipe) {
+  std::vector<std::pair<std::string, interp::Accuracy>> accuracy;
+  if (pb.exact.size() == 0) return accuracy;
+  const int d = static_cast<int>(pb.U.cols());
+  const interp::VertexMatrices Z = interp::VertexMatrices::Zero(pb.U.rows() * d, d);
+  for (const auto& [name, M] : {std::pair<std::string, const interp::VertexMatrices*>{"BI", &Z},
+                                {"Phong", &pipe.phong_M()},
+                                {"modified-BI", &pipe.modified_bi_M()}})
+    accuracy.emplace_back(name, interp::accuracy(interp::bezier_points(pb.U, pb.T, pb.X, *M),
+                                                 pipe.embedding(), pb.P, pb.exact, pb.exact_gradients));
+  return accuracy;
+}
+
+nlohmann::json stats_json(const DeformArgs& a, const Problem& pb, const interp::Embedding& embedding,
+                          const Result& r) {
+  nlohmann::json j;
+  j["method"] = a.method;
+  j["dim"] = pb.U.cols();
+  j["alpha"] = r.solver->alpha();
+  j["beta"] = r.solver->beta();
+  j["pin_boundary"] = a.pin_boundary;
+  j["control_vertices"] = pb.U.rows();
+  j["elements"] = pb.T.rows();
+  j["points"] = pb.P.rows();
+  j["outside_points"] = embedding.outside.size();
+  j["max_outside_distance"] = embedding.max_outside_distance;
+  j["null_space_dim"] = r.solver->null_space_dim();
+  j["disc"] = scenes::disc_json(r.table, scenes::disc_roundoff(pb.U));
+  if (!r.accuracy.empty()) {
+    const char* keys[] = {"bi", "phong", "modified_bi"};
+    for (size_t k = 0; k < r.accuracy.size(); ++k)
+      j["accuracy"][keys[k]] = scenes::accuracy_json(r.accuracy[k].second);
+  }
+  j["e_vibr"] = r.table.e_vibr;
+  j["e_disc"] = r.table.e_disc;
+  j["e_total"] = r.table.e_total;
+  j["timings_ms"] = {{"embed", r.embed_ms},
+                     {"precompute", r.precompute_ms},
+                     {"phong_precompute", r.phong_ms},
+                     {"solve", r.solve_ms},
+                     {"evaluate", r.evaluate_ms}};
+  return j;
+}
+
+void print_summary(const DeformArgs& a, const Problem& pb, const interp::Embedding& embedding,
+                   const Result& r) {
+  const int d = static_cast<int>(pb.U.cols());
+  std::printf("control: %s: %d vertices, %d %s (%dD)\n", pb.control_name.c_str(),
+              static_cast<int>(pb.U.rows()), static_cast<int>(pb.T.rows()),
+              d == 3 ? "tetrahedra" : "triangles", d);
+  std::printf("dense:   %s: %d points (%zu outside)\n", pb.mesh_name.c_str(),
+              static_cast<int>(pb.P.rows()), embedding.outside.size());
+  std::printf("method:  %s, alpha %.4g, beta %.4g%s, gauge null space %d\n", a.method.c_str(),
+              r.solver->alpha(), r.solver->beta(), a.pin_boundary ? ", boundary pinned" : "",
+              r.solver->null_space_dim());
+  std::printf("\nface discontinuity over %d interior faces (paper Table 2):\n%s", r.table.faces,
+              scenes::format_table(r.table, scenes::disc_roundoff(pb.U)).c_str());
+  if (!r.accuracy.empty())
+    std::printf("\nerror against the closed-form deformation at the %d points (positions relative "
+                "to the model size %.4g, gradients relative to |F|):\n%s",
+                static_cast<int>(pb.P.rows()), r.accuracy.front().second.size,
+                scenes::format_accuracy(r.accuracy).c_str());
+  std::printf("E_vibr %.6g  E_disc %.6g  E_total %.6g\n", r.table.e_vibr, r.table.e_disc,
+              r.table.e_total);
+  std::printf("\ntimes (ms): embed %.2f  precompute %.2f  Phong weights %.2f  solve %.3f  evaluate %.2f\n",
+              r.embed_ms, r.precompute_ms, r.phong_ms, r.solve_ms, r.evaluate_ms);
+}
+
 int run_deform(const DeformArgs& a) {
   const bool example = !a.example.empty();
   if (!example) {
@@ -176,20 +273,8 @@ int run_deform(const DeformArgs& a) {
   scenes::check_run_size(pb.control_name, pb.P.rows(), pb.U.rows(), pb.T.rows(), d);
   if (!pb.X.allFinite()) throw std::runtime_error(pb.deformed_name + ": non-finite position");
 
-  // Embed
-  auto t0 = Clock::now();
-  interp::Embedding emb;
-  try {
-    emb = interp::embed(pb.U, pb.T, pb.P);
-  } catch (const interp::Error& e) {
-    throw std::runtime_error(pb.mesh_name + ": " + plain(e));
-  }
-  const double embed_ms = ms_since(t0);
-  if (!emb.outside.empty())
-    std::fprintf(stderr,
-                 "mbi deform: warning: %zu of %d points lie outside the control mesh (farthest "
-                 "%.3g); they follow the nearest element by extrapolation\n",
-                 emb.outside.size(), emb.size(), emb.max_outside_distance);
+  double embed_ms = 0;
+  interp::Embedding emb = embed_points(pb, embed_ms);
 
   // One frame through the pipeline: the given positions drive it, BI skips the solve.
   pipeline::PipelineOptions po;
@@ -217,26 +302,19 @@ int run_deform(const DeformArgs& a) {
   const pipeline::FrameResult fr = pipe->step();
   if (!fr.ok) throw std::runtime_error(fr.message);
   const Eigen::MatrixXd& out = pipe->positions();
-  const double precompute_ms = pipe->precompute_ms();
-  const double solve_ms = pipe->timings().solve_ms;
-  const double evaluate_ms = pipe->timings().bezier_ms + pipe->timings().evaluate_ms;
+  Result r;
+  r.solver = solver;
+  r.embed_ms = embed_ms;
+  r.precompute_ms = pipe->precompute_ms();
+  r.solve_ms = pipe->timings().solve_ms;
+  r.evaluate_ms = pipe->timings().bezier_ms + pipe->timings().evaluate_ms;
   if (!out.allFinite()) throw std::runtime_error("evaluation produced non-finite positions");
 
   // BI, Phong and modified-BI side by side, whatever the method
-  const interp::DiscontinuityTable table =
-      interp::discontinuity_table(*solver, pb.X, pipe->modified_bi_M(), pipe->phong_M());
+  r.table = interp::discontinuity_table(*solver, pb.X, pipe->modified_bi_M(), pipe->phong_M());
+  r.accuracy = accuracy_rows(pb, *pipe);
+  r.phong_ms = pipe->phong_precompute_ms();
   const interp::Embedding& embedding = pipe->embedding();
-  // accuracy against the closed-form deformation, when it is known (--example)
-  std::vector<std::pair<std::string, interp::Accuracy>> accuracy;
-  if (pb.exact.size() > 0) {
-    const interp::VertexMatrices Z = interp::VertexMatrices::Zero(pb.U.rows() * d, d);
-    for (const auto& [name, M] : {std::pair<std::string, const interp::VertexMatrices*>{"BI", &Z},
-                                  {"Phong", &pipe->phong_M()},
-                                  {"modified-BI", &pipe->modified_bi_M()}})
-      accuracy.emplace_back(name, interp::accuracy(interp::bezier_points(pb.U, pb.T, pb.X, *M),
-                                                   embedding, pb.P, pb.exact,
-                                                   pb.exact_gradients));
-  }
 
   // Outputs: nothing is written unless everything above succeeded.
   if (!a.out.empty()) {
@@ -260,56 +338,12 @@ int run_deform(const DeformArgs& a) {
     }
   }
   if (!a.stats.empty()) {
-    nlohmann::json j;
-    j["method"] = a.method;
-    j["dim"] = d;
-    j["alpha"] = solver->alpha();
-    j["beta"] = solver->beta();
-    j["pin_boundary"] = a.pin_boundary;
-    j["control_vertices"] = pb.U.rows();
-    j["elements"] = pb.T.rows();
-    j["points"] = pb.P.rows();
-    j["outside_points"] = embedding.outside.size();
-    j["max_outside_distance"] = embedding.max_outside_distance;
-    j["null_space_dim"] = solver->null_space_dim();
-    j["disc"] = scenes::disc_json(table, scenes::disc_roundoff(pb.U));
-    if (!accuracy.empty()) {
-      const char* keys[] = {"bi", "phong", "modified_bi"};
-      for (size_t k = 0; k < accuracy.size(); ++k)
-        j["accuracy"][keys[k]] = scenes::accuracy_json(accuracy[k].second);
-    }
-    j["e_vibr"] = table.e_vibr;
-    j["e_disc"] = table.e_disc;
-    j["e_total"] = table.e_total;
-    j["timings_ms"] = {{"embed", embed_ms},
-                       {"precompute", precompute_ms},
-                       {"phong_precompute", pipe->phong_precompute_ms()},
-                       {"solve", solve_ms},
-                       {"evaluate", evaluate_ms}};
+    const nlohmann::json j = stats_json(a, pb, embedding, r);
     check_finite(j, a.stats);
     io::write_text_atomic(outputs.staging(i_stats), j.dump(2) + "\n");
   }
   outputs.commit();
-
-  std::printf("control: %s: %d vertices, %d %s (%dD)\n", pb.control_name.c_str(),
-              static_cast<int>(pb.U.rows()), static_cast<int>(pb.T.rows()),
-              d == 3 ? "tetrahedra" : "triangles", d);
-  std::printf("dense:   %s: %d points (%zu outside)\n", pb.mesh_name.c_str(),
-              static_cast<int>(pb.P.rows()), embedding.outside.size());
-  std::printf("method:  %s, alpha %.4g, beta %.4g%s, gauge null space %d\n", a.method.c_str(),
-              solver->alpha(), solver->beta(), a.pin_boundary ? ", boundary pinned" : "",
-              solver->null_space_dim());
-  std::printf("\nface discontinuity over %d interior faces (paper Table 2):\n%s", table.faces,
-              scenes::format_table(table, scenes::disc_roundoff(pb.U)).c_str());
-  if (!accuracy.empty())
-    std::printf("\nerror against the closed-form deformation at the %d points (positions relative "
-                "to the model size %.4g, gradients relative to |F|):\n%s",
-                static_cast<int>(pb.P.rows()), accuracy.front().second.size,
-                scenes::format_accuracy(accuracy).c_str());
-  std::printf("E_vibr %.6g  E_disc %.6g  E_total %.6g\n", table.e_vibr, table.e_disc,
-              table.e_total);
-  std::printf("\ntimes (ms): embed %.2f  precompute %.2f  Phong weights %.2f  solve %.3f  evaluate %.2f\n",
-              embed_ms, precompute_ms, pipe->phong_precompute_ms(), solve_ms, evaluate_ms);
+  print_summary(a, pb, embedding, r);
   if (!a.out.empty()) std::printf("wrote %s\n", a.out.c_str());
   return 0;
 }
@@ -329,7 +363,7 @@ const Registrar reg{
                      "REQUIRED (unless --example) output, format by extension: .obj/.ply/.off/.stl (keeping the input's "
                      "attributes when the format is the same) or points .txt/.xyz");
       sub.add_option("--method", a->method, "interpolation")
-          ->check(CLI::IsMember({"bi", "modified-bi", "phong"}));
+          ->check(CLI::IsMember(pipeline::kMethodNames.names()));
       sub.add_option_function<double>(
           "--alpha",
           [a](double v) {

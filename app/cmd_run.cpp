@@ -2,6 +2,7 @@
 //         [--gpu auto|on|off] [--force] [--quiet]
 #include "commands.hpp"
 
+#include <mbi/scenes/output_folder.hpp>
 #include <mbi/scenes/report.hpp>
 #include <mbi/scenes/runner.hpp>
 
@@ -9,13 +10,16 @@
 
 #include <chrono>
 #include <cstdio>
+#include <optional>
 #include <string>
 
 namespace mbi::cli {
 namespace {
 
 struct RunArgs {
-  std::string scene, out, mesh, method, gpu;
+  std::string scene, out, mesh;
+  std::optional<pipeline::Method> method;
+  std::optional<scenes::GpuUse> gpu;
   int frames = 0;
   bool force = false, quiet = false, force_3d = false;
 };
@@ -27,10 +31,8 @@ int run_run(const RunArgs& a) {
   o.out_dir = a.out;
   o.frames = a.frames;
   o.mesh = a.mesh;
-  if (!a.method.empty()) o.method = pipeline::parse_method(a.method);
-  if (a.gpu == "auto") o.gpu = scenes::GpuUse::Auto;
-  if (a.gpu == "on") o.gpu = scenes::GpuUse::On;
-  if (a.gpu == "off") o.gpu = scenes::GpuUse::Off;
+  o.method = a.method;
+  o.gpu = a.gpu;
   o.warn = [](const std::string& s) { std::fprintf(stderr, "mbi run: %s\n", s.c_str()); };
   o.force = a.force;
   o.force_3d = a.force_3d;
@@ -77,13 +79,11 @@ const Registrar reg{
       sub.add_option("--frames", a->frames, "number of frames (default: the scene's)")
           ->check(CLI::Range(1, 1000000));
       sub.add_option("--mesh", a->mesh, "dense model replacing the scene's (.obj/.ply/.off/.stl)");
-      sub.add_option("--method", a->method, "interpolation replacing the scene's")
-          ->check(CLI::IsMember({"bi", "modified-bi", "phong"}));
-      sub.add_option("--gpu", a->gpu,
-                     "evaluate and draw on the GPU: auto (when OpenGL is available, else the CPU, "
-                     "saying so), on (error without OpenGL), off (CPU, double); default: the "
-                     "scene's interpolation.gpu, auto")
-          ->check(CLI::IsMember({"auto", "on", "off"}));
+      add_choice(sub, "--method", a->method, pipeline::kMethodNames, "interpolation replacing the scene's");
+      add_choice(sub, "--gpu", a->gpu, scenes::kGpuUseNames,
+                 "evaluate and draw on the GPU: auto (when OpenGL is available, else the CPU, "
+                 "saying so), on (error without OpenGL), off (CPU, double); default: the "
+                 "scene's interpolation.gpu, auto");
       sub.add_flag("--force", a->force, "overwrite a non-empty output folder");
       sub.add_flag("--quiet", a->quiet, "no progress output");
       sub.add_flag("--force-3d", a->force_3d,

@@ -42,7 +42,7 @@ const Registrar reg{
       sub.add_option("scene", a->scene, "scene file (.toml)")->required();
       sub.add_option("--mesh", a->mesh, "dense model replacing the scene's (.obj/.ply/.off/.stl)");
       sub.add_option("--method", a->method, "interpolation replacing the scene's")
-          ->check(CLI::IsMember({"bi", "modified-bi", "phong"}));
+          ->check(CLI::IsMember(pipeline::kMethodNames.names()));
       sub.add_option("--script", a->script, "replay recorded input events (FRAME EVENT ARGS per line)");
       sub.add_option("--record", a->record, "record the input events to this file");
       sub.add_option("--frames", a->frames, "close after N frames (0 = when the window closes)")

@@ -2,6 +2,8 @@
 // Subcommands of the mbi executable. Each cli/cmd_*.cpp registers one subcommand with a static
 // Registrar; main.cpp builds the CLI11 app from the registry. A subcommand reports bad input by
 // throwing any std::exception: main prints "mbi <sub>: error: <message>" on one line and exits 2.
+#include <mbi/base/names.hpp>
+
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
@@ -37,6 +39,15 @@ inline void check_finite(const nlohmann::json& j, const std::string& file, const
       check_finite(*it, file, key.empty() ? it.key() : key + "." + it.key());
   if (j.is_array())
     for (std::size_t i = 0; i < j.size(); ++i) check_finite(j[i], file, key + "[" + std::to_string(i) + "]");
+}
+
+/// An option whose values are the names of an enum's table (mbi/base/names.hpp): --help and
+/// errors list them, and `value` (an E, or a std::optional<E>) gets the value named.
+template <typename E, std::size_t N, typename T>
+CLI::Option* add_choice(CLI::App& sub, const std::string& name, T& value, const NameTable<E, N>& names,
+                        const std::string& description) {
+  auto set = [&value, names, name](const std::string& s) { value = names.parse(s, name); };
+  return sub.add_option_function<std::string>(name, set, description)->check(CLI::IsMember(names.names()));
 }
 
 struct Registrar {

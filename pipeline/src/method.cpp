@@ -1,28 +1,22 @@
 #include <mbi/pipeline/method.hpp>
 
+#include <string>
+
 namespace mbi::pipeline {
 
-const char* method_name(Method m) {
-  switch (m) {
-    case Method::BI: return "bi";
-    case Method::ModifiedBI: return "modified-bi";
-    case Method::Phong: return "phong";
-  }
-  return "?";
-}
+const char* method_name(Method m) { return kMethodNames.name(m); }
 
-std::optional<Method> parse_method(std::string_view name) {
-  for (Method m : all_methods())
-    if (name == method_name(m)) return m;
-  return std::nullopt;
-}
+std::optional<Method> parse_method(std::string_view name) { return kMethodNames.find(name); }
 
 const std::vector<Method>& all_methods() {
-  static const std::vector<Method> methods{Method::BI, Method::ModifiedBI, Method::Phong};
+  static const std::vector<Method> methods = kMethodNames.values();
   return methods;
 }
 
-const char* method_names() { return "bi, modified-bi, phong"; }
+const char* method_names() {
+  static const std::string names = kMethodNames.joined();
+  return names.c_str();
+}
 
 bool needs_solve(Method m) { return m == Method::ModifiedBI; }
 

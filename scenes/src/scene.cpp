@@ -96,35 +96,19 @@ class Table {
     if (!v.is_boolean()) fail(key, "expected true or false");
     return v.as_boolean();
   }
-  /// A string key mapped to an enum value: unknown values list the accepted names.
-  template <typename E>
-  E choice(const std::string& key, E def, std::initializer_list<std::pair<const char*, E>> names) {
+  /// A string key naming a value of an enum's table: unknown names list the accepted ones.
+  template <typename E, std::size_t N>
+  E choice(const std::string& key, E def, const NameTable<E, N>& names) {
     if (!has(key)) return def;
-    const toml_value& v = at(key);
-    if (!v.is_string()) fail(key, "expected a string");
-    const std::string s = v.as_string();
-    std::string list;
-    for (const auto& [name, value] : names) {
-      if (s == name) return value;
-      list += std::string(list.empty() ? "" : ", ") + name;
-    }
-    fail(key, "unknown value \"" + s + "\" (expected one of: " + list + ")");
+    const std::string s = string(key, "");
+    if (const std::optional<E> value = names.find(s)) return *value;
+    fail(key, names.unknown(s));
   }
-  std::string string(const std::string& key, const std::string& def,
-                     std::initializer_list<const char*> allowed = {}) {
+  std::string string(const std::string& key, const std::string& def) {
     if (!has(key)) return def;
     const toml_value& v = at(key);
     if (!v.is_string()) fail(key, "expected a string");
-    std::string s = v.as_string();
-    if (allowed.size()) {
-      std::string list;
-      for (const char* a : allowed) {
-        if (s == a) return s;
-        list += std::string(list.empty() ? "" : ", ") + a;
-      }
-      fail(key, "unknown value \"" + s + "\" (expected one of: " + list + ")");
-    }
-    return s;
+    return v.as_string();
   }
   Eigen::Vector3d vec(const std::string& key, const Eigen::Vector3d& def, int dims = 3) {
     if (!has(key)) return def;
@@ -229,45 +213,9 @@ Selection parse_selection(Table t) {
 
 }  // namespace
 
-const char* mode_name(Mode m) { return m == Mode::Simulate ? "simulate" : "drag"; }
-
-const char* builtin_name(DenseBuiltin b) {
-  switch (b) {
-    case DenseBuiltin::PaperBar: return "paper-bar";
-    case DenseBuiltin::Cylinder: return "cylinder";
-    case DenseBuiltin::BumpySphere: return "bumpy-sphere";
-    case DenseBuiltin::ImageGrid: return "image-grid";
-    case DenseBuiltin::None: break;
-  }
-  return "";
-}
-
-const char* builtin_name(ControlBuiltin b) {
-  switch (b) {
-    case ControlBuiltin::PaperBar: return "paper-bar";
-    case ControlBuiltin::Box: return "box";
-    case ControlBuiltin::Grid2D: return "grid-2d";
-    case ControlBuiltin::None: break;
-  }
-  return "";
-}
-
-const char* format_name(MeshFormat f) {
-  switch (f) {
-    case MeshFormat::Obj: return "obj";
-    case MeshFormat::Ply: return "ply";
-    case MeshFormat::None: return "none";
-  }
-  return "";
-}
-
-const char* gpu_name(GpuUse g) {
-  switch (g) {
-    case GpuUse::Auto: return "auto";
-    case GpuUse::On: return "on";
-    case GpuUse::Off: return "off";
-  }
-  return "";
+std::filesystem::path resolve_path(const Scene& sc, const std::filesystem::path& p) {
+  if (p.is_absolute()) return p;
+  return sc.file.parent_path() / p;
 }
 
 namespace {
@@ -387,229 +335,244 @@ Scene load_scene(const std::filesystem::path& file) {
   return parse_scene(text, file);
 }
 
-Scene parse_scene(std::string_view text, const std::filesystem::path& file) {
-  const std::string fname = file.string();
-  if (text.size() >= 3 && text.compare(0, 3, "\xEF\xBB\xBF") == 0) text.remove_prefix(3);  // BOM
-  check_characters(text, fname);
-  check_nesting(text, fname);
-  toml_value root;
+namespace {
+
+// One function per table of the scene file, in the order parse_scene reads them.
+
+void parse_dense(Table t, DenseSpec& d) {
+  if (t.has("path")) d.path = t.string("path", "");
+  d.builtin = t.choice("builtin", DenseBuiltin::None, kDenseBuiltinNames);
+  if (d.path.empty() == (d.builtin == DenseBuiltin::None))
+    throw SceneError(t.where(t.value()) + ": dense: give exactly one of path or builtin");
+  d.subdivide = t.integer("subdivide", 0, 0, 4);
+  if (t.has("image")) d.image = t.string("image", "");
+  d.grid = t.integer("grid", 128, 2, 4096);
+  t.finish();
+}
+
+// cells = [nx, ny(, nz)] of a built-in box or grid, counted in 64 bits before it is built.
+Eigen::Vector3i parse_cells(Table& t, ControlBuiltin builtin) {
+  Eigen::Vector3d c = t.vec("cells", Eigen::Vector3d(2, 2, 8), 2);
+  if (t.value().as_table().count("cells") && t.value().as_table().at("cells").as_array().size() == 2)
+    c.z() = 1;
+  if (c.minCoeff() < 1 || c.maxCoeff() > 1000 || (c - c.array().round().matrix()).norm() > 0)
+    t.fail("cells", "expected positive integers <= 1000");
+  if (t.has("cells")) {
+    const bool flat = builtin == ControlBuiltin::Grid2D;  // [nx, ny] for box: nz = 1
+    const auto nx = static_cast<long long>(c.x()), ny = static_cast<long long>(c.y()),
+               nz = static_cast<long long>(c.z());
+    const long long verts = (nx + 1) * (ny + 1) * (flat ? 1 : nz + 1);
+    const long long elems = flat ? 2 * nx * ny : 6 * nx * ny * nz;
+    if (verts > kMaxControlVertices || elems > kMaxControlElements)
+      t.fail("cells", "makes " + std::to_string(verts) + " control vertices and " +
+                          std::to_string(elems) + (flat ? " triangles" : " tetrahedra") +
+                          ", over the cap of " + std::to_string(kMaxControlVertices) +
+                          " vertices and " + std::to_string(kMaxControlElements) +
+                          " elements (see docs/limits.md)");
+  }
+  return c.cast<int>();
+}
+
+void parse_control(Table t, ControlSpec& c) {
+  if (t.has("path")) c.path = t.string("path", "");
+  c.builtin = t.choice("builtin", ControlBuiltin::None, kControlBuiltinNames);
+  c.generate_vertices = t.integer("generate_vertices", 0, 4, 1 << 30);
+  if (c.generate_vertices > kMaxControlVertices)
+    t.fail("generate_vertices",
+           std::to_string(c.generate_vertices) + " control vertices exceed the cap of " +
+               std::to_string(kMaxControlVertices) +
+               " (the precompute grows about as n^2.5; see docs/limits.md)");
+  c.mesher = t.choice("mesher", generate::Mesher::Voxel, generate::kMesherNames);
+  const int given = int(!c.path.empty()) + int(c.builtin != ControlBuiltin::None) +
+                    int(c.generate_vertices > 0);
+  if (given != 1)
+    throw SceneError(t.where(t.value()) +
+                     ": control: give exactly one of path, builtin or generate_vertices");
+  c.cells = parse_cells(t, c.builtin);
+  t.finish();
+}
+
+void parse_material(Table t, MaterialSpec& m) {
+  // physical ranges (beyond them the stiffness and mass matrices lose their digits): the
+  // stiffest solid (diamond) is about 1.2e12 Pa, the densest element (osmium) 22,590 kg/m^3
+  m.young = t.number("young", m.young, 0, 1e13, true);
+  m.poisson = t.number("poisson", m.poisson, -0.999, 0.499);
+  m.density = t.number("density", m.density, 0, 1e5, true);
+  t.finish();
+}
+
+void parse_simulation(Table t, SimulationSpec& s) {
+  sim::Parameters& p = s.parameters;
+  p.dt = t.number("dt", p.dt, 0, 10, true);
+  p.substeps = t.integer("substeps", p.substeps, 1, 1000);
+  s.frames = t.integer("frames", s.frames, 1, 1000000);
+  p.newton_iterations = t.integer("newton_iterations", p.newton_iterations, 1, 100);
+  p.gravity = t.vec("gravity", p.gravity);
+  if (p.gravity.norm() > 1e6) t.fail("gravity", "magnitude above 1e6 m/s^2");
+  p.mass_damping = t.number("damping_mass", p.mass_damping, 0, 1e6);
+  p.stiffness_damping = t.number("damping_stiffness", p.stiffness_damping, 0, 1e3);
+  if (t.has("ground")) {  // the height of a ground plane, y up
+    p.ground = true;
+    p.ground_plane.normal = Eigen::Vector3d::UnitY();
+    p.ground_plane.offset = t.number("ground", 0.0);
+  }
+  t.finish();
+}
+
+ConstraintSpec parse_constraint(Table& t) {
+  ConstraintSpec c;
+  c.kind = t.choice("type", ConstraintSpec::Kind::Fixed, kConstraintKindNames);
+  if (!t.has("select")) throw SceneError(t.where(t.value()) + ": " + t.key_name("select") + ": missing");
+  c.select = parse_selection(t.sub("select"));
+  if (t.has("motion")) {
+    if (c.kind != ConstraintSpec::Kind::Kinematic)
+      t.fail("motion", "only kinematic constraints have a motion");
+    Table m = t.sub("motion");
+    sim::RigidMotion& r = c.motion;
+    r.axis = m.vec("twist_axis", r.axis);
+    if (r.axis.norm() == 0) m.fail("twist_axis", "axis must be non-zero");
+    r.center = m.vec("twist_center", r.center);
+    r.angular_velocity = m.number("twist_rate", 0.0, -1e4, 1e4);
+    r.velocity = m.vec("velocity", r.velocity);
+    r.start = m.number("start", 0.0, 0, HUGE_VAL);
+    r.stop = m.number("stop", 1e30, 0, HUGE_VAL);
+    if (r.stop < r.start) m.fail("stop", "stop must be >= start");
+    m.finish();
+  }
+  t.finish();
+  return c;
+}
+
+PokeSpec parse_poke(Table& t) {
+  PokeSpec p;
+  p.first = t.integer("first", 0, 0, 1 << 30);
+  p.last = t.integer("last", p.first, 0, 1 << 30);
+  if (p.last < p.first) t.fail("last", "last must be >= first");
+  const bool has_point = t.has("point"), has_at = t.has("at");
+  if (has_point == has_at)
+    throw SceneError(t.where(t.value()) + ": " + t.key_name("") + ": give exactly one of point or at");
+  p.relative = has_at;
+  p.point = has_at ? t.vec("at", p.point) : t.vec("point", p.point);
+  if (t.has("force")) p.force = t.vec("force", Eigen::Vector3d::Zero());
+  if (t.has("target")) p.target = t.vec("target", Eigen::Vector3d::Zero());
+  if (t.has("offset")) {
+    if (p.target) t.fail("offset", "give target or offset, not both");
+    p.target = t.vec("offset", Eigen::Vector3d::Zero());
+    p.target_relative = true;
+  }
+  if (t.has("offset_relative")) {
+    if (p.target) t.fail("offset_relative", "give one of target, offset or offset_relative");
+    p.target = t.vec("offset_relative", Eigen::Vector3d::Zero());
+    p.target_relative = true;
+    p.offset_in_sizes = true;
+  }
+  p.stiffness = t.number("stiffness", 0.0, 0, 1e15);
+  if (p.force.has_value() == p.target.has_value())
+    throw SceneError(t.where(t.value()) + ": " + t.key_name("") + ": give exactly one of force or target");
+  if (p.target && p.stiffness <= 0) t.fail("stiffness", "a target poke needs stiffness > 0 (N/m)");
+  t.finish();
+  return p;
+}
+
+DragSpec parse_drag(Table& t) {
+  DragSpec d;
+  d.vertex = t.integer("vertex", -1, 0, 1 << 30);
+  if (t.has("near")) d.near = t.vec("near", Eigen::Vector3d::Zero(), 2);
+  if (t.has("select")) d.select = parse_selection(t.sub("select"));
+  if (int(d.vertex >= 0) + int(d.near.has_value()) + int(d.select.has_value()) != 1)
+    throw SceneError(t.where(t.value()) + ": " + t.key_name("") +
+                     ": give exactly one of vertex, near or select");
+  if (!t.has("keys")) throw SceneError(t.where(t.value()) + ": " + t.key_name("keys") + ": missing");
+  const toml_value& keys = t.at("keys");
+  if (!keys.is_array() || keys.as_array().empty())
+    t.fail("keys", "expected an array of [frame, x, y(, z)] arrays");
+  for (const auto& k : keys.as_array()) {
+    if (!k.is_array() || (k.as_array().size() != 3 && k.as_array().size() != 4))
+      t.fail("keys", "each key is [frame, x, y] (2D) or [frame, x, y, z]");
+    Eigen::Vector4d q = Eigen::Vector4d::Zero();
+    for (size_t i = 0; i < k.as_array().size(); ++i) {
+      const auto& x = k.as_array()[i];
+      if (x.is_floating())
+        q[static_cast<Eigen::Index>(i)] = x.as_floating();
+      else if (x.is_integer())
+        q[static_cast<Eigen::Index>(i)] = static_cast<double>(x.as_integer());
+      else
+        t.fail("keys", "key entries must be numbers");
+    }
+    if (!q.allFinite()) t.fail("keys", "key entries must be finite");
+    if (!d.keys.empty() && q[0] <= d.keys.back().first) t.fail("keys", "frames must increase");
+    d.keys.emplace_back(q[0], q.tail<3>());
+  }
+  t.finish();
+  return d;
+}
+
+void parse_interpolation(Table t, InterpolationSpec& i) {
+  i.method = t.choice("method", i.method, pipeline::kMethodNames);
+  i.options.alpha = t.number("alpha", 0.0, 0, 1e6, true);
+  i.options.pin_boundary = t.boolean("pin_boundary", false);
+  i.compare_pinned = t.boolean("compare_pinned", false);
+  i.gpu = t.choice("gpu", i.gpu, kGpuUseNames);
+  i.handles = t.choice("handles", i.handles, kHandleModeNames);
+  t.finish();
+}
+
+void parse_output(Table t, OutputSpec& o) {
+  o.every = t.integer("every", o.every, 1, 1 << 30);
+  o.mesh_format = t.choice("mesh_format", o.mesh_format, kMeshFormatNames);
+  o.pc2 = t.boolean("pc2", o.pc2);
+  o.control_vtk = t.boolean("control_vtk", o.control_vtk);
+  o.metrics = t.boolean("metrics", o.metrics);
+  o.image = t.boolean("image", o.image);
+  o.up = t.vec("up", o.up);
+  if (o.up.norm() == 0) t.fail("up", "must be non-zero");
+  t.finish();
+}
+
+// The TOML tree of a scene text that passed check_characters and check_nesting.
+toml_value parse_toml(std::string_view text, const std::string& fname) {
   try {
     // a final newline: toml11 reads past the end of some texts without one
     std::istringstream in{std::string(text) + "\n"};
-    root = toml::parse(in, fname);
+    return toml::parse(in, fname);
   } catch (const toml::exception& e) {
     throw SceneError(fname + ":" + std::to_string(e.location().line()) +
                      ": syntax error: " + first_line(e.what()));
   } catch (const std::exception& e) {
     throw SceneError(fname + ": " + first_line(e.what()));
   }
+}
+
+}  // namespace
+
+Scene parse_scene(std::string_view text, const std::filesystem::path& file) {
+  const std::string fname = file.string();
+  if (text.size() >= 3 && text.compare(0, 3, "\xEF\xBB\xBF") == 0) text.remove_prefix(3);  // BOM
+  check_characters(text, fname);
+  check_nesting(text, fname);
+  const toml_value root = parse_toml(text, fname);
   Scene sc;
   sc.file = file;
   Table top(root, "", fname);
   sc.name = top.string("name", file.stem().string());
-  sc.mode = top.choice("mode", Mode::Simulate, {{"simulate", Mode::Simulate}, {"drag", Mode::Drag}});
-
+  sc.mode = top.choice("mode", Mode::Simulate, kModeNames);
   if (!top.has("dense")) throw SceneError(fname + ":1: dense: missing table [dense]");
-  {
-    Table t = top.sub("dense");
-    if (t.has("path")) sc.dense.path = t.string("path", "");
-    sc.dense.builtin = t.choice("builtin", DenseBuiltin::None,
-                                {{"paper-bar", DenseBuiltin::PaperBar},
-                                 {"cylinder", DenseBuiltin::Cylinder},
-                                 {"bumpy-sphere", DenseBuiltin::BumpySphere},
-                                 {"image-grid", DenseBuiltin::ImageGrid}});
-    if (sc.dense.path.empty() == (sc.dense.builtin == DenseBuiltin::None))
-      throw SceneError(t.where(t.value()) + ": dense: give exactly one of path or builtin");
-    sc.dense.subdivide = t.integer("subdivide", 0, 0, 4);
-    if (t.has("image")) sc.dense.image = t.string("image", "");
-    sc.dense.grid = t.integer("grid", 128, 2, 4096);
-    t.finish();
-  }
+  parse_dense(top.sub("dense"), sc.dense);
   if (!top.has("control")) throw SceneError(fname + ":1: control: missing table [control]");
-  {
-    Table t = top.sub("control");
-    if (t.has("path")) sc.control.path = t.string("path", "");
-    sc.control.builtin = t.choice("builtin", ControlBuiltin::None,
-                                  {{"paper-bar", ControlBuiltin::PaperBar},
-                                   {"box", ControlBuiltin::Box},
-                                   {"grid-2d", ControlBuiltin::Grid2D}});
-    sc.control.generate_vertices = t.integer("generate_vertices", 0, 4, 1 << 30);
-    if (sc.control.generate_vertices > kMaxControlVertices)
-      t.fail("generate_vertices",
-             std::to_string(sc.control.generate_vertices) + " control vertices exceed the cap of " +
-                 std::to_string(kMaxControlVertices) +
-                 " (the precompute grows about as n^2.5; see docs/limits.md)");
-    sc.control.mesher = t.choice("mesher", generate::Mesher::Voxel,
-                                 {{"voxel", generate::Mesher::Voxel},
-                                  {"tetgen", generate::Mesher::TetGen}});
-    const int given = int(!sc.control.path.empty()) + int(sc.control.builtin != ControlBuiltin::None) +
-                      int(sc.control.generate_vertices > 0);
-    if (given != 1)
-      throw SceneError(t.where(t.value()) +
-                       ": control: give exactly one of path, builtin or generate_vertices");
-    Eigen::Vector3d c = t.vec("cells", Eigen::Vector3d(2, 2, 8), 2);
-    if (t.value().as_table().count("cells") && t.value().as_table().at("cells").as_array().size() == 2)
-      c.z() = 1;
-    if (c.minCoeff() < 1 || c.maxCoeff() > 1000 || (c - c.array().round().matrix()).norm() > 0)
-      t.fail("cells", "expected positive integers <= 1000");
-    if (t.has("cells")) {  // the box / grid it makes, counted in 64 bits before it is built
-      const bool flat = sc.control.builtin == ControlBuiltin::Grid2D;  // [nx, ny] for box: nz = 1
-      const auto nx = static_cast<long long>(c.x()), ny = static_cast<long long>(c.y()),
-                 nz = static_cast<long long>(c.z());
-      const long long verts = (nx + 1) * (ny + 1) * (flat ? 1 : nz + 1);
-      const long long elems = flat ? 2 * nx * ny : 6 * nx * ny * nz;
-      if (verts > kMaxControlVertices || elems > kMaxControlElements)
-        t.fail("cells", "makes " + std::to_string(verts) + " control vertices and " +
-                            std::to_string(elems) + (flat ? " triangles" : " tetrahedra") +
-                            ", over the cap of " + std::to_string(kMaxControlVertices) +
-                            " vertices and " + std::to_string(kMaxControlElements) +
-                            " elements (see docs/limits.md)");
-    }
-    sc.control.cells = c.cast<int>();
-    t.finish();
-  }
-  if (top.has("material")) {
-    Table t = top.sub("material");
-    // physical ranges (beyond them the stiffness and mass matrices lose their digits): the
-    // stiffest solid (diamond) is about 1.2e12 Pa, the densest element (osmium) 22,590 kg/m^3
-    sc.material.young = t.number("young", sc.material.young, 0, 1e13, true);
-    sc.material.poisson = t.number("poisson", sc.material.poisson, -0.999, 0.499);
-    sc.material.density = t.number("density", sc.material.density, 0, 1e5, true);
-    t.finish();
-  }
-  if (top.has("simulation")) {
-    Table t = top.sub("simulation");
-    auto& s = sc.simulation;
-    s.dt = t.number("dt", s.dt, 0, 10, true);
-    s.substeps = t.integer("substeps", s.substeps, 1, 1000);
-    s.frames = t.integer("frames", s.frames, 1, 1000000);
-    s.newton_iterations = t.integer("newton_iterations", s.newton_iterations, 1, 100);
-    s.gravity = t.vec("gravity", s.gravity);
-    if (s.gravity.norm() > 1e6) t.fail("gravity", "magnitude above 1e6 m/s^2");
-    s.damping_mass = t.number("damping_mass", s.damping_mass, 0, 1e6);
-    s.damping_stiffness = t.number("damping_stiffness", s.damping_stiffness, 0, 1e3);
-    if (t.has("ground")) s.ground = t.number("ground", 0.0);
-    t.finish();
-  }
-  for (Table& t : top.array_of_tables("constraints")) {
-    ConstraintSpec c;
-    c.kind = t.choice("type", ConstraintSpec::Kind::Fixed,
-                      {{"fixed", ConstraintSpec::Kind::Fixed},
-                       {"kinematic", ConstraintSpec::Kind::Kinematic}});
-    if (!t.has("select")) throw SceneError(t.where(t.value()) + ": " + t.key_name("select") + ": missing");
-    c.select = parse_selection(t.sub("select"));
-    if (t.has("motion")) {
-      if (c.kind != ConstraintSpec::Kind::Kinematic)
-        t.fail("motion", "only kinematic constraints have a motion");
-      Table m = t.sub("motion");
-      c.motion.twist_axis = m.vec("twist_axis", c.motion.twist_axis);
-      if (c.motion.twist_axis.norm() == 0) m.fail("twist_axis", "axis must be non-zero");
-      c.motion.twist_center = m.vec("twist_center", c.motion.twist_center);
-      c.motion.twist_rate = m.number("twist_rate", 0.0, -1e4, 1e4);
-      c.motion.velocity = m.vec("velocity", c.motion.velocity);
-      c.motion.start = m.number("start", 0.0, 0, HUGE_VAL);
-      c.motion.stop = m.number("stop", 1e30, 0, HUGE_VAL);
-      if (c.motion.stop < c.motion.start) m.fail("stop", "stop must be >= start");
-      m.finish();
-    }
-    t.finish();
-    sc.constraints.push_back(std::move(c));
-  }
-  for (Table& t : top.array_of_tables("pokes")) {
-    PokeSpec p;
-    p.first = t.integer("first", 0, 0, 1 << 30);
-    p.last = t.integer("last", p.first, 0, 1 << 30);
-    if (p.last < p.first) t.fail("last", "last must be >= first");
-    const bool has_point = t.has("point"), has_at = t.has("at");
-    if (has_point == has_at)
-      throw SceneError(t.where(t.value()) + ": " + t.key_name("") + ": give exactly one of point or at");
-    p.relative = has_at;
-    p.point = has_at ? t.vec("at", p.point) : t.vec("point", p.point);
-    if (t.has("force")) p.force = t.vec("force", Eigen::Vector3d::Zero());
-    if (t.has("target")) p.target = t.vec("target", Eigen::Vector3d::Zero());
-    if (t.has("offset")) {
-      if (p.target) t.fail("offset", "give target or offset, not both");
-      p.target = t.vec("offset", Eigen::Vector3d::Zero());
-      p.target_relative = true;
-    }
-    if (t.has("offset_relative")) {
-      if (p.target) t.fail("offset_relative", "give one of target, offset or offset_relative");
-      p.target = t.vec("offset_relative", Eigen::Vector3d::Zero());
-      p.target_relative = true;
-      p.offset_in_sizes = true;
-    }
-    p.stiffness = t.number("stiffness", 0.0, 0, 1e15);
-    if (p.force.has_value() == p.target.has_value())
-      throw SceneError(t.where(t.value()) + ": " + t.key_name("") + ": give exactly one of force or target");
-    if (p.target && p.stiffness <= 0) t.fail("stiffness", "a target poke needs stiffness > 0 (N/m)");
-    t.finish();
-    sc.pokes.push_back(p);
-  }
-  for (Table& t : top.array_of_tables("drags")) {
-    DragSpec d;
-    d.vertex = t.integer("vertex", -1, 0, 1 << 30);
-    if (t.has("near")) d.near = t.vec("near", Eigen::Vector3d::Zero(), 2);
-    if (t.has("select")) d.select = parse_selection(t.sub("select"));
-    if (int(d.vertex >= 0) + int(d.near.has_value()) + int(d.select.has_value()) != 1)
-      throw SceneError(t.where(t.value()) + ": " + t.key_name("") +
-                       ": give exactly one of vertex, near or select");
-    if (!t.has("keys")) throw SceneError(t.where(t.value()) + ": " + t.key_name("keys") + ": missing");
-    const toml_value& keys = t.at("keys");
-    if (!keys.is_array() || keys.as_array().empty())
-      t.fail("keys", "expected an array of [frame, x, y(, z)] arrays");
-    for (const auto& k : keys.as_array()) {
-      if (!k.is_array() || (k.as_array().size() != 3 && k.as_array().size() != 4))
-        t.fail("keys", "each key is [frame, x, y] (2D) or [frame, x, y, z]");
-      Eigen::Vector4d q = Eigen::Vector4d::Zero();
-      for (size_t i = 0; i < k.as_array().size(); ++i) {
-        const auto& x = k.as_array()[i];
-        if (x.is_floating())
-          q[static_cast<Eigen::Index>(i)] = x.as_floating();
-        else if (x.is_integer())
-          q[static_cast<Eigen::Index>(i)] = static_cast<double>(x.as_integer());
-        else
-          t.fail("keys", "key entries must be numbers");
-      }
-      if (!q.allFinite()) t.fail("keys", "key entries must be finite");
-      if (!d.keys.empty() && q[0] <= d.keys.back().first) t.fail("keys", "frames must increase");
-      d.keys.emplace_back(q[0], q.tail<3>());
-    }
-    t.finish();
-    sc.drags.push_back(std::move(d));
-  }
-  if (top.has("interpolation")) {
-    Table t = top.sub("interpolation");
-    auto& i = sc.interpolation;
-    i.method = t.choice("method", i.method,
-                        {{"bi", pipeline::Method::BI}, {"modified-bi", pipeline::Method::ModifiedBI},
-                         {"phong", pipeline::Method::Phong}});
-    i.alpha = t.number("alpha", 0.0, 0, 1e6, true);
-    i.pin_boundary = t.boolean("pin_boundary", false);
-    i.compare_pinned = t.boolean("compare_pinned", false);
-    i.gpu = t.choice("gpu", i.gpu, {{"auto", GpuUse::Auto}, {"on", GpuUse::On}, {"off", GpuUse::Off}});
-    i.handles = t.choice("handles", i.handles,
-                         {{"hard", interp::HandleMode::Hard}, {"soft", interp::HandleMode::Soft}});
-    t.finish();
-  }
-  if (top.has("output")) {
-    Table t = top.sub("output");
-    auto& o = sc.output;
-    o.every = t.integer("every", o.every, 1, 1 << 30);
-    o.mesh_format = t.choice("mesh_format", o.mesh_format,
-                             {{"obj", MeshFormat::Obj}, {"ply", MeshFormat::Ply}, {"none", MeshFormat::None}});
-    o.pc2 = t.boolean("pc2", o.pc2);
-    o.control_vtk = t.boolean("control_vtk", o.control_vtk);
-    o.metrics = t.boolean("metrics", o.metrics);
-    o.image = t.boolean("image", o.image);
-    o.up = t.vec("up", o.up);
-    if (o.up.norm() == 0) t.fail("up", "must be non-zero");
-    t.finish();
-  }
+  parse_control(top.sub("control"), sc.control);
+  if (top.has("material")) parse_material(top.sub("material"), sc.material);
+  if (top.has("simulation")) parse_simulation(top.sub("simulation"), sc.simulation);
+  for (Table& t : top.array_of_tables("constraints")) sc.constraints.push_back(parse_constraint(t));
+  for (Table& t : top.array_of_tables("pokes")) sc.pokes.push_back(parse_poke(t));
+  for (Table& t : top.array_of_tables("drags")) sc.drags.push_back(parse_drag(t));
+  if (top.has("interpolation")) parse_interpolation(top.sub("interpolation"), sc.interpolation);
+  if (top.has("output")) parse_output(top.sub("output"), sc.output);
   top.finish();
   if (sc.mode == Mode::Drag && sc.drags.empty())
     throw SceneError(fname + ":1: drags: a drag scene needs at least one [[drags]] entry");
   if (sc.mode == Mode::Simulate && !sc.drags.empty())
-    throw SceneError(fname + ":1: drags: only drag scenes (mode = \"drag\") take [[drags]]");
+    throw SceneError(fname + ":1: drags: only drag scenes (mode = \"" + mode_name(Mode::Drag) +
+                     "\") take [[drags]]");
   return sc;
 }
 

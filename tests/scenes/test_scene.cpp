@@ -67,6 +67,50 @@ TEST_CASE("defaults are applied", "[scene]") {
   CHECK(sc.name == "scene");
 }
 
+TEST_CASE("simulation and motion keys fill the simulator's own parameters", "[scene]") {
+  mbi::test::TempDir dir("scene");
+  const auto plain = load_scene(write(dir, minimal));
+  CHECK(plain.simulation.parameters.dt == Approx(1.0 / 30.0));
+  CHECK(plain.simulation.parameters.gravity.norm() == 0.0);
+  CHECK_FALSE(plain.simulation.parameters.ground);
+  const auto sc = load_scene(write(dir, std::string(minimal) +
+                                            "[simulation]\ndt = 0.01\nsubsteps = 3\ndamping_mass = 0.5\n"
+                                            "damping_stiffness = 0.02\nground = -1.5\n"
+                                            "[[constraints]]\ntype = \"kinematic\"\nselect = { indices = [0] }\n"
+                                            "motion = { twist_axis = [1, 0, 0], twist_center = [0, 2, 0], "
+                                            "twist_rate = 0.25, stop = 4 }\n"));
+  const mbi::sim::Parameters& p = sc.simulation.parameters;
+  CHECK(p.dt == 0.01);
+  CHECK(p.substeps == 3);
+  CHECK(p.mass_damping == 0.5);
+  CHECK(p.stiffness_damping == 0.02);
+  CHECK(p.ground);
+  CHECK(p.ground_plane.offset == -1.5);
+  CHECK(p.ground_plane.normal == Eigen::Vector3d::UnitY());
+  REQUIRE(sc.constraints.size() == 1);
+  const mbi::sim::RigidMotion& m = sc.constraints[0].motion;
+  CHECK(m.axis == Eigen::Vector3d::UnitX());
+  CHECK(m.center == Eigen::Vector3d(0, 2, 0));
+  CHECK(m.angular_velocity == 0.25);
+  CHECK(m.start == 0.0);
+  CHECK(m.stop == 4.0);
+}
+
+TEST_CASE("one name table per enum: names round-trip, unknown names list the choices", "[scene]") {
+  using namespace mbi::scenes;
+  for (const std::string& n : kModeNames.names()) CHECK(mode_name(*kModeNames.find(n)) == n);
+  for (const std::string& n : kGpuUseNames.names()) CHECK(gpu_name(*kGpuUseNames.find(n)) == n);
+  for (const std::string& n : kMeshFormatNames.names()) CHECK(format_name(*kMeshFormatNames.find(n)) == n);
+  CHECK(std::string(builtin_name(DenseBuiltin::None)).empty());
+  CHECK(kControlBuiltinNames.joined() == "paper-bar, box, grid-2d");
+  CHECK_FALSE(kHandleModeNames.find("Hard").has_value());
+  CHECK_THROWS_WITH(kGpuUseNames.parse("maybe", "--gpu"),
+                    "--gpu: unknown value \"maybe\" (expected one of: auto, on, off)");
+  mbi::test::TempDir dir("scene");
+  CHECK_THAT(error_of(write(dir, std::string(minimal) + "[interpolation]\ngpu = \"maybe\"\n")),
+             Catch::EndsWith("interpolation.gpu: unknown value \"maybe\" (expected one of: auto, on, off)"));
+}
+
 TEST_CASE("unknown keys are errors naming file, line and key", "[scene]") {
   mbi::test::TempDir dir("scene");
   const std::string msg = error_of(write(dir, std::string(minimal) + "[material]\nyoung = 1e5\nyuong = 3\n"));

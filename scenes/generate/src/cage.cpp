@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -527,8 +528,8 @@ long long grid_cap(int target) {
   return std::clamp<long long>(4096LL * target, 1LL << 20, kMaxCells);
 }
 
-[[noreturn]] void unreachable_target(const char* who, int target, int best, long long cap) {
-  throw CageError(std::string(who) + ": cannot reach " + std::to_string(target) +
+[[noreturn]] void unreachable_target(int target, int best, long long cap) {
+  throw CageError("cannot reach " + std::to_string(target) +
                   " control vertices: grids of up to " + std::to_string(cap) +
                   " cells give at most " + std::to_string(best) +
                   " (the model's bounding box is mostly empty: too few points, parts far apart or "
@@ -555,7 +556,7 @@ CageResult make_cage_tetgen(const Eigen::MatrixXd& P, const Eigen::MatrixXi& Fi,
   // Search on the boundary vertex count (TetGen adds few vertices inside).
   int best_count = 0;
   if (!search_cell_size(eval, 1.01 * scale, target, options.search_steps, 1.5, best_count))
-    unreachable_target("make_cage", target, best_count, cap);
+    unreachable_target(target, best_count, cap);
   std::stable_sort(tried.begin(), tried.end(), [](const Tried& a, const Tried& b) { return a.h > b.h; });
 
   // Run TetGen on the candidate whose boundary count plus the interior points seen so far is
@@ -622,22 +623,20 @@ CageResult make_cage_tetgen(const Eigen::MatrixXd& P, const Eigen::MatrixXi& Fi,
     if (best_dist <= target / 10) break;
   }
   if (best.U.rows() == 0)
-    throw CageError("make_cage (tetgen): no TetGen cage with every dihedral angle >= 5 "
-                             "degrees, every vertex inside and within 30% of " +
-                             std::to_string(target) + " vertices (last: " + last_why +
-                             "); use the voxel mesher");
+    throw CageError("no TetGen cage with every dihedral angle >= 5 degrees, every vertex inside "
+                    "and within 30% of " + std::to_string(target) + " vertices (last: " + last_why +
+                    "); use the voxel mesher");
   best.mesher = Mesher::TetGen;
   return best;
 }
 
 }  // namespace
 
-const char* mesher_name(Mesher m) { return m == Mesher::TetGen ? "tetgen" : "voxel"; }
+const char* mesher_name(Mesher m) { return kMesherNames.name(m); }
 
 Mesher parse_mesher(const std::string& name) {
-  if (name == "voxel") return Mesher::Voxel;
-  if (name == "tetgen") return Mesher::TetGen;
-  throw CageError("unknown mesher '" + name + "' (expected voxel or tetgen)");
+  if (const std::optional<Mesher> m = kMesherNames.find(name)) return *m;
+  throw CageError("mesher: " + kMesherNames.unknown(name));
 }
 
 bool is_planar(const Eigen::Ref<const Eigen::MatrixXd>& V) {
@@ -685,29 +684,28 @@ CageResult make_cage(const Eigen::Ref<const Eigen::MatrixXd>& V,
                      const Eigen::Ref<const Eigen::MatrixXi>& F, const CageOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   if (V.rows() == 0 || V.cols() != 3)
-    throw CageError("make_cage: V must be n x 3 with n > 0, got " +
-                                std::to_string(V.rows()) + " x " + std::to_string(V.cols()));
+    throw CageError("V must be n x 3 with n > 0, got " + std::to_string(V.rows()) + " x " +
+                    std::to_string(V.cols()));
   for (Eigen::Index i = 0; i < V.rows(); ++i)
     if (!V.row(i).allFinite())
-      throw CageError("make_cage: vertex " + std::to_string(i) + " is not finite");
+      throw CageError("vertex " + std::to_string(i) + " is not finite");
   if (F.rows() > 0 && F.cols() != 3)
-    throw CageError("make_cage: F must be t x 3");
+    throw CageError("F must be t x 3");
   for (Eigen::Index t = 0; t < F.rows(); ++t)
     for (int c = 0; c < 3; ++c)
       if (F(t, c) < 0 || F(t, c) >= V.rows())
-        throw CageError("make_cage: face " + std::to_string(t) + " index " +
-                                    std::to_string(F(t, c)) + " out of range");
+        throw CageError("face " + std::to_string(t) + " index " + std::to_string(F(t, c)) +
+                        " out of range");
   if (options.search_steps < 0 || options.search_steps > 10000)
-    throw CageError("make_cage: search_steps out of range [0, 10000]");
+    throw CageError("search_steps out of range [0, 10000]");
 
   const double zspan = V.col(2).maxCoeff() - V.col(2).minCoeff();
   const bool tetgen = options.mesher == Mesher::TetGen;
   const int d = (zspan == 0.0 && !options.force_3d && !tetgen) ? 2 : 3;
   const int min_target = d == 3 ? 8 : 4;
   if (options.target_vertices < min_target || options.target_vertices > 1000000)
-    throw CageError("make_cage: target_vertices " +
-                                std::to_string(options.target_vertices) + " out of range [" +
-                                std::to_string(min_target) + ", 1000000]");
+    throw CageError("target_vertices " + std::to_string(options.target_vertices) +
+                    " out of range [" + std::to_string(min_target) + ", 1000000]");
 
   // Scale-free: the cage is built for the model moved to the centre of its bounding box and
   // scaled by its largest extent L (halves first: no overflow at +-1e308), then mapped back.
@@ -722,12 +720,12 @@ CageResult make_cage(const Eigen::Ref<const Eigen::MatrixXd>& V,
     return std::string(b);
   };
   if (!(L > 0))
-    throw CageError("make_cage: degenerate model: all " + std::to_string(V.rows()) +
+    throw CageError("degenerate model: all " + std::to_string(V.rows()) +
                     " vertices are the same point (" + fmt(V(0, 0)) + ", " + fmt(V(0, 1)) + ", " +
                     fmt(V(0, 2)) + "); a cage needs a model with an extent");
   const double offset = std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
   if (L < kMinRelativeExtent * offset)
-    throw CageError("make_cage: the model's extent " + fmt(L) + " is below the precision of its "
+    throw CageError("the model's extent " + fmt(L) + " is below the precision of its "
                     "coordinates at offset " + fmt(offset) + " (at least " +
                     fmt(kMinRelativeExtent) + " of the offset is needed); move it near the origin");
   Eigen::MatrixXd Pn = (V.rowwise() - center) / L;
@@ -739,7 +737,7 @@ CageResult make_cage(const Eigen::Ref<const Eigen::MatrixXd>& V,
   const interp::Embedding emb = interp::embed(r.U, r.T, V.leftCols(d));
   r.outside_points = static_cast<int>(emb.outside.size());
   if (r.outside_points != 0)
-    throw CageError("make_cage: " + std::to_string(r.outside_points) +
+    throw CageError(std::to_string(r.outside_points) +
                     " vertices fall outside the cage once it is moved back to the model's offset " +
                     fmt(offset) + " (rounding); move the model near the origin");
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -778,7 +776,7 @@ CageResult make_cage_normalised(const Eigen::MatrixXd& P, const Eigen::MatrixXi&
   auto eval = [&](double h) { return eval_h({h, h, h}); };
   int best_count = 0;
   if (!search_cell_size(eval, 1.01 * scale, target, options.search_steps, 1.2, best_count))
-    unreachable_target("make_cage", target, best_count, cap);
+    unreachable_target(target, best_count, cap);
   // Coarse grids jump in large steps; cells with slightly different edges per axis (one cell
   // more or less along some axes, aspect ratio <= 1.6) fill the gaps between those steps.
   auto by_distance = [&](const Tried& a, const Tried& b) {
@@ -844,8 +842,8 @@ CageResult make_cage_normalised(const Eigen::MatrixXd& P, const Eigen::MatrixXi&
     if (res.outside_points == 0) break;
   }
   if (res.U.rows() == 0 || res.outside_points != 0)
-    throw CageError("make_cage: no cell size found whose cage contains every vertex (" +
-                             std::to_string(res.outside_points) + " outside)");
+    throw CageError("no cell size found whose cage contains every vertex (" +
+                    std::to_string(res.outside_points) + " outside)");
   res.min_dihedral_deg = min_dihedral_angle_deg(res.U, res.T);
   return res;
 }

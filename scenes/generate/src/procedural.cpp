@@ -29,8 +29,8 @@ struct SurfaceLattice {
 
 void box_surface(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const Eigen::Vector3i& n,
                  Eigen::MatrixXd& V, Eigen::MatrixXi& F) {
-  require(n.minCoeff() >= 1, "box_surface: cell counts must be >= 1");
-  require((hi - lo).minCoeff() > 0, "box_surface: empty box");
+  require(n.minCoeff() >= 1, "a box needs cell counts >= 1");
+  require((hi - lo).minCoeff() > 0, "a box needs max > min in every coordinate");
   SurfaceLattice L{n, std::vector<int>(static_cast<size_t>(n.x() + 1) * (n.y() + 1) * (n.z() + 1), -1)};
   std::vector<Eigen::Vector3d> pts;
   for (int k = 0; k <= n.z(); ++k)
@@ -80,8 +80,8 @@ void box_surface(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const Eig
 
 void box_tets(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const Eigen::Vector3i& n,
               Eigen::MatrixXd& V, Eigen::MatrixXi& T) {
-  require(n.minCoeff() >= 1, "box_tets: cell counts must be >= 1");
-  require((hi - lo).minCoeff() > 0, "box_tets: empty box");
+  require(n.minCoeff() >= 1, "a box needs cell counts >= 1");
+  require((hi - lo).minCoeff() > 0, "a box needs max > min in every coordinate");
   const int nx = n.x() + 1, ny = n.y() + 1, nz = n.z() + 1;
   V.resize(nx * ny * nz, 3);
   auto id = [&](int i, int j, int k) { return (k * ny + j) * nx + i; };
@@ -171,8 +171,9 @@ void paper_bar_surface(Eigen::MatrixXd& V, Eigen::MatrixXi& F) {
 
 void cylinder_surface(double radius, double length, int around, int along, int cap_rings,
                       Eigen::MatrixXd& V, Eigen::MatrixXi& F) {
-  require(radius > 0 && length > 0, "cylinder_surface: radius and length must be > 0");
-  require(around >= 3 && along >= 1 && cap_rings >= 1, "cylinder_surface: too few segments");
+  require(radius > 0 && length > 0, "a cylinder needs radius and length > 0");
+  require(around >= 3 && along >= 1 && cap_rings >= 1,
+          "a cylinder needs 3 or more segments around and 1 or more along and in its caps");
   std::vector<Eigen::Vector3d> pts;
   std::vector<std::array<int, 3>> tris;
   const double pi = std::acos(-1.0);
@@ -232,8 +233,8 @@ void cylinder_surface(double radius, double length, int around, int along, int c
 }
 
 void bumpy_sphere(double radius, int n, double bump, Eigen::MatrixXd& V, Eigen::MatrixXi& F) {
-  require(radius > 0 && n >= 1, "bumpy_sphere: radius and n must be > 0");
-  require(bump >= 0 && bump < 0.5, "bumpy_sphere: bump must be in [0, 0.5)");
+  require(radius > 0 && n >= 1, "a bumpy sphere needs radius > 0 and n > 0");
+  require(bump >= 0 && bump < 0.5, "a bumpy sphere needs a bump in [0, 0.5)");
   box_surface(Eigen::Vector3d::Constant(-1), Eigen::Vector3d::Constant(1), Eigen::Vector3i::Constant(n), V, F);
   for (Eigen::Index i = 0; i < V.rows(); ++i) {
     const Eigen::Vector3d d = V.row(i).normalized();
@@ -243,7 +244,8 @@ void bumpy_sphere(double radius, int n, double bump, Eigen::MatrixXd& V, Eigen::
 }
 
 void grid_2d(double width, double height, int nx, int ny, Eigen::MatrixXd& V, Eigen::MatrixXi& F) {
-  require(width > 0 && height > 0 && nx >= 1 && ny >= 1, "grid_2d: bad size");
+  require(width > 0 && height > 0 && nx >= 1 && ny >= 1,
+          "a 2D grid needs a positive size and 1 or more cells along each side");
   V.resize((nx + 1) * (ny + 1), 2);
   for (int j = 0; j <= ny; ++j)
     for (int i = 0; i <= nx; ++i) V.row(j * (nx + 1) + i) << width * i / nx, height * j / ny;
@@ -259,8 +261,8 @@ void grid_2d(double width, double height, int nx, int ny, Eigen::MatrixXd& V, Ei
 
 Eigen::MatrixXd twist_bend(const Eigen::Ref<const Eigen::MatrixXd>& P, double cx, double cy,
                            double z0, double z1, double angle, double bend) {
-  require(P.cols() == 3, "twist_bend: points must be n x 3");
-  require(z1 > z0, "twist_bend: need z1 > z0");
+  require(P.cols() == 3, "the twist needs points n x 3");
+  require(z1 > z0, "the twist needs z1 > z0");
   Eigen::MatrixXd X = P;
   for (Eigen::Index i = 0; i < P.rows(); ++i) {
     const double s = std::clamp((P(i, 2) - z0) / (z1 - z0), 0.0, 1.0);
@@ -274,8 +276,8 @@ Eigen::MatrixXd twist_bend(const Eigen::Ref<const Eigen::MatrixXd>& P, double cx
 
 Eigen::MatrixXd twist_bend_jacobian(const Eigen::Ref<const Eigen::MatrixXd>& P, double cx,
                                     double cy, double z0, double z1, double angle, double bend) {
-  require(P.cols() == 3, "twist_bend_jacobian: points must be n x 3");
-  require(z1 > z0, "twist_bend_jacobian: need z1 > z0");
+  require(P.cols() == 3, "the twist needs points n x 3");
+  require(z1 > z0, "the twist needs z1 > z0");
   Eigen::MatrixXd J(3 * P.rows(), 3);
   for (Eigen::Index i = 0; i < P.rows(); ++i) {
     const double L = z1 - z0, t = (P(i, 2) - z0) / L;

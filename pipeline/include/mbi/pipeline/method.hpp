@@ -3,6 +3,8 @@
 // from element Bezier control points (docs/method.md fact 5); they differ only in the per-vertex
 // matrices M: BI is M = 0 (no solve), modified-BI solves M from the control positions, Phong
 // deformation takes M_i = F_i / 2 in closed form (interp/phong.hpp, no factorisation).
+#include <mbi/base/names.hpp>
+
 #include <optional>
 #include <string_view>
 #include <vector>
@@ -15,11 +17,16 @@ enum class Method {
   Phong,       ///< Phong deformation (James 2020): M_i = F_i / 2, vertex deformation gradients
 };
 
-/// "bi", "modified-bi", "phong": the names used in scene files and on the command line.
+/// "bi", "modified-bi", "phong": the names used in scene files, on the command line and in
+/// messages, in the order of menus and comparisons.
+inline constexpr auto kMethodNames = name_table<Method>(
+    {{Method::BI, "bi"}, {Method::ModifiedBI, "modified-bi"}, {Method::Phong, "phong"}});
+
+/// kMethodNames' name of m.
 const char* method_name(Method m);
 /// Parses a name of method_name(); nullopt for anything else.
 std::optional<Method> parse_method(std::string_view name);
-/// Every method, in a fixed order (for menus, comparisons and option checks).
+/// Every method, in kMethodNames' order (for menus, comparisons and option checks).
 const std::vector<Method>& all_methods();
 /// The names of all_methods() joined by ", " (for error messages and --help).
 const char* method_names();

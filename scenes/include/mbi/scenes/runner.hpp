@@ -9,6 +9,8 @@
 //                              for the whole run); 2D the warped image
 //   <out>/metrics.json         per-frame timings and the discontinuity table (BI vs modified-BI,
 //                              and Phong for method phong)
+// The output folder and its rules: output_folder.hpp; what evaluates the dense points (GPU or
+// CPU): evaluator.hpp.
 #include <mbi/interp/embed.hpp>
 #include <mbi/interp/metrics.hpp>
 #include <mbi/io/image.hpp>
@@ -44,11 +46,6 @@ struct SceneModels {
 /// 3D file (its dimension decides, as in mbi deform).
 SceneModels load_models(const Scene& scene, const std::filesystem::path& mesh_override = {},
                         bool force_3d = false);
-
-/// The output folder of a run: `out_dir` when given, else "out/<scene name>". The name must be
-/// one safe file name (no '/', '\\', control characters, leading '.'); otherwise SceneError
-/// (a downloaded scene never writes outside out/).
-std::filesystem::path output_folder(const Scene& scene, const std::filesystem::path& out_dir);
 
 /// The frame pipeline of a scene: a SimulatorDriver (material, time stepping, constraints,
 /// scripted pokes) in simulate mode, a HandleDriver following the [[drags]] keyframes in drag

@@ -3,10 +3,12 @@
 // The format is documented key by key in docs/scene-format.md. load_scene() checks every key:
 // unknown keys, wrong types and out-of-range values throw SceneError "<file>:<line>: <key>: ...".
 // After parsing, a scene holds enums and typed values only: nothing downstream compares strings.
+#include <mbi/base/names.hpp>
 #include <mbi/error.hpp>
 #include <mbi/generate/cage.hpp>
 #include <mbi/interp/control.hpp>
 #include <mbi/pipeline/method.hpp>
+#include <mbi/sim/simulator.hpp>
 
 #include <Eigen/Core>
 
@@ -36,12 +38,33 @@ enum class MeshFormat { Obj, Ply, None };
 /// or the CPU. Auto uses the GPU when an OpenGL context can be made and says so when it cannot.
 enum class GpuUse { Auto, On, Off };
 
-/// Scene-file names of the enums ("simulate", "paper-bar", "grid-2d", "ply", ...).
-const char* mode_name(Mode m);
-const char* builtin_name(DenseBuiltin b);
-const char* builtin_name(ControlBuiltin b);
-const char* format_name(MeshFormat f);
-const char* gpu_name(GpuUse g);
+/// The names of the enums, as scene files, the command line and messages spell them (the
+/// methods' names are pipeline::kMethodNames, the meshers' generate::kMesherNames). The "none"
+/// values of DenseBuiltin and ControlBuiltin have no name: a scene never writes them.
+inline constexpr auto kModeNames =
+    name_table<Mode>({{Mode::Simulate, "simulate"}, {Mode::Drag, "drag"}});
+inline constexpr auto kDenseBuiltinNames = name_table<DenseBuiltin>(
+    {{DenseBuiltin::PaperBar, "paper-bar"},
+     {DenseBuiltin::Cylinder, "cylinder"},
+     {DenseBuiltin::BumpySphere, "bumpy-sphere"},
+     {DenseBuiltin::ImageGrid, "image-grid"}});
+inline constexpr auto kControlBuiltinNames = name_table<ControlBuiltin>(
+    {{ControlBuiltin::PaperBar, "paper-bar"},
+     {ControlBuiltin::Box, "box"},
+     {ControlBuiltin::Grid2D, "grid-2d"}});
+inline constexpr auto kMeshFormatNames = name_table<MeshFormat>(
+    {{MeshFormat::Obj, "obj"}, {MeshFormat::Ply, "ply"}, {MeshFormat::None, "none"}});
+inline constexpr auto kGpuUseNames =
+    name_table<GpuUse>({{GpuUse::Auto, "auto"}, {GpuUse::On, "on"}, {GpuUse::Off, "off"}});
+inline constexpr auto kHandleModeNames = name_table<interp::HandleMode>(
+    {{interp::HandleMode::Hard, "hard"}, {interp::HandleMode::Soft, "soft"}});
+
+/// The tables' names of single values ("" for the builtins' None).
+inline const char* mode_name(Mode m) { return kModeNames.name(m); }
+inline const char* builtin_name(DenseBuiltin b) { return kDenseBuiltinNames.name(b); }
+inline const char* builtin_name(ControlBuiltin b) { return kControlBuiltinNames.name(b); }
+inline const char* format_name(MeshFormat f) { return kMeshFormatNames.name(f); }
+inline const char* gpu_name(GpuUse g) { return kGpuUseNames.name(g); }
 
 /// Dense model: a file (path relative to the scene file) or a built-in procedural mesh.
 struct DenseSpec {
@@ -67,15 +90,20 @@ struct MaterialSpec {
   double density = 1000;  ///< kg/m^3
 };
 
+/// sim::Parameters with the scene file's defaults: one step of 1/30 s a frame, no gravity.
+inline sim::Parameters scene_parameters() {
+  sim::Parameters p;
+  p.dt = 1.0 / 30.0;
+  p.gravity.setZero();
+  return p;
+}
+
+/// Time stepping: the simulator's parameters themselves, and the length of a run. The keys of
+/// [simulation] fill them: dt, substeps, newton_iterations, gravity; damping_mass and
+/// damping_stiffness are mass_damping and stiffness_damping; ground = h is a ground plane y = h.
 struct SimulationSpec {
-  double dt = 1.0 / 30.0;  ///< s per frame
-  int substeps = 1;
+  sim::Parameters parameters = scene_parameters();
   int frames = 120;
-  int newton_iterations = 1;
-  Eigen::Vector3d gravity = Eigen::Vector3d::Zero();  ///< m/s^2
-  double damping_mass = 0.0;       ///< Rayleigh alpha, 1/s
-  double damping_stiffness = 0.0;  ///< Rayleigh beta, s
-  std::optional<double> ground;    ///< ground plane height (y up), m
 };
 
 /// Node selection: an axis-aligned box, a half-space, or explicit indices (any combination is a
@@ -90,19 +118,15 @@ struct Selection {
   std::string where;  ///< "<file>:<line>" for error messages
 };
 
-struct MotionSpec {
-  Eigen::Vector3d twist_axis = Eigen::Vector3d::UnitZ();
-  Eigen::Vector3d twist_center = Eigen::Vector3d::Zero();
-  double twist_rate = 0.0;  ///< rad/s
-  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  ///< m/s
-  double start = 0.0, stop = 1e30;  ///< s: the motion runs in [start, stop]
-};
-
 struct ConstraintSpec {
   enum class Kind { Fixed, Kinematic } kind = Kind::Fixed;
   Selection select;
-  MotionSpec motion;  ///< Kinematic only
+  /// Kinematic only: the keys of `motion` fill it (twist_center, twist_axis and twist_rate are
+  /// center, axis and angular_velocity). The scene file's defaults: about z, no stop (1e30 s).
+  sim::RigidMotion motion{.axis = Eigen::Vector3d::UnitZ(), .stop = 1e30};
 };
+inline constexpr auto kConstraintKindNames = name_table<ConstraintSpec::Kind>(
+    {{ConstraintSpec::Kind::Fixed, "fixed"}, {ConstraintSpec::Kind::Kinematic, "kinematic"}});
 
 /// A scripted poke: a constant force (N) or a spring (N/m) toward a target, on frames
 /// [first, last], at a material point: `point` in rest coordinates, or `at` in fractions of the
@@ -131,8 +155,8 @@ struct DragSpec {
 
 struct InterpolationSpec {
   pipeline::Method method = pipeline::Method::ModifiedBI;
-  double alpha = 0.0;                  ///< 0 = default (0.1 in 3D, 0.2 in 2D)
-  bool pin_boundary = false;
+  /// alpha (0 = default: 0.1 in 3D, 0.2 in 2D) and pin_boundary; the rest at their defaults
+  interp::Options options;
   bool compare_pinned = false;         ///< 2D drag scenes: also write the pinned variant
   interp::HandleMode handles = interp::HandleMode::Hard;  ///< drag scenes: Eq. 10 or Eq. 11
   GpuUse gpu = GpuUse::Auto;
@@ -174,6 +198,10 @@ Scene load_scene(const std::filesystem::path& file);
 /// load_scene on the text of a scene; `file` names it in messages and is where relative paths
 /// of the scene start from. Nothing is read from disk.
 Scene parse_scene(std::string_view text, const std::filesystem::path& file);
+
+/// A path of the scene (dense.path, control.path, ...): relative paths start at the scene file's
+/// folder.
+std::filesystem::path resolve_path(const Scene& scene, const std::filesystem::path& p);
 
 /// Nodes of U (n x d) selected by s (sorted, unique). Throws SceneError if an index is out of
 /// range or nothing is selected.

@@ -24,6 +24,7 @@
 // same vertex budget buys a finer envelope: the cell size is searched on the TetGen vertex count.
 // A TetGen mesh whose smallest dihedral angle is below 5 degrees is rejected (other cell sizes and
 // switches are tried); if none qualifies make_cage throws CageError.
+#include <mbi/base/names.hpp>
 #include <mbi/error.hpp>
 
 #include <Eigen/Core>
@@ -44,9 +45,13 @@ enum class Mesher {
   TetGen,  ///< the envelope's boundary tetrahedralised by TetGen
 };
 
-/// "voxel" / "tetgen".
+/// "voxel", "tetgen": the names in scene files (control.mesher) and of `mbi cage --mesher`.
+inline constexpr auto kMesherNames =
+    name_table<Mesher>({{Mesher::Voxel, "voxel"}, {Mesher::TetGen, "tetgen"}});
+
+/// kMesherNames' name of m.
 const char* mesher_name(Mesher m);
-/// Parses "voxel" / "tetgen"; throws CageError otherwise.
+/// Parses a name of kMesherNames; throws CageError otherwise.
 Mesher parse_mesher(const std::string& name);
 
 struct CageOptions {

@@ -1,0 +1,181 @@
+// make_driver and make_pipeline: what moves a scene's control mesh (the simulator with its
+// constraints and pokes, or the dragged handles) and the frame pipeline around it.
+#include "format.hpp"
+
+#include <mbi/interp.hpp>
+#include <mbi/scenes/runner.hpp>
+#include <mbi/sim/simulator.hpp>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <memory>
+
+namespace mbi::scenes {
+namespace {
+
+void check_mode(const Scene& sc, const SceneModels& m) {
+  if (sc.mode == Mode::Simulate && m.dim() != 3)
+    throw SceneError(sc.file.string() + ": mode = \"" + mode_name(Mode::Simulate) +
+                     "\" needs a 3D control mesh (use mode = \"" + mode_name(Mode::Drag) + "\" in 2D)");
+}
+
+// Linear interpolation of drag keyframes at frame f (held before the first and after the last).
+Eigen::Vector3d key_at(const DragSpec& d, double f) {
+  if (f <= d.keys.front().first) return d.keys.front().second;
+  if (f >= d.keys.back().first) return d.keys.back().second;
+  for (size_t k = 0; k + 1 < d.keys.size(); ++k)
+    if (f <= d.keys[k + 1].first) {
+      const double s = (f - d.keys[k].first) / (d.keys[k + 1].first - d.keys[k].first);
+      return (1 - s) * d.keys[k].second + s * d.keys[k + 1].second;
+    }
+  return d.keys.back().second;
+}
+
+void add_constraints(const Scene& sc, const Eigen::MatrixXd& U, sim::Simulator& simulator) {
+  for (const ConstraintSpec& c : sc.constraints) {
+    const std::vector<int> nodes = select_nodes(c.select, U);
+    if (c.kind == ConstraintSpec::Kind::Fixed)
+      simulator.fix(nodes);
+    else
+      simulator.add_kinematic(nodes, c.motion);
+  }
+}
+
+// A poke's material point: `point` itself, or for `at` the dense vertex nearest to a point given
+// in fractions of the dense model's bounding box.
+Eigen::MatrixXd poke_point(const PokeSpec& ps, const SceneModels& m) {
+  Eigen::MatrixXd q = ps.point.transpose();
+  if (ps.relative) {
+    const Eigen::RowVector3d lo = m.dense.V.colwise().minCoeff(), hi = m.dense.V.colwise().maxCoeff();
+    const Eigen::RowVector3d want = lo + ps.point.transpose().cwiseProduct(hi - lo);
+    Eigen::Index best = 0;
+    (m.dense.V.rowwise() - want).rowwise().squaredNorm().minCoeff(&best);
+    q = m.dense.V.row(best);
+  }
+  return q;
+}
+
+void add_pokes(const Scene& sc, const SceneModels& m, pipeline::SimulatorDriver& driver) {
+  for (const PokeSpec& ps : sc.pokes) {
+    const Eigen::MatrixXd q = poke_point(ps, m);
+    const std::string point = "pokes: point (" + format_num(ps.point.x()) + ", " +
+                              format_num(ps.point.y()) + ", " + format_num(ps.point.z()) + ")";
+    interp::Embedding e;
+    try {
+      e = interp::embed(m.U, m.T, q);
+    } catch (const interp::Error& err) {
+      throw SceneError(sc.file.string() + ": " + point + ": " + err.what());
+    }
+    if (!e.outside.empty())
+      throw SceneError(sc.file.string() + ": " + point + " is outside the control mesh");
+    const Eigen::Vector4d bary = e.bary.row(0).transpose();
+    if (ps.force) {
+      driver.add_scripted_force(ps.first, ps.last, e.element(0), bary, *ps.force);
+    } else {
+      const double size = ps.offset_in_sizes ? (m.dense.V.colwise().maxCoeff() - m.dense.V.colwise().minCoeff()).norm()
+                                             : 1.0;
+      const Eigen::Vector3d target = ps.target_relative ? Eigen::Vector3d(size * *ps.target + q.row(0).transpose())
+                                                        : *ps.target;
+      driver.add_scripted_spring(ps.first, ps.last, e.element(0), bary, target, ps.stiffness);
+    }
+  }
+}
+
+std::unique_ptr<pipeline::Driver> simulation_driver(const Scene& sc, const SceneModels& m) {
+  const sim::Material mat{sc.material.young, sc.material.poisson, sc.material.density};
+  sim::Simulator simulator(m.U, m.T, mat, sc.simulation.parameters);
+  add_constraints(sc, m.U, simulator);
+  auto driver = std::make_unique<pipeline::SimulatorDriver>(std::move(simulator));
+  add_pokes(sc, m, *driver);
+  return driver;
+}
+
+// The dragged control vertices (handles) and, for each, the [[drags]] entry that moves it.
+void drag_handles(const Scene& sc, const SceneModels& m, std::vector<int>& vertices,
+                  std::vector<int>& drag_of) {
+  for (size_t k = 0; k < sc.drags.size(); ++k) {
+    const DragSpec& dr = sc.drags[k];
+    std::vector<int> vs;
+    if (dr.select) {
+      vs = select_nodes(*dr.select, m.U);
+    } else if (dr.near) {
+      Eigen::Index v = 0;
+      (m.U.rowwise() - dr.near->head(m.dim()).transpose()).rowwise().squaredNorm().minCoeff(&v);
+      vs.push_back(static_cast<int>(v));
+    } else {
+      vs.push_back(dr.vertex);
+    }
+    const std::string where = sc.file.string() + ": drags[" + std::to_string(k) + "]: ";
+    for (int v : vs) {
+      if (v >= m.U.rows())
+        throw SceneError(where + "vertex " + std::to_string(v) + " out of range (control mesh has " +
+                         std::to_string(m.U.rows()) + ")");
+      if (std::find(vertices.begin(), vertices.end(), v) != vertices.end())
+        throw SceneError(where + "control vertex " + std::to_string(v) + " is dragged twice");
+      vertices.push_back(v);
+      drag_of.push_back(static_cast<int>(k));
+    }
+  }
+}
+
+std::unique_ptr<pipeline::Driver> drag_driver(const Scene& sc, const SceneModels& m) {
+  const int d = m.dim();
+  std::vector<int> vertices, drag_of;
+  drag_handles(sc, m, vertices, drag_of);
+  interp::ControlOptions co;
+  co.interp = sc.interpolation.options;
+  co.mode = sc.interpolation.handles;
+  const Eigen::MatrixXd U = m.U;
+  auto targets = [U, vertices, drag_of, drags = sc.drags, d](int f) {
+    Eigen::MatrixXd t(static_cast<Eigen::Index>(vertices.size()), d);
+    for (size_t k = 0; k < vertices.size(); ++k)
+      t.row(static_cast<Eigen::Index>(k)) =
+          U.row(vertices[k]) + key_at(drags[static_cast<size_t>(drag_of[k])], f).head(d).transpose();
+    return t;
+  };
+  return std::make_unique<pipeline::HandleDriver>(m.U, m.T, vertices, co, targets);
+}
+
+// Area-weighted vertex normals of a triangle surface (rest normals for the GPU's shading).
+Eigen::MatrixXd vertex_normals(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F) {
+  Eigen::MatrixXd N = Eigen::MatrixXd::Zero(V.rows(), 3);
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const Eigen::Vector3d a = V.row(F(f, 0)), b = V.row(F(f, 1)), c = V.row(F(f, 2));
+    const Eigen::RowVector3d n = (b - a).cross(c - a).transpose();
+    for (int k = 0; k < 3; ++k) N.row(F(f, k)) += n;
+  }
+  for (Eigen::Index i = 0; i < N.rows(); ++i) {
+    const double len = N.row(i).norm();
+    if (len > 0) N.row(i) /= len;
+    else N.row(i) << 0, 0, 1;  // a vertex no face uses
+  }
+  return N;
+}
+
+}  // namespace
+
+std::unique_ptr<pipeline::Driver> make_driver(const Scene& sc, const SceneModels& m) {
+  check_mode(sc, m);
+  return sc.mode == Mode::Simulate ? simulation_driver(sc, m) : drag_driver(sc, m);
+}
+
+pipeline::FramePipeline make_pipeline(const Scene& sc, const SceneModels& m,
+                                      interp::Embedding embedding,
+                                      std::unique_ptr<pipeline::Evaluator> evaluator) {
+  pipeline::PipelineOptions po;
+  po.method = sc.interpolation.method;
+  po.interp = sc.interpolation.options;
+  auto driver = make_driver(sc, m);
+  // rest normals of a 3D surface: evaluated normals for the GPU's pictures and the viewer; a
+  // model with normals of its own has them evaluated every frame (written with the meshes)
+  const bool file_normals = m.dim() == 3 && m.dense.N.rows() == m.dense.V.rows() && m.dense.N.cols() == 3;
+  po.normals = file_normals;
+  const Eigen::MatrixXd normals = file_normals ? m.dense.N
+                                  : m.dim() == 3 && m.dense.F.rows() > 0 ? vertex_normals(m.dense.V, m.dense.F)
+                                                                         : Eigen::MatrixXd();
+  return pipeline::FramePipeline(m.U, m.T, std::move(embedding), std::move(driver), po,
+                                 std::move(evaluator), normals);
+}
+
+}  // namespace mbi::scenes

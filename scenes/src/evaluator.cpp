@@ -1,0 +1,24 @@
+#include <mbi/gpu/context.hpp>
+#include <mbi/gpu/evaluator.hpp>
+#include <mbi/scenes/evaluator.hpp>
+
+namespace mbi::scenes {
+
+Evaluation make_evaluator(GpuUse use, const std::function<void(const std::string&)>& warn) {
+  Evaluation e;
+  if (use != GpuUse::Off) {
+    try {
+      e.context = gpu::Context::headless();
+    } catch (const gpu::GlError& err) {
+      if (use == GpuUse::On) throw SceneError(std::string("gpu = ") + gpu_name(use) + ", but " + err.what());
+      warn(std::string("note: ") + err.what() + "; evaluating and drawing on the CPU");
+    }
+  }
+  if (e.context)
+    e.evaluator = std::make_unique<gpu::GpuEvaluator>(*e.context);
+  else
+    e.evaluator = std::make_unique<pipeline::CpuEvaluator>();
+  return e;
+}
+
+}  // namespace mbi::scenes

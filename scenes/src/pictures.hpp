@@ -1,0 +1,65 @@
+#pragma once
+// The pictures of a run (frame_NNNN.png at the written frames): the run's panels side by side,
+// BI | modified-BI, or BI | Phong | modified-BI for a Phong run. 2D pictures warp the scene's
+// image and are written with each frame (Outputs); 3D pictures are drawn at the end of the run
+// (Pictures3D), on the GPU when the run evaluates there, else by the CPU rasteriser.
+#include <mbi/interp/modified_bi.hpp>
+#include <mbi/pipeline/frame_pipeline.hpp>
+#include <mbi/scenes/runner.hpp>
+
+#include <Eigen/Core>
+
+#include <filesystem>
+#include <memory>
+#include <vector>
+
+namespace mbi::gpu {
+class Context;
+class Renderer;
+}  // namespace mbi::gpu
+
+namespace mbi::scenes {
+
+/// The methods of a picture's panels, left to right, for a run of `method`.
+std::vector<pipeline::Method> picture_methods(pipeline::Method method);
+
+/// Pictures that could not be written fail at load, not after frame 0: 2D panels are the
+/// image's size x 1.5 each, side by side with 8-pixel gaps; io::Image holds at most 16384 x
+/// 16384. Throws SceneError.
+void check_picture_size(const Scene& sc, const SceneModels& m);
+
+/// The 3D pictures of a run: the Bezier points of each written frame's panels are kept (a few
+/// hundred kB), and the pictures are drawn at the end, all the same size, with one camera that
+/// frames the control mesh over the whole run.
+class Pictures3D {
+ public:
+  /// `context`: the run's GPU evaluator's, whose buffers the pictures are drawn from; null: the
+  /// CPU rasteriser.
+  Pictures3D(const Scene& sc, const SceneModels& m, const std::filesystem::path& dir,
+             std::shared_ptr<gpu::Context> context);
+  ~Pictures3D();
+  Pictures3D(const Pictures3D&) = delete;
+  Pictures3D& operator=(const Pictures3D&) = delete;
+
+  /// What draws them: "gpu" or "cpu".
+  const char* renderer() const;
+  /// Frame f's panels (Bezier points) at control positions X (n x 3).
+  void add(int f, const Eigen::MatrixXd& X, std::vector<interp::BezierPoints> panels);
+  /// Draws and writes every stored picture (the pipeline's evaluator and embedding evaluate them).
+  void write(pipeline::FramePipeline& pipe);
+
+ private:
+  struct Frame {
+    int f;
+    std::vector<interp::BezierPoints> panels;
+  };
+  const Scene& sc_;
+  const SceneModels& m_;
+  std::filesystem::path dir_;
+  std::shared_ptr<gpu::Context> context_;
+  std::unique_ptr<gpu::Renderer> renderer_;
+  Eigen::Vector3d lo_, hi_;
+  std::vector<Frame> frames_;
+};
+
+}  // namespace mbi::scenes
