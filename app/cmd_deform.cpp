@@ -38,7 +38,6 @@ double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-std::string lower_ext(const fs::path& p) { return mbi::io::lower_extension(p); }
 // A library message without its function name ("validate_mesh: element 5 ..." -> "element 5
 // ..."): the user did not call that function.
 std::string plain(const std::exception& e) {
@@ -47,8 +46,8 @@ std::string plain(const std::exception& e) {
 }
 
 bool is_point_list(const fs::path& p) {
-  const std::string e = lower_ext(p);
-  return e == ".txt" || e == ".xyz";
+  const io::FileFormat* f = io::file_format(p);
+  return f && f->kind == io::FileKind::points;
 }
 
 struct DeformArgs {
@@ -83,11 +82,7 @@ Problem load_files(const DeformArgs& a) {
   pb.T = cm.T;
   const int d = cm.dim();
   for (const std::string& note : cm.notes) std::fprintf(stderr, "mbi deform: note: %s\n", note.c_str());
-  const std::string dext = lower_ext(a.deformed);
-  pb.X = dext == ".node"  ? io::read_node(a.deformed)
-         : dext == ".msh" ? io::read_gmsh_nodes(a.deformed)
-         : dext == ".vtk" ? io::read_vtk_points(a.deformed)
-                          : io::read_points(a.deformed);
+  pb.X = io::read_positions(a.deformed);
   if (d == 2 && pb.X.cols() == 3) {
     // 2D positions stored with z (a .msh, a .vtk, meshio's 3-column text): one plane, dropped
     if (pb.X.rows() > 0 && (pb.X.col(2).array() != pb.X(0, 2)).any())
@@ -247,22 +242,14 @@ int run_deform(const DeformArgs& a) {
   std::vector<fs::path> inputs;
   if (!example) {
     inputs = {a.control, a.deformed, a.mesh};
-    fs::path base(a.control);
-    const std::string ce = lower_ext(base);
-    if (ce == ".node" || ce == ".ele" || ce == ".face" || ce.empty()) {
-      if (!ce.empty()) base.replace_extension();
-      for (const char* e : {".node", ".ele"}) {
-        fs::path p = base;
-        p += e;
-        inputs.push_back(p);
-      }
-    }
+    for (const fs::path& p : io::control_mesh_files(a.control)) inputs.push_back(p);
   }
   io::OutputSet outputs(inputs, a.force);
   const std::size_t i_out = a.out.empty() ? 0 : outputs.add(a.out, "--out");
   const std::size_t i_stats = a.stats.empty() ? 0 : outputs.add(a.stats, "--stats");
   if (!a.out.empty() && !is_point_list(a.out) && !io::is_surface_file(a.out))
-    throw std::runtime_error("--out " + a.out + ": unknown output format '" + lower_ext(a.out) +
+    throw std::runtime_error("--out " + a.out + ": unknown output format '" +
+                             io::lower_extension(a.out) +
                              "' (expected .obj, .ply, .off, .stl, .txt or .xyz)");
   if (a.alpha_given && !(a.alpha > 0) )
     throw std::runtime_error("--alpha must be > 0 (E_disc alone has extra null modes)");

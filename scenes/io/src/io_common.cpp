@@ -7,15 +7,12 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
-#include <cstring>
-#include <limits>
-
-#include <atomic>
 #include <cctype>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
-#include <fstream>
+#include <cstring>
+#include <limits>
 #include <system_error>
 
 namespace mbi::io::detail {
@@ -105,37 +102,43 @@ int LineCounter::line_of(std::size_t at) {
   return static_cast<int>(std::min<long long>(line_, std::numeric_limits<int>::max()));
 }
 
+bool LineReader::next(std::string_view& line) {
+  if (pos_ >= text_.size()) return false;
+  std::size_t end = text_.find_first_of("\r\n", pos_);
+  if (end == std::string_view::npos) end = text_.size();
+  line = text_.substr(pos_, end - pos_);
+  pos_ = end + (end + 1 < text_.size() && text_[end] == '\r' && text_[end + 1] == '\n' ? 2 : 1);
+  if (number_ < std::numeric_limits<int>::max()) ++number_;
+  return true;
+}
+
+std::vector<std::string_view> words(std::string_view s, char comment, std::string_view extra_seps) {
+  if (comment != 0) {
+    const std::size_t c = s.find(comment);
+    if (c != std::string_view::npos) s = s.substr(0, c);
+  }
+  auto is_sep = [&](char ch) {
+    return ch == ' ' || ch == '\t' || ch == '\r' || ch == '\f' || ch == '\v' ||
+           extra_seps.find(ch) != std::string_view::npos;
+  };
+  std::vector<std::string_view> tok;
+  std::size_t i = 0;
+  while (i < s.size()) {
+    while (i < s.size() && is_sep(s[i])) ++i;
+    const std::size_t b = i;
+    while (i < s.size() && !is_sep(s[i])) ++i;
+    if (i > b) tok.push_back(s.substr(b, i - b));
+  }
+  return tok;
+}
+
 std::vector<Line> tokenize(std::string_view text, char comment, std::string_view extra_seps) {
   std::vector<Line> lines;
-  int number = 0;
-  std::size_t pos = 0;
-  while (pos < text.size()) {
-    // A line ends at LF, CR LF or a lone CR (old Mac files).
-    std::size_t end = text.find_first_of("\r\n", pos);
-    if (end == std::string_view::npos) end = text.size();
-    const std::size_t next =
-        end + (end + 1 < text.size() && text[end] == '\r' && text[end + 1] == '\n' ? 2 : 1);
-    if (number < std::numeric_limits<int>::max()) ++number;  // saturates (files of > 2^31 lines)
-    std::string_view s = text.substr(pos, end - pos);
-    if (comment != 0) {
-      const std::size_t c = s.find(comment);
-      if (c != std::string_view::npos) s = s.substr(0, c);
-    }
-    Line line;
-    line.number = number;
-    std::size_t i = 0;
-    auto is_sep = [&](char ch) {
-      return ch == ' ' || ch == '\t' || ch == '\r' || ch == '\f' || ch == '\v' ||
-             extra_seps.find(ch) != std::string_view::npos;
-    };
-    while (i < s.size()) {
-      while (i < s.size() && is_sep(s[i])) ++i;
-      const std::size_t b = i;
-      while (i < s.size() && !is_sep(s[i])) ++i;
-      if (i > b) line.tok.push_back(s.substr(b, i - b));
-    }
+  LineReader reader(text);
+  std::string_view s;
+  while (reader.next(s)) {
+    Line line{reader.number(), words(s, comment, extra_seps)};
     if (!line.tok.empty()) lines.push_back(std::move(line));
-    pos = next;
   }
   return lines;
 }
@@ -209,7 +212,12 @@ void put(std::FILE* f, const std::string& s, const std::filesystem::path& file) 
   put(f, s.data(), s.size(), file);
 }
 
-std::string extension(const std::filesystem::path& file) { return lower_extension(file); }
+void put_buffered(std::string& out, std::FILE* f, const std::filesystem::path& file) {
+  if (out.size() >= (1u << 20)) {
+    put(f, out.data(), out.size(), file);
+    out.clear();
+  }
+}
 
 void check_finite(const Eigen::Ref<const Eigen::MatrixXd>& P, const std::filesystem::path& file,
                   const char* what) {

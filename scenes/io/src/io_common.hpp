@@ -1,11 +1,14 @@
 #pragma once
-// Internal helpers of the IO code: error messages, whole-file reading, line tokenising, number
-// parsing and atomic writing.
+// Helpers shared by the readers and writers of every format: error messages, whole-file
+// reading, lines and words of a text, numbers, bytes of binary data, checks and atomic writing.
 #include <mbi/io/io.hpp>
 #include <mbi/io/parse.hpp>
 
+#include <algorithm>
+#include <bit>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <functional>
 #include <string>
 #include <string_view>
@@ -49,14 +52,34 @@ class LineCounter {
   long long line_ = 1;
 };
 
+/// Reads a text a line at a time. A line ends at LF, CR LF or a lone CR (old Mac files); the
+/// last one may have no end.
+class LineReader {
+ public:
+  explicit LineReader(std::string_view text) : text_(text) {}
+  /// The next line, without its end, in `line`; false after the last one.
+  bool next(std::string_view& line);
+  /// The 1-based number of the line `next` gave last (saturates: files of > 2^31 lines).
+  int number() const { return number_; }
+
+ private:
+  std::string_view text_;
+  std::size_t pos_ = 0;
+  int number_ = 0;
+};
+
+/// The blank-separated words of one line (separators: blanks, tabs, CR, and `extra_seps`),
+/// without everything from `comment` on (comment = 0: none). The views point into `line`.
+std::vector<std::string_view> words(std::string_view line, char comment = '#',
+                                    std::string_view extra_seps = {});
+
 struct Line {
   int number = 0;                      ///< 1-based line number in the file
   std::vector<std::string_view> tok;   ///< blank-separated tokens
 };
 
-/// Splits `text` into lines of tokens (separators: blanks, tabs, CR, and `extra_seps`); drops
-/// everything from `comment` to the end of a line (comment = 0: none) and lines without tokens.
-/// The views point into `text`.
+/// The lines of `text` that have words (see words()), with their numbers. The views point into
+/// `text`.
 std::vector<Line> tokenize(std::string_view text, char comment = '#',
                            std::string_view extra_seps = {});
 
@@ -74,18 +97,9 @@ std::string fmt(double x);
 void write_atomic(const std::filesystem::path& target,
                   const std::function<void(std::FILE*)>& body);
 
-/// write_surface with the faces and attributes of `mesh`, and the positions V (n x 3) and
-/// normals N (n x 3 or empty) in place of mesh.V and mesh.N (no copy of the mesh per frame).
-void write_surface_positions(const std::filesystem::path& file, const SurfaceMesh& mesh,
-                             const Eigen::Ref<const Eigen::MatrixXd>& V,
-                             const Eigen::Ref<const Eigen::MatrixXd>& N, Encoding encoding);
-
 /// fwrite / fputs that throw IoError on failure.
 void put(std::FILE* f, const void* data, std::size_t bytes, const std::filesystem::path& file);
 void put(std::FILE* f, const std::string& s, const std::filesystem::path& file);
-
-/// Lower-case extension with the dot ("" if none).
-std::string extension(const std::filesystem::path& file);
 
 /// Checks P finite; throws "<file>: <what> <row>: non-finite coordinate".
 void check_finite(const Eigen::Ref<const Eigen::MatrixXd>& P, const std::filesystem::path& file,
@@ -93,5 +107,33 @@ void check_finite(const Eigen::Ref<const Eigen::MatrixXd>& P, const std::filesys
 /// Checks every entry of E in [0, n); throws naming row and column.
 void check_indices(const Eigen::Ref<const Eigen::MatrixXi>& E, long long n,
                    const std::filesystem::path& file, const char* what);
+
+/// The T whose sizeof(T) bytes start at p, reversed first when `swap` (the caller checks that
+/// they are there).
+template <typename T>
+T load_bytes(const char* p, bool swap) {
+  unsigned char b[sizeof(T)];
+  std::memcpy(b, p, sizeof(T));
+  if (swap) std::reverse(b, b + sizeof(T));
+  T x;
+  std::memcpy(&x, b, sizeof(T));
+  return x;
+}
+/// The same, stored little endian.
+template <typename T>
+T load_le(const char* p) {
+  return load_bytes<T>(p, std::endian::native == std::endian::big);
+}
+/// Appends the bytes of x to `out`, big or little endian.
+template <typename T>
+void append_bytes(std::string& out, T x, bool big) {
+  unsigned char b[sizeof(T)];
+  std::memcpy(b, &x, sizeof(T));
+  if (big != (std::endian::native == std::endian::big)) std::reverse(b, b + sizeof(T));
+  out.append(reinterpret_cast<const char*>(b), sizeof(T));
+}
+/// Writes `out` to f and empties it once it holds 1 MiB (binary writers fill it record by
+/// record; the caller writes the rest).
+void put_buffered(std::string& out, std::FILE* f, const std::filesystem::path& file);
 
 }  // namespace mbi::io::detail

@@ -1,7 +1,14 @@
 #pragma once
-// File formats of mbi: dense surfaces (OBJ, OFF, PLY, STL), point lists (.txt/.xyz), control
-// meshes (TetGen .node/.ele/.face, Gmsh .msh 2.2/4.1 ASCII, legacy VTK output) and animation
-// output (OBJ/PLY frame sequences, PC2 point caches).
+// File formats of mbi, each in its own file of src/ (format_*.cpp), chosen by extension through
+// one table (src/formats.cpp; file_format below):
+//   dense surfaces  OBJ, OFF (ASCII), PLY (ASCII, binary of either endianness), STL (ASCII,
+//                   binary): read and written
+//   point lists     .txt, .xyz: read and written
+//   control meshes  TetGen .node/.ele: read and written, .face: written; Gmsh .msh 2.2, 4.0 and
+//                   4.1, ASCII or binary: read; legacy VTK .vtk 2.0-5.1, ASCII or BINARY: read,
+//                   ASCII: written
+//   animation       OBJ/PLY frame sequences: written; PC2 point caches: read and written
+// PNG images are read and written by image.hpp.
 //
 // Conventions: positions are n x d Eigen::MatrixXd (d = 2 or 3), elements m x (d+1) 0-based
 // Eigen::MatrixXi, as in mbi::interp. Units are whatever the file uses (no scaling).
@@ -12,8 +19,8 @@
 // before anything is allocated for them. Non-finite coordinates are rejected.
 //
 // Writers never leave a half-written file: they write through AtomicFile (atomic_file.hpp), a
-// temporary file in the same folder renamed over the target at the end. Text writers print reals with %.17g, so reading a
-// written file gives back the same doubles bit for bit.
+// temporary file in the same folder renamed over the target at the end. Text writers print
+// reals with %.17g, so reading a written file gives back the same doubles bit for bit.
 #include <mbi/error.hpp>
 
 #include <Eigen/Core>
@@ -34,6 +41,36 @@ class IoError : public mbi::Error {
 };
 
 class AtomicFile;
+
+// ----------------------------------------------------------------------------------------------
+// Formats by extension
+// ----------------------------------------------------------------------------------------------
+
+/// What a file of a format holds.
+enum class FileKind {
+  surface,  ///< a dense surface: read_surface, write_surface
+  control,  ///< a control mesh, or positions of its nodes: read_control_mesh, read_positions
+  points,   ///< a point list: read_points, write_points
+  cache,    ///< an animation cache: read_pc2, Pc2Writer
+};
+
+/// One format of the table.
+struct FileFormat {
+  const char* extension;  ///< lower case, with its dot: ".obj"
+  const char* name;       ///< for people: "Wavefront OBJ"
+  FileKind kind;
+};
+
+/// The format of `file`'s extension (any case); nullptr for an extension not in the table.
+const FileFormat* file_format(const std::filesystem::path& file);
+/// The extensions of one kind in table order, for messages: ".obj, .off, .ply or .stl".
+std::string extensions_of(FileKind kind);
+/// True for the extensions read_surface reads (.obj, .off, .ply, .stl, any case).
+bool is_surface_file(const std::filesystem::path& file);
+
+/// The file's extension in lower case, with its dot (".obj"; "" when there is none): how every
+/// reader and writer picks a format.
+std::string lower_extension(const std::filesystem::path& file);
 
 // ----------------------------------------------------------------------------------------------
 // Dense surfaces
@@ -97,13 +134,6 @@ void write_surface(const std::filesystem::path& file, const SurfaceMesh& mesh,
 void write_surface(const std::filesystem::path& file, const Eigen::Ref<const Eigen::MatrixXd>& V,
                    const Eigen::Ref<const Eigen::MatrixXi>& F, Encoding encoding = Encoding::ascii);
 
-/// True for the extensions read_surface reads (.obj, .off, .ply, .stl, any case).
-bool is_surface_file(const std::filesystem::path& file);
-
-/// The file's extension in lower case, with its dot (".obj"; "" when there is none): how every
-/// reader and writer picks a format.
-std::string lower_extension(const std::filesystem::path& file);
-
 // ----------------------------------------------------------------------------------------------
 // Point lists (.txt, .xyz): one point per line, d numbers separated by blanks or commas; blank
 // lines and '#' comments are allowed. Every line must have the same count d.
@@ -129,9 +159,15 @@ struct ControlMesh {
 };
 
 /// Reads a control mesh from TetGen files, a Gmsh or a legacy VTK file, chosen by extension:
-/// ".msh" -> Gmsh, ".vtk" -> VTK,
-/// ".node"/".ele"/".face" or no extension -> TetGen base name (.face itself is not read).
+/// ".msh" -> Gmsh, ".vtk" -> VTK, anything else (".node", ".ele", ".face", none, "box.1") ->
+/// TetGen base name (.face itself is not read).
 ControlMesh read_control_mesh(const std::filesystem::path& file);
+/// The files read_control_mesh(file) reads: BASE.node and BASE.ele for TetGen, else `file`.
+std::vector<std::filesystem::path> control_mesh_files(const std::filesystem::path& file);
+/// Positions of every node of a control mesh file, in file order, as deformed positions for the
+/// mesh read_control_mesh reads: ".node" -> read_node (n x d), ".msh" -> read_gmsh_nodes,
+/// ".vtk" -> read_vtk_points (n x 3); any other file is a point list (read_points).
+Eigen::MatrixXd read_positions(const std::filesystem::path& file);
 
 /// TetGen: `path` is the base name or any of BASE.node / BASE.ele / BASE.face. Reads BASE.node
 /// and BASE.ele only: the boundary follows from the elements, so a BASE.face (or .edge, .neigh)

@@ -1,4 +1,4 @@
-// Plain point lists (.txt / .xyz).
+// Point lists (.txt, .xyz): one point per line, d numbers separated by blanks or commas.
 #include "io_common.hpp"
 
 namespace mbi::io {

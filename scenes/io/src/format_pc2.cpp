@@ -1,4 +1,4 @@
-// Animation output: OBJ/PLY frame sequences and PC2 point caches.
+// PC2 point caches (Blender "Mesh Cache" modifier): read and written (see Pc2Writer).
 #include "io_common.hpp"
 
 #include <mbi/io/atomic_file.hpp>
@@ -13,49 +13,16 @@ namespace mbi::io {
 using detail::fail;
 using std::filesystem::path;
 
-path frame_path(const path& base, int frame, const std::string& ext, int digits) {
-  if (frame < 0) fail(base, 0, "negative frame number " + std::to_string(frame));
-  if (digits < 1 || digits > 12) fail(base, 0, "frame digits must be in [1, 12]");
-  char num[32];
-  std::snprintf(num, sizeof num, "_%0*d", digits, frame);
-  path p = base;
-  p += num;
-  p += ext;
-  return p;
-}
-
-path write_frame(const path& base, int frame, const std::string& ext, const SurfaceMesh& topology,
-                 const Eigen::Ref<const Eigen::MatrixXd>& V, Encoding encoding,
-                 const Eigen::Ref<const Eigen::MatrixXd>& N) {
-  const path p = frame_path(base, frame, ext);
-  const std::string e = detail::extension(p);
-  if (e != ".obj" && e != ".ply") fail(p, 0, "frame sequences are .obj or .ply");
-  const Eigen::Index n = topology.V.rows() > 0 ? topology.V.rows() : V.rows();
-  if (V.rows() != n || V.cols() != 3)
-    fail(p, 0, "frame positions must be " + std::to_string(n) + " x 3, got " +
-                   std::to_string(V.rows()) + " x " + std::to_string(V.cols()));
-  detail::write_surface_positions(p, topology, V, N, encoding);
-  return p;
-}
-
 namespace {
 template <typename T>
 void put_le(AtomicFile& f, T x) {
-  unsigned char b[sizeof(T)];
-  std::memcpy(b, &x, sizeof(T));
-  if constexpr (std::endian::native == std::endian::big)
-    for (std::size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(b[i], b[sizeof(T) - 1 - i]);
-  f.write(b, sizeof(T));
+  std::string b;
+  detail::append_bytes(b, x, false);
+  f.write(b.data(), b.size());
 }
 template <typename T>
 T get_le(std::string_view data, std::size_t at) {
-  unsigned char b[sizeof(T)];
-  std::memcpy(b, data.data() + at, sizeof(T));
-  if constexpr (std::endian::native == std::endian::big)
-    for (std::size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(b[i], b[sizeof(T) - 1 - i]);
-  T x;
-  std::memcpy(&x, b, sizeof(T));
-  return x;
+  return detail::load_le<T>(data.data() + at);
 }
 constexpr char kMagic[12] = {'P', 'O', 'I', 'N', 'T', 'C', 'A', 'C', 'H', 'E', '2', '\0'};
 }  // namespace
