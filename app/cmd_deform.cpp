@@ -8,6 +8,7 @@
 // error of each against the closed-form deformation.
 #include "commands.hpp"
 
+#include <mbi/base/timer.hpp>
 #include <mbi/generate/procedural.hpp>
 #include <mbi/interp.hpp>
 #include <mbi/io/atomic_file.hpp>
@@ -22,7 +23,6 @@
 #include <filesystem>
 #include <iostream>
 #include <optional>
-#include <regex>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -32,18 +32,6 @@ namespace fs = std::filesystem;
 
 namespace mbi::cli {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
-// A library message without its function name ("validate_mesh: element 5 ..." -> "element 5
-// ..."): the user did not call that function.
-std::string plain(const std::exception& e) {
-  static const std::regex internal("^[a-z]+(_[a-z0-9]+)+: ");
-  return std::regex_replace(std::string(e.what()), internal, "");
-}
 
 bool is_point_list(const fs::path& p) {
   const io::FileFormat* f = io::file_format(p);
@@ -140,7 +128,7 @@ interp::Embedding embed_points(const Problem& pb, double& embed_ms) {
   try {
     emb = interp::embed(pb.U, pb.T, pb.P);
   } catch (const interp::Error& e) {
-    throw std::runtime_error(pb.mesh_name + ": " + plain(e));
+    throw std::runtime_error(pb.mesh_name + ": " + std::string(e.what()));
   }
   embed_ms = ms_since(t0);
   if (!emb.outside.empty())
@@ -284,7 +272,7 @@ int run_deform(const DeformArgs& a) {
                  rest_normals);
     solver = &pipe->solver();  // the comparison table needs modified-BI in any case
   } catch (const interp::Error& e) {
-    throw std::runtime_error(pb.control_name + ": " + plain(e));
+    throw std::runtime_error(pb.control_name + ": " + std::string(e.what()));
   }
   const pipeline::FrameResult fr = pipe->step();
   if (!fr.ok) throw std::runtime_error(fr.message);

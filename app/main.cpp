@@ -8,7 +8,6 @@
 #include <cstdio>
 #include <exception>
 #include <map>
-#include <regex>
 #include <string>
 #include <vector>
 
@@ -36,13 +35,11 @@ std::size_t distance(const std::string& a, const std::string& b) {
   return row[b.size()];
 }
 
-// The message on one line, without the library's internal function names ("make_cage: ...",
-// "validate_mesh: ...": the user did not call those).
+// The message on one line (the error line of the command-line contract).
 std::string clean(std::string what) {
   std::replace(what.begin(), what.end(), '\n', ' ');
   while (!what.empty() && what.back() == ' ') what.pop_back();
-  static const std::regex internal("^[a-z]+(_[a-z0-9]+)+: ");
-  return std::regex_replace(what, internal, "");
+  return what;
 }
 
 std::string names(const std::vector<Command>& commands) {

@@ -1,3 +1,4 @@
+#include <mbi/base/timer.hpp>
 #include <mbi/error.hpp>
 #include <mbi/interp/evaluate.hpp>
 #include <mbi/pipeline/frame_pipeline.hpp>
@@ -6,11 +7,6 @@
 
 namespace mbi::pipeline {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 }  // namespace
 

@@ -83,7 +83,7 @@ void add_pokes(const Scene& sc, const SceneModels& m, pipeline::SimulatorDriver&
 }
 
 std::unique_ptr<pipeline::Driver> simulation_driver(const Scene& sc, const SceneModels& m) {
-  const sim::Material mat{sc.material.young, sc.material.poisson, sc.material.density};
+  const sim::Material& mat = sc.material;
   sim::Simulator simulator(m.U, m.T, mat, sc.simulation.parameters);
   add_constraints(sc, m.U, simulator);
   auto driver = std::make_unique<pipeline::SimulatorDriver>(std::move(simulator));

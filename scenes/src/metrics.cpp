@@ -1,5 +1,6 @@
 #include "metrics.hpp"
 
+#include <mbi/base/timer.hpp>
 #include <mbi/io/atomic_file.hpp>
 #include <mbi/scenes/report.hpp>
 
@@ -9,11 +10,6 @@
 
 namespace mbi::scenes {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 }  // namespace
 
@@ -79,9 +75,8 @@ interp::DiscontinuityTable RunMetrics::add_discontinuity(nlohmann::json& record)
   interp::DiscontinuityTable t;
   try {
     t = table();
-  } catch (const interp::OverflowError& e) {  // without the library function's name
-    const std::string w = e.what(), who = "discontinuity_table: ";
-    throw SceneError(w.rfind(who, 0) == 0 ? w.substr(who.size()) : w);
+  } catch (const interp::OverflowError& e) {  // a run error (exit 3), not a library one
+    throw SceneError(e.what());
   }
   record["disc"] = disc_json(t, roundoff_);  // throws on a non-finite value
   if (!std::isfinite(t.e_vibr) || !std::isfinite(t.e_disc))

@@ -94,11 +94,9 @@ void generate_control(const Scene& sc, bool force_3d, SceneModels& m) {
   generate::CageResult cage;
   try {
     cage = generate::make_cage(V3, m.dense.F, co);
-  } catch (const generate::CageError& e) {  // the scene key that asked for it, without "make_cage: "
-    const std::string w = e.what(), who = "make_cage: ";
+  } catch (const generate::CageError& e) {  // named by the scene key that asked for it
     throw SceneError(sc.file.string() + ": control.generate_vertices = " +
-                     std::to_string(co.target_vertices) + ": " +
-                     (w.rfind(who, 0) == 0 ? w.substr(who.size()) : w));
+                     std::to_string(co.target_vertices) + ": " + e.what());
   }
   m.U = cage.U;
   m.T = cage.T;

@@ -8,6 +8,7 @@
 #include "outputs.hpp"
 #include "pictures.hpp"
 
+#include <mbi/base/timer.hpp>
 #include <mbi/interp/embed.hpp>
 #include <mbi/scenes/evaluator.hpp>
 #include <mbi/scenes/output_folder.hpp>
@@ -18,11 +19,6 @@
 
 namespace mbi::scenes {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 // The scene with the run's options in place of its own values.
 Scene with_overrides(const Scene& scene, const RunOptions& opt) {

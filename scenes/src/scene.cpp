@@ -392,11 +392,11 @@ void parse_control(Table t, ControlSpec& c) {
   t.finish();
 }
 
-void parse_material(Table t, MaterialSpec& m) {
+void parse_material(Table t, sim::Material& m) {
   // physical ranges (beyond them the stiffness and mass matrices lose their digits): the
   // stiffest solid (diamond) is about 1.2e12 Pa, the densest element (osmium) 22,590 kg/m^3
-  m.young = t.number("young", m.young, 0, 1e13, true);
-  m.poisson = t.number("poisson", m.poisson, -0.999, 0.499);
+  m.youngs_modulus = t.number("young", m.youngs_modulus, 0, 1e13, true);
+  m.poisson_ratio = t.number("poisson", m.poisson_ratio, -0.999, 0.499);
   m.density = t.number("density", m.density, 0, 1e5, true);
   t.finish();
 }

@@ -32,17 +32,17 @@ Eigen::Matrix<double, 3, 4> corners(const Eigen::Ref<const Eigen::MatrixXd>& X,
 void check_deformed(const MeshRest& rest, const Eigen::Ref<const Eigen::MatrixXi>& T,
                     const Eigen::Ref<const Eigen::MatrixXd>& X) {
   if (static_cast<size_t>(T.rows()) != rest.tets.size() || T.cols() != 4)
-    throw Error("mbi::sim: T must be m x 4 with the m elements of MeshRest");
-  if (X.cols() != 3) throw Error("mbi::sim: X must be n x 3");
+    throw Error("T must be m x 4 with the m elements of MeshRest");
+  if (X.cols() != 3) throw Error("X must be n x 3");
   for (Eigen::Index e = 0; e < T.rows(); ++e)
     for (int a = 0; a < 4; ++a)
       if (T(e, a) < 0 || T(e, a) >= X.rows())
-        throw Error("mbi::sim: element " + std::to_string(e) + " has node index " +
+        throw Error("element " + std::to_string(e) + " has node index " +
                     std::to_string(T(e, a)) + " outside X's " + std::to_string(X.rows()) +
                     " rows");
   for (Eigen::Index i = 0; i < X.rows(); ++i)
     if (!X.row(i).allFinite())
-      throw Error("mbi::sim: X has a non-finite position at node " + std::to_string(i));
+      throw Error("X has a non-finite position at node " + std::to_string(i));
 }
 
 /// Element Hessian contributions: H_ab(k, l) = V (dP(e_l g_b^T) g_a)_k.
@@ -79,13 +79,13 @@ Eigen::SparseMatrix<double> assemble(const Eigen::Ref<const Eigen::MatrixXi>& T,
 Lame lame(const Material& m, const char* what) {
   const std::string w = what ? what : "material";
   if (!finite(m.youngs_modulus) || m.youngs_modulus <= 0)
-    throw Error("mbi::sim: " + w + ": Young's modulus must be finite and > 0 Pa, got " +
+    throw Error("" + w + ": Young's modulus must be finite and > 0 Pa, got " +
                 std::to_string(m.youngs_modulus));
   if (!finite(m.poisson_ratio) || m.poisson_ratio <= -1.0 || m.poisson_ratio >= 0.5)
-    throw Error("mbi::sim: " + w + ": Poisson ratio must lie in (-1, 0.5), got " +
+    throw Error("" + w + ": Poisson ratio must lie in (-1, 0.5), got " +
                 std::to_string(m.poisson_ratio));
   if (!finite(m.density) || m.density <= 0)
-    throw Error("mbi::sim: " + w + ": density must be finite and > 0 kg/m^3, got " +
+    throw Error("" + w + ": density must be finite and > 0 kg/m^3, got " +
                 std::to_string(m.density));
   const double E = m.youngs_modulus, nu = m.poisson_ratio;
   return {E / (2.0 * (1.0 + nu)), E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))};
@@ -141,7 +141,7 @@ Eigen::Matrix3d rotation(const Eigen::Matrix3d& F) {
 TetRest tet_rest(const Eigen::Matrix<double, 3, 4>& C, int element) {
   const std::string who =
       element >= 0 ? "element " + std::to_string(element) : std::string("tetrahedron");
-  if (!C.allFinite()) throw Error("mbi::sim: " + who + " has a non-finite corner");
+  if (!C.allFinite()) throw Error("" + who + " has a non-finite corner");
   Eigen::Matrix3d Dm;
   for (int a = 0; a < 3; ++a) Dm.col(a) = C.col(a + 1) - C.col(0);
   double edge = 0.0;
@@ -150,7 +150,7 @@ TetRest tet_rest(const Eigen::Matrix<double, 3, 4>& C, int element) {
   edge /= 6.0;
   const double det = Dm.determinant();
   if (!(std::abs(det) / 6.0 > 1e-12 * edge * edge * edge))
-    throw Error("mbi::sim: " + who + " is degenerate (volume " + std::to_string(det / 6.0) +
+    throw Error("" + who + " is degenerate (volume " + std::to_string(det / 6.0) +
                 " m^3, mean edge " + std::to_string(edge) + " m)");
   TetRest r;
   r.Dm_inv = Dm.inverse();
@@ -170,17 +170,17 @@ Eigen::Matrix3d deformation_gradient(const TetRest& rest, const Eigen::Matrix<do
 MeshRest mesh_rest(const Eigen::Ref<const Eigen::MatrixXd>& U,
                    const Eigen::Ref<const Eigen::MatrixXi>& T, const Material& base,
                    const std::vector<Material>& per_element) {
-  if (U.cols() != 3) throw Error("mbi::sim: rest positions U must be n x 3, got n x " +
+  if (U.cols() != 3) throw Error("rest positions U must be n x 3, got n x " +
                                  std::to_string(U.cols()));
-  if (T.cols() != 4) throw Error("mbi::sim: elements T must be m x 4, got m x " +
+  if (T.cols() != 4) throw Error("elements T must be m x 4, got m x " +
                                  std::to_string(T.cols()));
-  if (T.rows() == 0) throw Error("mbi::sim: the mesh has no elements");
+  if (T.rows() == 0) throw Error("the mesh has no elements");
   if (!per_element.empty() && per_element.size() != static_cast<size_t>(T.rows()))
-    throw Error("mbi::sim: per_element materials: expected " + std::to_string(T.rows()) +
+    throw Error("per_element materials: expected " + std::to_string(T.rows()) +
                 " (one per element) or none, got " + std::to_string(per_element.size()));
   for (Eigen::Index i = 0; i < U.rows(); ++i)
     if (!U.row(i).allFinite())
-      throw Error("mbi::sim: rest position of node " + std::to_string(i) + " is not finite");
+      throw Error("rest position of node " + std::to_string(i) + " is not finite");
   MeshRest r;
   r.tets.reserve(T.rows());
   r.lame.reserve(T.rows());
@@ -189,11 +189,11 @@ MeshRest mesh_rest(const Eigen::Ref<const Eigen::MatrixXd>& U,
   for (Eigen::Index e = 0; e < T.rows(); ++e) {
     for (int a = 0; a < 4; ++a) {
       if (T(e, a) < 0 || T(e, a) >= U.rows())
-        throw Error("mbi::sim: element " + std::to_string(e) + " has node index " +
+        throw Error("element " + std::to_string(e) + " has node index " +
                     std::to_string(T(e, a)) + " outside [0, " + std::to_string(U.rows()) + ")");
       for (int b = 0; b < a; ++b)
         if (T(e, a) == T(e, b))
-          throw Error("mbi::sim: element " + std::to_string(e) + " repeats node " +
+          throw Error("element " + std::to_string(e) + " repeats node " +
                       std::to_string(T(e, a)));
     }
     r.tets.push_back(tet_rest(corners(U, T, static_cast<int>(e)), static_cast<int>(e)));
@@ -304,7 +304,7 @@ Eigen::VectorXd lumped_masses(const MeshRest& rest, const Eigen::Ref<const Eigen
   for (Eigen::Index e = 0; e < T.rows(); ++e)
     for (int a = 0; a < 4; ++a) {
       if (T(e, a) < 0 || T(e, a) >= nodes)
-        throw Error("mbi::sim: element " + std::to_string(e) + " has node index " +
+        throw Error("element " + std::to_string(e) + " has node index " +
                     std::to_string(T(e, a)) + " outside [0, " + std::to_string(nodes) + ")");
       m(T(e, a)) += 0.25 * rest.density[e] * rest.tets[e].volume;
     }

@@ -1,3 +1,4 @@
+#include <mbi/base/timer.hpp>
 #include <mbi/sim/simulator.hpp>
 
 #include <Eigen/Geometry>
@@ -14,18 +15,13 @@
 namespace mbi::sim {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
 std::string vec_str(const Eigen::Vector3d& v) {
   return "(" + std::to_string(v.x()) + ", " + std::to_string(v.y()) + ", " +
          std::to_string(v.z()) + ")";
 }
 
 void check_params(const Parameters& p) {
-  auto bad = [](const std::string& what) { throw Error("mbi::sim: parameter " + what); };
+  auto bad = [](const std::string& what) { throw Error("parameter " + what); };
   if (!std::isfinite(p.dt) || p.dt <= 0) bad("dt must be finite and > 0 s");
   if (p.substeps < 1) bad("substeps must be >= 1");
   if (!p.gravity.allFinite()) bad("gravity must be finite");
@@ -227,7 +223,7 @@ void Simulator::Impl::build(const Eigen::Ref<const Eigen::MatrixXd>& U_,
   mass = lumped_masses(rest, T, n);
   for (int i = 0; i < n; ++i)
     if (!(mass(i) > 0))
-      throw Error("mbi::sim: node " + std::to_string(i) +
+      throw Error("node " + std::to_string(i) +
                   " belongs to no element (it would have no mass)");
   mass_dof.resize(3 * n);
   for (int i = 0; i < n; ++i) mass_dof.segment<3>(3 * i).setConstant(mass(i));
@@ -363,23 +359,23 @@ void Simulator::Impl::update_constraints() {
 
 void Simulator::Impl::check_element_bary(int element, const Eigen::Vector4d& bary) const {
   if (element < 0 || element >= static_cast<int>(elems.size()))
-    throw Error("mbi::sim: element " + std::to_string(element) + " outside [0, " +
+    throw Error("element " + std::to_string(element) + " outside [0, " +
                 std::to_string(elems.size()) + ")");
   if (!bary.allFinite() || std::abs(bary.sum() - 1.0) > 1e-9)
-    throw Error("mbi::sim: barycentric coordinates in element " + std::to_string(element) +
+    throw Error("barycentric coordinates in element " + std::to_string(element) +
                 " must be finite and sum to 1");
 }
 
 void Simulator::Impl::check_nodes(const std::vector<int>& nodes) const {
-  if (nodes.empty()) throw Error("mbi::sim: empty node set");
+  if (nodes.empty()) throw Error("empty node set");
   std::vector<char> seen(n, 0);
   for (int i : nodes) {
     if (i < 0 || i >= n)
-      throw Error("mbi::sim: node " + std::to_string(i) + " outside [0, " + std::to_string(n) + ")");
+      throw Error("node " + std::to_string(i) + " outside [0, " + std::to_string(n) + ")");
     if (owner[i] >= 0)
-      throw Error("mbi::sim: node " + std::to_string(i) + " already belongs to handle " +
+      throw Error("node " + std::to_string(i) + " already belongs to handle " +
                   std::to_string(owner[i]));
-    if (seen[i]) throw Error("mbi::sim: node " + std::to_string(i) + " listed twice");
+    if (seen[i]) throw Error("node " + std::to_string(i) + " listed twice");
     seen[i] = 1;
   }
 }
@@ -671,11 +667,11 @@ int Simulator::add_kinematic(const std::vector<int>& nodes, const RigidMotion& m
   if (!motion.center.allFinite() || !motion.axis.allFinite() ||
       !std::isfinite(motion.angular_velocity) || !motion.velocity.allFinite() ||
       std::isnan(motion.start) || std::isnan(motion.stop))
-    throw Error("mbi::sim: rigid motion has a non-finite field");
+    throw Error("rigid motion has a non-finite field");
   if (motion.angular_velocity != 0.0 && motion.axis.norm() == 0.0)
-    throw Error("mbi::sim: rotation axis is zero");
+    throw Error("rotation axis is zero");
   if (motion.stop < motion.start)
-    throw Error("mbi::sim: stop time is before start time");
+    throw Error("stop time is before start time");
   Kinematic k;
   k.nodes = nodes;
   k.motion = motion;
@@ -692,7 +688,7 @@ int Simulator::add_point_force(int element, const Eigen::Vector4d& bary,
                                const Eigen::Vector3d& force) {
   impl_->check_element_bary(element, bary);
   if (!force.allFinite())
-    throw Error("mbi::sim: force " + vec_str(force) + " is not finite");
+    throw Error("force " + vec_str(force) + " is not finite");
   const int id = impl_->next_id++;
   impl_->forces.emplace(id, PointForce{element, bary, force});
   return id;
@@ -701,10 +697,10 @@ int Simulator::add_point_force(int element, const Eigen::Vector4d& bary,
 void Simulator::set_point_force(int handle, const Eigen::Vector3d& force) {
   auto it = impl_->forces.find(handle);
   if (it == impl_->forces.end())
-    throw Error("mbi::sim: handle " + std::to_string(handle) +
+    throw Error("handle " + std::to_string(handle) +
                 " is not a point force");
   if (!force.allFinite())
-    throw Error("mbi::sim: force " + vec_str(force) + " for handle " +
+    throw Error("force " + vec_str(force) + " for handle " +
                 std::to_string(handle) + " is not finite");
   it->second.force = force;
 }
@@ -712,9 +708,9 @@ void Simulator::set_point_force(int handle, const Eigen::Vector3d& force) {
 int Simulator::add_poke(int element, const Eigen::Vector4d& bary, const Eigen::Vector3d& target,
                         double stiffness) {
   impl_->check_element_bary(element, bary);
-  if (!target.allFinite()) throw Error("mbi::sim: target " + vec_str(target) + " is not finite");
+  if (!target.allFinite()) throw Error("target " + vec_str(target) + " is not finite");
   if (!std::isfinite(stiffness) || stiffness <= 0)
-    throw Error("mbi::sim: stiffness must be finite and > 0 N/m, got " +
+    throw Error("stiffness must be finite and > 0 N/m, got " +
                 std::to_string(stiffness));
   const int id = impl_->next_id++;
   impl_->pokes.emplace(id, Poke{element, bary, target, stiffness});
@@ -724,9 +720,9 @@ int Simulator::add_poke(int element, const Eigen::Vector4d& bary, const Eigen::V
 void Simulator::set_poke_target(int handle, const Eigen::Vector3d& target) {
   auto it = impl_->pokes.find(handle);
   if (it == impl_->pokes.end())
-    throw Error("mbi::sim: handle " + std::to_string(handle) + " is not a poke");
+    throw Error("handle " + std::to_string(handle) + " is not a poke");
   if (!target.allFinite())
-    throw Error("mbi::sim: target " + vec_str(target) + " for handle " +
+    throw Error("target " + vec_str(target) + " for handle " +
                 std::to_string(handle) + " is not finite");
   it->second.target = target;
 }
@@ -738,7 +734,7 @@ void Simulator::remove(int handle) {
     s.kinematic.erase(it);
     s.constraints_dirty = true;
   } else if (!s.forces.erase(handle) && !s.pokes.erase(handle)) {
-    throw Error("mbi::sim: no handle " + std::to_string(handle));
+    throw Error("no handle " + std::to_string(handle));
   }
 }
 
@@ -765,7 +761,7 @@ StepResult Simulator::step() {
     s.v = v0;
     s.t = time0;
     res.success = false;
-    res.message = "mbi::sim: step " + std::to_string(res.step) + " (t = " +
+    res.message = "step " + std::to_string(res.step) + " (t = " +
                   std::to_string(time0) + " s) failed: " + why +
                   "; state left at the last good step";
   } else {
@@ -781,9 +777,9 @@ StepResult Simulator::step() {
 StaticResult Simulator::solve_static(int max_iterations, double tolerance) {
   Impl& s = *impl_;
   StaticResult res;
-  if (max_iterations < 1) throw Error("mbi::sim: max_iterations must be >= 1");
+  if (max_iterations < 1) throw Error("max_iterations must be >= 1");
   if (!std::isfinite(tolerance) || tolerance < 0)
-    throw Error("mbi::sim: tolerance must be finite and >= 0 N");
+    throw Error("tolerance must be finite and >= 0 N");
   const Eigen::VectorXd x0 = s.x, v0 = s.v;
   s.prescribed(s.t, s.x);
   s.external_forces();
@@ -824,7 +820,7 @@ StaticResult Simulator::solve_static(int max_iterations, double tolerance) {
       }
     }
     if (!s.solve(why, dummy)) {
-      res.message = "mbi::sim: static solve iteration " + std::to_string(it) + ": " + why;
+      res.message = "static solve iteration " + std::to_string(it) + ": " + why;
       break;
     }
     s.x += s.delta;
@@ -844,7 +840,7 @@ StaticResult Simulator::solve_static(int max_iterations, double tolerance) {
   if (res.converged && !s.x.allFinite()) res.converged = false;
   if (!res.converged) {
     if (res.message.empty())
-      res.message = "mbi::sim: no convergence in " + std::to_string(max_iterations) +
+      res.message = "no convergence in " + std::to_string(max_iterations) +
                     " iterations (residual " + std::to_string(res.residual) + " N, tolerance " +
                     std::to_string(tol) + " N)";
     s.x = x0;
@@ -895,10 +891,10 @@ const Eigen::MatrixXd& Simulator::velocities() const { return impl_->Vout; }
 void Simulator::set_positions(const Eigen::Ref<const Eigen::MatrixXd>& X) {
   Impl& s = *impl_;
   if (X.rows() != s.n || X.cols() != 3)
-    throw Error("mbi::sim: positions must be " + std::to_string(s.n) + " x 3");
+    throw Error("positions must be " + std::to_string(s.n) + " x 3");
   for (int i = 0; i < s.n; ++i) {
     if (!X.row(i).allFinite())
-      throw Error("mbi::sim: position of node " + std::to_string(i) + " is not finite");
+      throw Error("position of node " + std::to_string(i) + " is not finite");
     s.x.segment<3>(3 * i) = X.row(i).transpose();
   }
   s.sync_out();
@@ -907,10 +903,10 @@ void Simulator::set_positions(const Eigen::Ref<const Eigen::MatrixXd>& X) {
 void Simulator::set_velocities(const Eigen::Ref<const Eigen::MatrixXd>& V) {
   Impl& s = *impl_;
   if (V.rows() != s.n || V.cols() != 3)
-    throw Error("mbi::sim: velocities must be " + std::to_string(s.n) + " x 3");
+    throw Error("velocities must be " + std::to_string(s.n) + " x 3");
   for (int i = 0; i < s.n; ++i) {
     if (!V.row(i).allFinite())
-      throw Error("mbi::sim: velocity of node " + std::to_string(i) + " is not finite");
+      throw Error("velocity of node " + std::to_string(i) + " is not finite");
     s.v.segment<3>(3 * i) = V.row(i).transpose();
   }
   s.sync_out();

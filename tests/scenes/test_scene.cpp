@@ -63,7 +63,7 @@ TEST_CASE("defaults are applied", "[scene]") {
   CHECK(sc.mode == mbi::scenes::Mode::Simulate);
   CHECK(sc.interpolation.method == mbi::pipeline::Method::ModifiedBI);
   CHECK(sc.simulation.frames == 120);
-  CHECK(sc.material.poisson == Approx(0.45));
+  CHECK(sc.material.poisson_ratio == Approx(0.45));
   CHECK(sc.name == "scene");
 }
 

@@ -4,14 +4,10 @@
 
 #include <algorithm>
 #include <chrono>
+#include <mbi/base/timer.hpp>
 
 namespace mbi::viewer {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 // The markers of direct mode (handles big, every control vertex small) and of the poke target.
 void draw_markers(gpu::Renderer& renderer, const Interaction& in, const ViewerOptions& options,

@@ -14,13 +14,12 @@ void view_scene(const scenes::Scene& scene_in, const std::filesystem::path& mesh
       scene, models, interp::embed(models.U, models.T, models.dense.V), viewer.evaluator());
   const io::Image pattern = models.image ? *models.image : generate::test_pattern(512, 384);
   Shown shown{.pipe = pipe, .faces = models.dense.F, .image = models.dim() == 2 ? &pattern : nullptr};
-  shown.material = {.youngs_modulus = scene.material.young, .poisson_ratio = scene.material.poisson,
-                    .density = scene.material.density};
+  shown.material = scene.material;
   if (scene.mode == scenes::Mode::Simulate)
     shown.rebuild = [&](const sim::Material& m) {
       scenes::Scene changed = scene;
-      changed.material.young = m.youngs_modulus;
-      changed.material.poisson = m.poisson_ratio;
+      changed.material.youngs_modulus = m.youngs_modulus;
+      changed.material.poisson_ratio = m.poisson_ratio;
       return scenes::make_driver(changed, models);
     };
   viewer.show(shown);

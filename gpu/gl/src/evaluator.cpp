@@ -1,3 +1,4 @@
+#include <mbi/base/timer.hpp>
 #include <mbi/gpu/evaluator.hpp>
 
 #include "gl_util.hpp"
@@ -8,11 +9,6 @@
 
 namespace mbi::gpu {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
 
 // A static vertex buffer of floats (p x comps), attribute `loc`.
 GLuint float_attribute(GLuint loc, const std::vector<float>& data, int comps) {

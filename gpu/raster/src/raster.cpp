@@ -91,7 +91,7 @@ View frame_points(const Eigen::Ref<const Eigen::MatrixXd>& V, const Eigen::Vecto
 Image render_mesh(const Eigen::Ref<const Eigen::MatrixXd>& V,
                   const Eigen::Ref<const Eigen::MatrixXi>& F, const View& view, int width,
                   int height, const Eigen::Vector3d& color) {
-  if (V.cols() != 3 || F.cols() != 3) throw std::invalid_argument("render_mesh: need n x 3, f x 3");
+  if (V.cols() != 3 || F.cols() != 3) throw std::invalid_argument("the mesh to render needs n x 3, f x 3");
   Image img(width, height, {255, 255, 255});
   const Projector proj(view, width, height);
   // area-weighted vertex normals
@@ -156,7 +156,7 @@ Image warp_image(const Image& src, const Eigen::Ref<const Eigen::MatrixXd>& rest
                  const Eigen::Ref<const Eigen::MatrixXd>& deformed,
                  const Eigen::Ref<const Eigen::MatrixXi>& F, int out_w, int out_h) {
   if (rest.cols() != 2 || deformed.cols() != 2 || rest.rows() != deformed.rows() || F.cols() != 3)
-    throw std::invalid_argument("warp_image: need rest and deformed n x 2 and F f x 3");
+    throw std::invalid_argument("an image warp needs rest and deformed n x 2 and F f x 3");
   Image out(out_w, out_h, {255, 255, 255});
   auto sample = [&](double x, double y, int c) {
     x = std::clamp(x - 0.5, 0.0, src.width - 1.0);
@@ -183,7 +183,7 @@ Image warp_image(const Image& src, const Eigen::Ref<const Eigen::MatrixXd>& rest
 }
 
 Image side_by_side(const std::vector<Image>& images, int gap) {
-  if (images.empty()) throw std::invalid_argument("side_by_side: no images");
+  if (images.empty()) throw std::invalid_argument("no images to put side by side");
   int w = 0, h = 0;
   for (const Image& i : images) {
     w += i.width;

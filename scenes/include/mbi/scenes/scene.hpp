@@ -84,11 +84,8 @@ struct ControlSpec {
   Eigen::Vector3i cells{2, 2, 8};  ///< for builtin "box" / "grid-2d" (z ignored in 2D)
 };
 
-struct MaterialSpec {
-  double young = 1e6;     ///< Pa
-  double poisson = 0.45;  ///< 1
-  double density = 1000;  ///< kg/m^3
-};
+/// sim::Material with the scene file's defaults: E = 1e6 Pa, nu = 0.45, rho = 1000 kg/m^3.
+inline sim::Material scene_material() { return {.youngs_modulus = 1e6, .poisson_ratio = 0.45, .density = 1000}; }
 
 /// sim::Parameters with the scene file's defaults: one step of 1/30 s a frame, no gravity.
 inline sim::Parameters scene_parameters() {
@@ -178,7 +175,7 @@ struct Scene {
   Mode mode = Mode::Simulate;
   DenseSpec dense;
   ControlSpec control;
-  MaterialSpec material;
+  sim::Material material = scene_material();
   SimulationSpec simulation;
   std::vector<ConstraintSpec> constraints;
   std::vector<PokeSpec> pokes;
