@@ -304,20 +304,22 @@ Embedding embed(const Eigen::Ref<const Eigen::MatrixXd>& U,
   emb.element.resize(np);
   emb.bary.resize(np, d + 1);
   Eigen::VectorXd dist(np);
-  const int threads = detail::thread_count(np, 2048);
-  detail::parallel_for(np, threads, [&](long long b, long long e) {
+  // blocks of points to whichever thread asks; each thread keeps its own search stamps
+  detail::Blocks blocks(np, 4096);
+  detail::run_shared(detail::thread_count(np, 4096), [&] {
     std::vector<int> stamp(m, -1);
     std::array<double, 4> bb{};
-    for (long long i = b; i < e; ++i) {
-      Vec3 p = Vec3::Zero();
-      p.head(d) = Pn.row(i).transpose();
-      double dd = 0;
-      bb.fill(0.0);
-      const int el = locate(L, p, stamp, static_cast<int>(i), bb.data(), dd);
-      emb.element(i) = el;
-      for (int k = 0; k <= d; ++k) emb.bary(i, k) = bb[k];
-      dist(i) = dd;
-    }
+    for (long long b, e; blocks.next(b, e);)
+      for (long long i = b; i < e; ++i) {
+        Vec3 p = Vec3::Zero();
+        p.head(d) = Pn.row(i).transpose();
+        double dd = 0;
+        bb.fill(0.0);
+        const int el = locate(L, p, stamp, static_cast<int>(i), bb.data(), dd);
+        emb.element(i) = el;
+        for (int k = 0; k <= d; ++k) emb.bary(i, k) = bb[k];
+        dist(i) = dd;
+      }
   });
   for (int i = 0; i < np; ++i) {
     if (emb.element(i) < 0 || !emb.bary.row(i).allFinite())  // never index element -1

@@ -67,8 +67,7 @@ void kernel(const MatX<Scalar>& Prow /* D x (m K), column per control point */, 
             MatX<Scalar>& pos, MatX<Scalar>* normals_out, int threads) {
   constexpr int K = (D + 1) * (D + 2) / 2;
   const long long np = emb.size();
-  const int nt = detail::thread_count(np, 8192, threads);
-  detail::parallel_for(np, nt, [&](long long begin, long long end) {
+  detail::parallel_blocks(np, 8192, detail::thread_count(np, 8192, threads), [&](long long begin, long long end) {
     Scalar b[D + 1], x[D], g[D + 1][D];
     for (long long p = begin; p < end; ++p) {
       const int e = emb.element(p);

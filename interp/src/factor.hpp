@@ -23,11 +23,13 @@ struct CholeskyFactor {
   const char* method = "";           ///< "Eigen SimplicialLLT (AMD)" or "CHOLMOD supernodal (...)"
 
   // Schedule of the sweeps on several threads (schedule()): disjoint subtrees of the supernodal
-  // elimination tree are put into `bins` groups of about equal work, one group a thread; the
-  // supernodes above them (`top`) run on one thread. In the forward sweep a group's updates to
-  // rows of the top part go to that group's own copy of those rows (`prow` holds each row's
-  // place: its own index, or n (1 + group) + index), summed before the top part runs; in the
-  // backward sweep groups only read rows of the top part, so they need no copies.
+  // elimination tree are put into `bins` groups of about equal work, handed to the threads as
+  // they come; the supernodes above them (`top`) follow, the large ones shared out between the
+  // threads. In the forward sweep a group's updates to rows of the top part go to that group's
+  // own copy of those rows (`prow` holds each row's place: its own index, or n (1 + group) +
+  // index), summed before the top part runs; in the backward sweep groups only read rows of the
+  // top part, so they need no copies. The schedule does not depend on the thread count, so
+  // neither do the results.
   int bins = 1;                          ///< 1: the sweeps run serially
   std::vector<std::vector<int>> groups;  ///< per group: its supernodes, ascending
   std::vector<int> top;                  ///< supernodes above the groups, ascending
@@ -37,16 +39,20 @@ struct CholeskyFactor {
   std::ptrdiff_t nonzeros() const;   ///< entries of L
   std::size_t bytes() const;         ///< memory held
 
-  /// Splits the sweeps into `threads` groups when that pays: factors of at least `min_nonzeros`
-  /// entries (the default: where a parallel region costs less than it saves); called by
-  /// cholesky(), and by the tests with min_nonzeros 0.
-  void schedule(int threads, std::ptrdiff_t min_nonzeros = 200000);
+  /// Splits the sweeps into `groups` groups when that pays: factors of at least `min_nonzeros`
+  /// entries (the default: where sharing the work costs less than it saves); called by
+  /// cholesky() with kGroups, and by the tests with min_nonzeros 0.
+  void schedule(int groups, std::ptrdiff_t min_nonzeros = 200000);
 
   /// Solves A X = B in place: B is n x w (1 <= w <= 8), row-major (row i = w right-hand-side
-  /// entries). Thread-safe (its scratch is per calling thread); on all of OpenMP's threads
-  /// when the factor is large.
+  /// entries). Thread-safe (its scratch is per calling thread); on the library's threads when
+  /// the factor has a schedule (bins > 1), with the same result on any number of them.
   void solve(double* B, int w) const;
 };
+
+/// Groups of the sweeps' schedule (cholesky()): a fixed number, so that results do not depend on
+/// the thread count.
+constexpr int kGroups = 4;
 
 /// Factor of the SPD matrix A (full symmetric storage). Throws Error when A is not positive
 /// definite. use_cholmod needs cholmod_available().

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -77,29 +78,34 @@ double prepare_terms(const BezierPoints& B, float* coef, int m, int threads) {
         D + 1 + static_cast<int>(s);
   const double* col[D];
   for (int c = 0; c < D; ++c) col[c] = B.data() + c * B.rows();  // B is column-major
-  double dmax = 0;
-  MBI_INTERP_OMP("omp parallel for schedule(static) num_threads(threads) if (m > 512) reduction(max : dmax)")
-  for (int e = 0; e < m; ++e) {
-    const long long row = static_cast<long long>(e) * K;
-    float* C = coef + static_cast<size_t>(e) * NC;
-    for (int f = 0; f < NC; ++f)
-      if (unused[f]) C[f] = 0.0f;
-    for (int c = 0; c < D; ++c) {
-      const double* P = col[c] + row;
-      auto Pe = [&](int i, int j) { return P[edge_row[i][j]]; };
-      C[L.at(0, c)] = static_cast<float>(P[0]);
-      for (int k = 1; k <= D; ++k) {
-        const double ck = 2 * (Pe(0, k) - P[0]);
-        dmax = std::max(dmax, std::abs(ck));
-        C[L.at(ix.lin[k], c)] = static_cast<float>(ck);
-        C[L.at(ix.quad[k][k], c)] = static_cast<float>(P[0] + P[k] - 2 * Pe(0, k));
-        for (int l = k + 1; l <= D; ++l)
-          C[L.at(ix.quad[k][l], c)] = static_cast<float>(2 * (P[0] - Pe(0, k) - Pe(0, l) + Pe(k, l)));
+  // blocks of elements on up to `threads` threads (more than 512 elements); the largest |c_k|
+  // of each block joins the maximum
+  std::atomic<double> dmax_all{0.0};
+  detail::parallel_blocks(m, 256, m > 512 ? threads : 1, [&](long long e0, long long e1) {
+    double dmax = 0;
+    for (long long e = e0; e < e1; ++e) {
+      const long long row = e * K;
+      float* C = coef + static_cast<size_t>(e) * NC;
+      for (int f = 0; f < NC; ++f)
+        if (unused[f]) C[f] = 0.0f;
+      for (int c = 0; c < D; ++c) {
+        const double* P = col[c] + row;
+        auto Pe = [&](int i, int j) { return P[edge_row[i][j]]; };
+        C[L.at(0, c)] = static_cast<float>(P[0]);
+        for (int k = 1; k <= D; ++k) {
+          const double ck = 2 * (Pe(0, k) - P[0]);
+          dmax = std::max(dmax, std::abs(ck));
+          C[L.at(ix.lin[k], c)] = static_cast<float>(ck);
+          C[L.at(ix.quad[k][k], c)] = static_cast<float>(P[0] + P[k] - 2 * Pe(0, k));
+          for (int l = k + 1; l <= D; ++l)
+            C[L.at(ix.quad[k][l], c)] = static_cast<float>(2 * (P[0] - Pe(0, k) - Pe(0, l) + Pe(k, l)));
+        }
       }
     }
-  }
-  (void)threads;  // without OpenMP
-  return dmax;
+    for (double cur = dmax_all.load(); dmax > cur && !dmax_all.compare_exchange_weak(cur, dmax);) {
+    }
+  });
+  return dmax_all.load();
 }
 
 }  // namespace
@@ -227,8 +233,8 @@ void FastEvaluator::set_rest_normals(const Eigen::Ref<const Eigen::MatrixXd>& no
 }
 
 int FastEvaluator::threads() const {
-  // at least kBlock points a thread: below that the fork/join costs more than it saves
-  return detail::omp_threads(p_, kBlock, threads_);
+  // at least kBlock points a thread: below that sharing costs more than it saves
+  return detail::thread_count(p_, kBlock, threads_);
 }
 
 void FastEvaluator::prepare(const BezierPoints& B, bool normals) {

@@ -115,9 +115,9 @@ struct BlockMatrix {
 };
 
 // Fixed-size assembly for dimension D (the same code path serves triangles and tetrahedra).
-// Each element's and each interior face's local Hessian is computed on all threads, a block of
-// them at a time (one parallel region: forks are costly on a shared machine), then added into the
-// matrices in element / face order on one thread: the same sums whatever the thread count.
+// Each element's and each interior face's local Hessian is computed on the library's threads, a
+// block of them at a time, then added into the matrices in element / face order on the calling
+// thread: the same sums whatever the thread count.
 template <int D>
 Hessians assemble_fixed(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T) {
   using VecD = Eigen::Matrix<double, D, 1>;
@@ -133,16 +133,16 @@ Hessians assemble_fixed(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T) {
   // Basis gradients of every element (the face pass needs both sides').
   std::vector<Grad> A(m);
   std::vector<double> volume(m);
-  const int nt = omp_threads(m, 2048);
-  MBI_INTERP_OMP("omp parallel for num_threads(nt) if (nt > 1) schedule(static)")
-  for (int e = 0; e < m; ++e) {
-    Eigen::Matrix<double, D, D> E;
-    for (int k = 0; k < D; ++k) E.col(k) = u(T(e, k + 1)) - u(T(e, 0));
-    const Eigen::Matrix<double, D, D> Einv = E.inverse();
-    A[e].template bottomRows<D>() = Einv;
-    A[e].row(0) = -Einv.colwise().sum();
-    volume[e] = std::abs(E.determinant()) / (D == 2 ? 2.0 : 6.0);
-  }
+  parallel_blocks(m, 2048, thread_count(m, 2048), [&](long long e0, long long e1) {
+    for (long long e = e0; e < e1; ++e) {
+      Eigen::Matrix<double, D, D> E;
+      for (int k = 0; k < D; ++k) E.col(k) = u(T(e, k + 1)) - u(T(e, 0));
+      const Eigen::Matrix<double, D, D> Einv = E.inverse();
+      A[e].template bottomRows<D>() = Einv;
+      A[e].row(0) = -Einv.colwise().sum();
+      volume[e] = std::abs(E.determinant()) / (D == 2 ? 2.0 : 6.0);
+    }
+  });
   const Eigen::MatrixXi F = interior_faces(T);
   const int nf = static_cast<int>(F.rows());
 
@@ -155,25 +155,24 @@ Hessians assemble_fixed(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T) {
       int pos[D + 1][D + 1];  // pos[k][l]: T(e, k) among the neighbours of T(e, l)
     };
     std::vector<Local> buf(static_cast<size_t>(std::min(m, kBlock)));
-    const int ntb = omp_threads(std::min(m, kBlock), 64);
-    MBI_INTERP_OMP("omp parallel num_threads(ntb) if (ntb > 1)")
+    const int ntb = thread_count(std::min(m, kBlock), 64);
     for (int e0 = 0; e0 < m; e0 += kBlock) {
       const int e1 = std::min(m, e0 + kBlock);
-      MBI_INTERP_OMP("omp for schedule(static)")
-      for (int e = e0; e < e1; ++e) {
-        Local& Lc = buf[static_cast<size_t>(e - e0)];
-        Eigen::Matrix<double, D * D, NV> L = Eigen::Matrix<double, D * D, NV>::Zero();
-        for (int k = 0; k <= D; ++k)
-          for (int p = 0; p < D; ++p)
-            for (int q = 0; q < D; ++q) {
-              L(p * D + q, k * D + q) += A[e](k, p);
-              L(p * D + q, k * D + p) += A[e](k, q);
-            }
-        Lc.H.noalias() = volume[e] * (L.transpose() * L);
-        for (int k = 0; k <= D; ++k)
-          for (int l = 0; l <= D; ++l) Lc.pos[k][l] = Pe.find(T(e, l), T(e, k));
-      }
-      MBI_INTERP_OMP("omp single")
+      parallel_blocks(e1 - e0, 64, ntb, [&](long long lo, long long hi) {
+        for (int e = e0 + static_cast<int>(lo); e < e0 + hi; ++e) {
+          Local& Lc = buf[static_cast<size_t>(e - e0)];
+          Eigen::Matrix<double, D * D, NV> L = Eigen::Matrix<double, D * D, NV>::Zero();
+          for (int k = 0; k <= D; ++k)
+            for (int p = 0; p < D; ++p)
+              for (int q = 0; q < D; ++q) {
+                L(p * D + q, k * D + q) += A[e](k, p);
+                L(p * D + q, k * D + p) += A[e](k, q);
+              }
+          Lc.H.noalias() = volume[e] * (L.transpose() * L);
+          for (int k = 0; k <= D; ++k)
+            for (int l = 0; l <= D; ++l) Lc.pos[k][l] = Pe.find(T(e, l), T(e, k));
+        }
+      });
       for (int e = e0; e < e1; ++e) {
         const Local& Lc = buf[static_cast<size_t>(e - e0)];
         for (int l = 0; l <= D; ++l)
@@ -183,7 +182,6 @@ Hessians assemble_fixed(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T) {
                 vibr.at(r, T(e, l), s, Lc.pos[k][l]) += Lc.H(k * D + r, l * D + s);
       }
     }
-    (void)ntb;
   }
 
   // E_disc: the jump of grad x_c across a face is linear; at a face vertex v the phi_v m_v
@@ -209,53 +207,52 @@ Hessians assemble_fixed(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T) {
       int pos[NL][NL];  // pos[p][q]: local vertex p among the neighbours of local vertex q
     };
     std::vector<Local> buf(static_cast<size_t>(std::min(std::max(nf, 1), kBlock)));
-    const int ntb = omp_threads(std::min(nf, kBlock), 64);
-    MBI_INTERP_OMP("omp parallel num_threads(ntb) if (ntb > 1)")
+    const int ntb = thread_count(std::min(nf, kBlock), 64);
     for (int f0 = 0; f0 < nf; f0 += kBlock) {
       const int f1 = std::min(nf, f0 + kBlock);
-      MBI_INTERP_OMP("omp for schedule(static)")
-      for (int f = f0; f < f1; ++f) {
-        Local& Lc = buf[static_cast<size_t>(f - f0)];
-        const std::array<int, NL>& lv = local[static_cast<size_t>(f)];
-        auto local_of = [&](int g) {
-          for (int j = 0; j < NL; ++j)
-            if (lv[j] == g) return j;
-          return -1;
-        };
-        std::array<Eigen::Matrix<double, D, NZ>, D> G;
-        for (auto& g : G) g.setZero();
-        for (int s = 0; s < 2; ++s) {
-          const int e = F(f, D + s);
-          const double sgn = s == 0 ? 1.0 : -1.0;
-          for (int k = 0; k <= D; ++k) {
-            const int j = local_of(T(e, k));
-            const VecD a = sgn * A[e].row(k).transpose();
-            for (int v = 0; v < D; ++v) {
-              const VecD w = u(F(f, v)) - u(T(e, k));
-              G[v].col(XOFF + j) += a;
-              G[v].template block<D, D>(0, j * D) += a * w.transpose();
+      parallel_blocks(f1 - f0, 64, ntb, [&](long long lo, long long hi) {
+        for (int f = f0 + static_cast<int>(lo); f < f0 + hi; ++f) {
+          Local& Lc = buf[static_cast<size_t>(f - f0)];
+          const std::array<int, NL>& lv = local[static_cast<size_t>(f)];
+          auto local_of = [&](int g) {
+            for (int j = 0; j < NL; ++j)
+              if (lv[j] == g) return j;
+            return -1;
+          };
+          std::array<Eigen::Matrix<double, D, NZ>, D> G;
+          for (auto& g : G) g.setZero();
+          for (int s = 0; s < 2; ++s) {
+            const int e = F(f, D + s);
+            const double sgn = s == 0 ? 1.0 : -1.0;
+            for (int k = 0; k <= D; ++k) {
+              const int j = local_of(T(e, k));
+              const VecD a = sgn * A[e].row(k).transpose();
+              for (int v = 0; v < D; ++v) {
+                const VecD w = u(F(f, v)) - u(T(e, k));
+                G[v].col(XOFF + j) += a;
+                G[v].template block<D, D>(0, j * D) += a * w.transpose();
+              }
             }
           }
+          double area;
+          if constexpr (D == 2) {
+            area = (u(F(f, 1)) - u(F(f, 0))).norm();
+          } else {
+            area = 0.5 * (u(F(f, 1)) - u(F(f, 0))).cross(u(F(f, 2)) - u(F(f, 0))).norm();
+          }
+          // integral over a (D-1)-simplex of |g|^2, g linear: |F|/(D(D+1)) (sum |g_v|^2 + |sum g_v|^2)
+          Eigen::Matrix<double, D, NZ> Gs = Eigen::Matrix<double, D, NZ>::Zero();
+          Lc.H.setZero();
+          for (int v = 0; v < D; ++v) {
+            Gs += G[v];
+            Lc.H.noalias() += G[v].transpose() * G[v];
+          }
+          Lc.H.noalias() += Gs.transpose() * Gs;
+          Lc.H *= area / (D * (D + 1));
+          for (int p = 0; p < NL; ++p)
+            for (int q = 0; q < NL; ++q) Lc.pos[p][q] = Pf.find(lv[q], lv[p]);
         }
-        double area;
-        if constexpr (D == 2) {
-          area = (u(F(f, 1)) - u(F(f, 0))).norm();
-        } else {
-          area = 0.5 * (u(F(f, 1)) - u(F(f, 0))).cross(u(F(f, 2)) - u(F(f, 0))).norm();
-        }
-        // integral over a (D-1)-simplex of |g|^2, g linear: |F|/(D(D+1)) (sum |g_v|^2 + |sum g_v|^2)
-        Eigen::Matrix<double, D, NZ> Gs = Eigen::Matrix<double, D, NZ>::Zero();
-        Lc.H.setZero();
-        for (int v = 0; v < D; ++v) {
-          Gs += G[v];
-          Lc.H.noalias() += G[v].transpose() * G[v];
-        }
-        Lc.H.noalias() += Gs.transpose() * Gs;
-        Lc.H *= area / (D * (D + 1));
-        for (int p = 0; p < NL; ++p)
-          for (int q = 0; q < NL; ++q) Lc.pos[p][q] = Pf.find(lv[q], lv[p]);
-      }
-      MBI_INTERP_OMP("omp single")
+      });
       for (int f = f0; f < f1; ++f) {
         const Local& Lc = buf[static_cast<size_t>(f - f0)];
         const std::array<int, NL>& lv = local[static_cast<size_t>(f)];
@@ -276,9 +273,7 @@ Hessians assemble_fixed(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T) {
         }
       }
     }
-    (void)ntb;
   }
-  (void)nt;
   return {vibr.take(), dmm.take(), dmx.take(), dxx.take()};
 }
 
@@ -501,15 +496,15 @@ struct ModifiedBI::Impl {
     const double* val = rhs_op.valuePtr();
     const double* x = X.data();
     const Eigen::Index ld = X.outerStride();
-    const int nt = detail::omp_threads(rhs_op.nonZeros(), 1 << 16);
-    MBI_INTERP_OMP("omp parallel for num_threads(nt) if (nt > 1) schedule(static)")
-    for (int a = 0; a < n_red; ++a) {
-      double acc[3] = {0.0, 0.0, 0.0};
-      for (int p = outer[a]; p < outer[a + 1]; ++p)
-        for (int c = 0; c < d; ++c) acc[c] += val[p] * x[inner[p] + c * ld];
-      for (int c = 0; c < d; ++c) sol[static_cast<size_t>(a) * d + c] = acc[c];
-    }
-    (void)nt;
+    const int nt = detail::thread_count(rhs_op.nonZeros(), 1 << 16);
+    detail::parallel_blocks(n_red, 1024, nt, [&](long long a0, long long a1) {
+      for (long long a = a0; a < a1; ++a) {
+        double acc[3] = {0.0, 0.0, 0.0};
+        for (int p = outer[a]; p < outer[a + 1]; ++p)
+          for (int c = 0; c < d; ++c) acc[c] += val[p] * x[inner[p] + c * ld];
+        for (int c = 0; c < d; ++c) sol[static_cast<size_t>(a) * d + c] = acc[c];
+      }
+    });
     F.solve(sol.data(), d);
   }
 
@@ -661,18 +656,13 @@ VertexMatrices ModifiedBI::solve(const Eigen::Ref<const Eigen::MatrixXd>& X) con
     for (int c = 0; c < d; ++c)
       for (int j = 0; j < n; ++j) cols[static_cast<size_t>(c) * n + j] = X(j, c);
     const std::ptrdiff_t rows = I.n_red;
-    const int nt = detail::omp_threads(rows * n, 1 << 17);
-    MBI_INTERP_OMP("omp parallel num_threads(nt) if (nt > 1)")
-    {
-      int t = 0, T = 1;
-      detail::omp_team(t, T);
-      // row ranges of even length: the kernel takes rows two at a time
-      const std::ptrdiff_t pairs = (rows + 1) / 2;
-      const std::ptrdiff_t a = std::min(rows, 2 * (pairs * t / T)), b = std::min(rows, 2 * (pairs * (t + 1) / T));
-      const double* c0 = cols.data();
+    const double* c0 = cols.data();
+    // blocks of an even number of rows (the kernel takes rows two at a time), about 2^16
+    // entries of K each
+    const std::ptrdiff_t block = std::max<std::ptrdiff_t>(2, ((1 << 16) / std::max(n, 1)) & ~std::ptrdiff_t(1));
+    detail::parallel_blocks(rows, block, detail::thread_count(rows * n, 1 << 17), [&](long long a, long long b) {
       dense_rows(I.K.data(), n, c0, c0 + n, c0 + 2 * static_cast<std::ptrdiff_t>(n), s3.data(), a, b);
-    }
-    (void)nt;  // without OpenMP
+    });
     sol.resize(static_cast<size_t>(I.n_red) * d);
     for (int a = 0; a < I.n_red; ++a)
       for (int c = 0; c < d; ++c) sol[static_cast<size_t>(a) * d + c] = s3[static_cast<size_t>(a) * 3 + c];

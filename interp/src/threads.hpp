@@ -1,39 +1,118 @@
 #pragma once
-// How many threads a call of mbi::interp runs on, and its parallel loops (internal): the one
-// place that knows the thread pool. Loops written as OpenMP pragmas use MBI_INTERP_OMP (in a
-// build without OpenMP they vanish and the loop runs on the calling thread); parallel_for runs
-// std::threads.
-#include <functional>
-
-#ifdef _OPENMP
-#define MBI_INTERP_OMP(x) _Pragma(x)
-#else
-#define MBI_INTERP_OMP(x)
-#endif
+// The parallel loops of mbi::interp (internal) and the one pool they run on (public side:
+// mbi/interp/threads.hpp). Work is shared, never split in fixed parts: the calling thread starts
+// at once and takes blocks of work from a counter, and each pool thread takes blocks from the same
+// counter when it arrives. A pool thread whose core is busy elsewhere therefore delays nothing
+// (the caller does its blocks), which a fixed split with a barrier cannot give. Every loop writes
+// each result from one block, in an order that does not depend on who ran the block, so results
+// are the same for every thread count. In a build without threads (MBI_WITH_THREADS=OFF) every
+// loop runs on the calling thread.
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <type_traits>
+#include <utility>
 
 namespace mbi::interp::detail {
 
-/// Every core: OpenMP's default team size, or the hardware's threads without OpenMP.
+/// A callable passed down without a copy or an allocation (the loops below take lambdas).
+template <typename Sig>
+class FunctionRef;
+template <typename R, typename... A>
+class FunctionRef<R(A...)> {
+ public:
+  template <typename F, typename = std::enable_if_t<!std::is_same_v<std::decay_t<F>, FunctionRef>>>
+  FunctionRef(F&& f)  // NOLINT: implicit, as std::function
+      : obj_(const_cast<void*>(static_cast<const void*>(std::addressof(f)))),
+        call_([](void* o, A... a) -> R { return (*static_cast<std::remove_reference_t<F>*>(o))(std::forward<A>(a)...); }) {}
+  R operator()(A... a) const { return call_(obj_, std::forward<A>(a)...); }
+
+ private:
+  void* obj_;
+  R (*call_)(void*, A...);
+};
+
+/// The library's thread count (interp::threads()).
 int all_threads();
 
-/// Threads for `work` units with at least `min_per_thread` each: `requested` (> 0) or
-/// all_threads(), at most work / min_per_thread, at least 1.
+/// Threads for `work` units with at least `min_per_thread` each: `requested` (> 0; at most the
+/// library's count) or the library's count, at most work / min_per_thread, at least 1.
 int thread_count(long long work, long long min_per_thread, int requested = 0);
 
-/// thread_count() for an OpenMP region: 1 in a build without OpenMP.
-int omp_threads(long long work, long long min_per_thread, int requested = 0);
+/// [0, count) handed out in blocks of `block` (the last one shorter), to whichever thread asks.
+class Blocks {
+ public:
+  Blocks(long long count, long long block) : count_(count), block_(block > 0 ? block : 1) {}
+  /// The next block [begin, end); false when none is left.
+  bool next(long long& begin, long long& end) {
+    const long long b = next_.fetch_add(block_, std::memory_order_relaxed);
+    if (b >= count_) return false;
+    begin = b;
+    end = b + block_ < count_ ? b + block_ : count_;
+    return true;
+  }
+  long long count() const { return count_; }
 
-/// This thread's number and the team size inside an OpenMP region (0 and 1 outside one).
-void omp_team(int& t, int& T);
+ private:
+  long long count_, block_;
+  alignas(64) std::atomic<long long> next_{0};
+};
 
-/// Runs f(begin, end) on [0, count) split in `threads` contiguous chunks, one std::thread each
-/// (on the calling thread when threads <= 1).
-void parallel_for(long long count, int threads, const std::function<void(long long, long long)>& f);
+/// Runs body() on the calling thread and on up to threads - 1 pool threads, each at most once,
+/// as they come; body shares its work out through counters (Blocks). Returns when every thread
+/// that started body has returned from it; rethrows the first exception one of them threw.
+/// Inside body (on any of its threads) a nested call runs on that thread alone.
+void run_shared(int threads, FunctionRef<void()> body);
 
-/// Runs f(begin, end) on [0, count) in blocks of `block` items, handed to `threads` OpenMP
-/// threads as they free up (a core slowed by other work then holds no fixed share); one call
-/// f(0, count) when threads <= 1.
-void parallel_blocks(long long count, long long block, int threads,
-                     const std::function<void(long long, long long)>& f);
+/// f(begin, end) for the blocks of [0, count) of `block` items, on up to `threads` threads;
+/// one call f(0, count) when threads <= 1 or count <= block.
+void parallel_blocks(long long count, long long block, int threads, FunctionRef<void(long long, long long)> f);
+
+/// Work in consecutive steps inside one run_shared job (a solve's sweeps): the caller publishes a
+/// step (run), every thread of the job takes blocks of it, and run returns once all its blocks are
+/// done, so the next step may read what this one wrote. Between steps the caller may work alone.
+/// The caller calls run and close; every other thread of the job calls join, which takes blocks
+/// of each step until close (spinning between steps, then yielding its core).
+class Steps {
+ public:
+  using Fn = FunctionRef<void(long long, long long)>;
+  /// Caller: fn over [0, count) in blocks of `block`, on every thread in the job.
+  void run(long long count, long long block, Fn fn);
+  /// Caller: no more steps.
+  void close();
+  /// The other threads of the job.
+  void join();
+
+ private:
+  // claim word: step tag (high 24 bits) and the next block's start (low 40 bits), so that a
+  // thread late for one step can never take a block of the next under the old step's function
+  static constexpr int kShift = 40;
+  static constexpr std::uint64_t kClosed = ~std::uint64_t(0);
+  bool take(std::uint64_t tag, long long count, long long block, long long& begin, long long& end);
+  void work(std::uint64_t tag, const Fn* fn, long long count, long long block);
+
+  alignas(64) std::atomic<std::uint64_t> claim_{0};
+  alignas(64) std::atomic<long long> done_{0};
+  alignas(64) std::atomic<std::uint64_t> step_{0};  // even: published (odd: being written); kClosed
+  std::atomic<const Fn*> fn_{nullptr};
+  std::atomic<long long> count_{0}, block_{1};
+};
+
+/// While alive, BLAS (OpenBLAS, when it is the system's BLAS) and the OpenMP loops of libraries
+/// the calling thread calls into (CHOLMOD's) run on one thread: the precompute's factorization is
+/// serial, so neither library leaves threads spinning after it. OpenBLAS's count is process-wide:
+/// it is set to 1 by the first guard and given back by the last one alive (a BLAS call from
+/// another thread meanwhile runs on one thread too). OpenMP's settings are the calling thread's
+/// own. Both are looked up at run time (dlsym), so nothing here depends on either library.
+class SerialForeignPools {
+ public:
+  SerialForeignPools();
+  ~SerialForeignPools();
+  SerialForeignPools(const SerialForeignPools&) = delete;
+  SerialForeignPools& operator=(const SerialForeignPools&) = delete;
+
+ private:
+  int omp_threads_ = 0, omp_dynamic_ = 0;
+};
 
 }  // namespace mbi::interp::detail

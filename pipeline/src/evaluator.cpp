@@ -1,19 +1,23 @@
 #include <mbi/error.hpp>
 #include <mbi/interp/evaluate.hpp>
+#include <mbi/interp/threads.hpp>
 #include <mbi/pipeline/evaluator.hpp>
 
+#include <algorithm>
 #include <chrono>
-#include <thread>
 
 namespace mbi::pipeline {
 
 CpuEvaluator::CpuEvaluator(Precision precision, int threads)
     : precision_(precision), threads_(threads) {
-  if (threads < 0) throw Error("threads must be >= 0 (0 = all cores)");
+  if (threads < 0) throw Error("threads must be >= 0 (0 = the library's count)");
 }
 
 std::string CpuEvaluator::name() const {
-  const int t = threads_ > 0 ? threads_ : static_cast<int>(std::thread::hardware_concurrency());
+  // the count the library's loops run on (mbi/interp/threads.hpp): this evaluator's, at most
+  // the library's
+  const int lib = interp::threads();
+  const int t = threads_ > 0 ? std::min(threads_, lib) : lib;
   return std::string("cpu ") + (precision_ == Precision::Float ? "float" : "double") + ", " +
          std::to_string(t) + (t == 1 ? " thread" : " threads");
 }

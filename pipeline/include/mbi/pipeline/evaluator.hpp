@@ -51,7 +51,9 @@ class Evaluator {
 enum class Precision { Float, Double };
 
 /// Multithreaded CPU evaluation. Double: interp::evaluate<double>, exact at rest. Float: the
-/// compact kernel interp::FastEvaluator (28 B a point in 3D, OpenMP threads), float round-off.
+/// compact kernel interp::FastEvaluator (28 B a point in 3D), float round-off. Both run on the
+/// library's threads (mbi/interp/threads.hpp); `threads` > 0 limits this evaluator to that many,
+/// 0 takes the library's count.
 class CpuEvaluator final : public Evaluator {
  public:
   explicit CpuEvaluator(Precision precision = Precision::Double, int threads = 0);
