@@ -2,10 +2,13 @@
 #include <mbi/interp/evaluate.hpp>
 
 #include "detail.hpp"
+#include "evaluate_float.hpp"
 #include "threads.hpp"
 
 #include <array>
+#include <atomic>
 #include <cmath>
+#include <type_traits>
 
 namespace mbi::interp {
 namespace {
@@ -13,8 +16,8 @@ namespace {
 template <typename Scalar>
 using MatX = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
 
-// Checks B / emb consistency; returns d.
-int check_inputs(const BezierPoints& B, const Embedding& emb) {
+// Checks B / emb consistency (elements too, unless `elements` is false); returns d.
+int check_inputs(const BezierPoints& B, const Embedding& emb, bool elements = true) {
   const int d = static_cast<int>(B.cols());
   if (d != 2 && d != 3) throw Error("Bezier points must have 2 or 3 columns");
   const int K = (d + 1) * (d + 2) / 2;
@@ -24,11 +27,21 @@ int check_inputs(const BezierPoints& B, const Embedding& emb) {
   if (emb.bary.cols() != d + 1 || emb.bary.rows() != emb.element.size())
     throw Error("embedding has " + std::to_string(emb.bary.cols()) +
                 " coordinates per point, expected " + std::to_string(d + 1));
-  const long long m = B.rows() / K;
-  for (int i = 0; i < emb.size(); ++i)
-    if (emb.element(i) < 0 || emb.element(i) >= m)
-      throw Error("point " + std::to_string(i) + " refers to element " +
-                  std::to_string(emb.element(i)) + " outside [0, " + std::to_string(m) + ")");
+  if (!elements) return d;
+  // the first point whose element is out of range, looked for on the library's threads
+  const long long m = B.rows() / K, p = emb.size();
+  std::atomic<long long> bad{p};
+  detail::parallel_blocks(p, 1 << 16, detail::thread_count(p, 1 << 16), [&](long long b, long long e) {
+    for (long long i = b; i < e; ++i)
+      if (emb.element(i) < 0 || emb.element(i) >= m) {
+        for (long long cur = bad.load(); i < cur && !bad.compare_exchange_weak(cur, i);) {
+        }
+        return;
+      }
+  });
+  if (const long long i = bad.load(); i < p)
+    throw Error("point " + std::to_string(i) + " refers to element " +
+                std::to_string(emb.element(i)) + " outside [0, " + std::to_string(m) + ")");
   return d;
 }
 
@@ -118,6 +131,11 @@ void kernel(const MatX<Scalar>& Prow /* D x (m K), column per control point */, 
 template <typename Scalar>
 void run(const BezierPoints& B, const Embedding& emb, const MatX<Scalar>* normals_rest,
          MatX<Scalar>& positions, MatX<Scalar>* normals_out, int threads) {
+  // float positions in 3D: FastEvaluator's kernels, which check the elements as they go (the
+  // double path keeps the Bernstein form)
+  if constexpr (std::is_same_v<Scalar, float>) {
+    if (!normals_out && check_inputs(B, emb, false) == 3) return detail::evaluate_float3(B, emb, positions, threads);
+  }
   const int d = check_inputs(B, emb);
   // control points as D x (m K) so that each element's points are contiguous
   const MatX<Scalar> Prow = B.transpose().template cast<Scalar>();

@@ -110,6 +110,12 @@ double prepare_terms(const BezierPoints& B, float* coef, int m, int threads) {
 
 }  // namespace
 
+namespace detail {
+double pairs_terms3(const BezierPoints& B, float* coef, int m, int threads) {
+  return prepare_terms<3, kPairs>(B, coef, m, threads);
+}
+}  // namespace detail
+
 bool FastEvaluator::supported(Simd s) {
 #ifdef MBI_INTERP_X86
   if (s == Simd::Avx512) return detail::have_avx512();

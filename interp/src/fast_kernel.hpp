@@ -25,6 +25,8 @@
 // D_2 x (m_1 D_3 - m_3 D_1) + m_2 (D_3 x D_1), two cross products instead of three).
 #include "cpu.hpp"
 
+#include <Eigen/Core>
+
 #include <cstdint>
 
 namespace mbi::interp::detail {
@@ -75,6 +77,10 @@ inline constexpr Layout kPacked2 = packed_layout(2), kPacked3 = packed_layout(3)
 // aligned), the rest normals' m (mrest) and the scale sigma of the derivatives.
 using Kernel = void (*)(const std::int32_t* rec, const float* coef, const float* mrest, float sigma, float* pos,
                         float* nout, long long begin, long long end);
+
+// The 3D element terms of B in the pairs layout (m x coef_stride(3) floats at coef, 64-byte
+// aligned), on up to `threads` threads; returns the largest |c_k| (fast_evaluate.cpp).
+double pairs_terms3(const Eigen::MatrixXd& B, float* coef, int m, int threads);
 
 // The portable loop (d = 2 or 3, terms in layout L), any number of points.
 void eval_portable(int d, const std::int32_t* rec, const float* coef, const Layout& L, const float* mrest,

@@ -113,6 +113,7 @@ class ModifiedBI {
   const Eigen::MatrixXi& elements_matrix() const;
 
  private:
+  void warm_up() const;
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
