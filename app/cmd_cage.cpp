@@ -40,6 +40,7 @@ const mbi::cli::Registrar reg(
                            "envelope's boundary tetrahedralised by TetGen (3D)");
       sub.add_flag("--force", a->force,
                    "overwrite existing outputs (BASE.node/.ele, --stats, --vtk); inputs never");
+      mbi::cli::add_threads_option(sub);
       return [a]() {
         namespace fs = std::filesystem;
         // BASE, without a .node/.ele/.face extension

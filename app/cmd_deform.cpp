@@ -45,7 +45,6 @@ struct DeformArgs {
   bool alpha_given = false;
   bool pin_boundary = false;
   bool force = false;
-  int threads = 0;
 };
 
 // What the command works on, wherever it came from (files or the built-in example).
@@ -268,7 +267,7 @@ int run_deform(const DeformArgs& a) {
   const interp::ModifiedBI* solver = nullptr;
   try {
     pipe.emplace(pb.U, pb.T, std::move(emb), std::move(given), po,
-                 std::make_unique<pipeline::CpuEvaluator>(pipeline::Precision::Double, a.threads),
+                 std::make_unique<pipeline::CpuEvaluator>(pipeline::Precision::Double),
                  rest_normals);
     solver = &pipe->solver();  // the comparison table needs modified-BI in any case
   } catch (const interp::Error& e) {
@@ -350,8 +349,7 @@ const Registrar reg{
       sub.add_option("--stats", a->stats, "write statistics and timings as JSON");
       sub.add_flag("--force", a->force, "overwrite existing --out / --stats files");
       sub.add_option("--example", a->example, "built-in example instead of files: twist-bar");
-      sub.add_option("--threads", a->threads, "evaluation threads (0 = all cores)")
-          ->check(CLI::Range(0, 1024));
+      add_threads_option(sub);
       return [a] { return run_deform(*a); };
     }};
 

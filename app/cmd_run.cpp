@@ -1,5 +1,5 @@
 // mbi run SCENE [--out DIR] [--frames N] [--mesh FILE] [--method bi|modified-bi|phong]
-//         [--gpu auto|on|off] [--force] [--quiet]
+//         [--gpu auto|on|off] [--force] [--quiet] [--threads N]
 #include "commands.hpp"
 
 #include <mbi/scenes/output_folder.hpp>
@@ -88,6 +88,7 @@ const Registrar reg{
       sub.add_flag("--quiet", a->quiet, "no progress output");
       sub.add_flag("--force-3d", a->force_3d,
                    "a flat model (every z equal) stays 3D (default: it runs in 2D)");
+      add_threads_option(sub);
       return [a] { return run_run(*a); };
     }};
 

@@ -55,6 +55,7 @@ const Registrar reg{
       sub.add_flag("--no-split", a->no_split, "only the scene's method (no BI panel)");
       sub.add_flag("--wireframe", a->wireframe, "show the control mesh's edges");
       sub.add_flag("--no-panel", a->no_panel, "hide the control panel (clean screenshots)");
+      add_threads_option(sub);
       return [a] { return run_view(*a); };
     }};
 

@@ -3,6 +3,7 @@
 // Registrar; main.cpp builds the CLI11 app from the registry. A subcommand reports bad input by
 // throwing any std::exception: main prints "mbi <sub>: error: <message>" on one line and exits 2.
 #include <mbi/base/names.hpp>
+#include <mbi/interp/threads.hpp>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -48,6 +49,15 @@ CLI::Option* add_choice(CLI::App& sub, const std::string& name, T& value, const 
                         const std::string& description) {
   auto set = [&value, names, name](const std::string& s) { value = names.parse(s, name); };
   return sub.add_option_function<std::string>(name, set, description)->check(CLI::IsMember(names.names()));
+}
+
+/// --threads N: how many threads the command's computations run on (mbi::interp::set_threads,
+/// set when the option is parsed, before the command runs); 0, the default: the cores this
+/// process may run on. Every subcommand takes it.
+inline CLI::Option* add_threads_option(CLI::App& sub) {
+  return sub.add_option_function<int>("--threads", [](int n) { interp::set_threads(n); },
+                                      "threads to compute on, the calling one included (default 0: the cores this process may run on)")
+      ->check(CLI::Range(0, 1024));
 }
 
 struct Registrar {

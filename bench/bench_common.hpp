@@ -5,9 +5,11 @@
 //
 // MBI_BENCH_QUICK=1 (scripts/bench.sh --quick, CI): small sizes and short measuring times, so
 // that every benchmark still runs and the report still builds, in well under a minute.
+// MBI_BENCH_THREADS=N runs the library on N threads.
 #include <mbi/generate/procedural.hpp>
 #include <mbi/gpu/context.hpp>
 #include <mbi/interp.hpp>
+#include <mbi/interp/threads.hpp>
 
 #include <cstdlib>
 #include <map>
@@ -18,6 +20,13 @@
 #include <vector>
 
 namespace mbi::bench {
+
+/// MBI_BENCH_THREADS=N: the library's thread count for the whole run (mbi::interp::set_threads).
+[[maybe_unused]] inline const bool threads_set = [] {
+  const char* v = std::getenv("MBI_BENCH_THREADS");
+  if (v && *v) interp::set_threads(std::atoi(v));
+  return true;
+}();
 
 inline bool quick() {
   static const bool q = [] {

@@ -28,6 +28,8 @@
 //   BM_Triad               a[i] = b[i] + s c[i]: 3 x 8 B per element (as STREAM counts it).
 #include "bench_common.hpp"
 
+#include <mbi/interp/threads.hpp>
+
 #include <benchmark/benchmark.h>
 
 #include <Eigen/SparseCore>
@@ -43,7 +45,8 @@ using mbi::bench::Cage;
 using mbi::bench::Cloud;
 using mbi::interp::BezierPoints;
 
-int all_threads() { return static_cast<int>(std::max(1u, std::thread::hardware_concurrency())); }
+// the library's thread count (mbi/interp/threads.hpp): what "all threads" runs on
+int all_threads() { return mbi::interp::threads(); }
 
 /// Bytes one evaluation must read and write (see the file comment).
 double eval_bytes(long long p, long long elements, bool dbl, bool normals) {

@@ -51,6 +51,8 @@ double omp_burst(std::vector<double>& v) {
   return s;
 }
 
+volatile double g_sink;  // keeps the arithmetic
+
 }  // namespace
 
 void spin(const volatile bool* stop) {
@@ -59,8 +61,7 @@ void spin(const volatile bool* stop) {
     for (int i = 0; i < 1 << 20; ++i) x = x * 1.0000001 + 1e-9;
     if (x > 1e6) x = 1.0;
   }
-  static volatile double sink;
-  sink = x;
+  g_sink = x;
 }
 
 const char* name(Load l) {
@@ -83,13 +84,14 @@ bool available(Load l) {
 }
 
 struct LoadGuard::Impl {
+  explicit Impl(Load l) : load(l) {}
   Load load;
   volatile bool stop = false;
   std::thread th;
   pid_t child = -1;
 };
 
-LoadGuard::LoadGuard(Load l) : impl_(new Impl{l}) {
+LoadGuard::LoadGuard(Load l) : impl_(new Impl(l)) {
   Impl& I = *impl_;
   switch (l) {
     case Load::None: break;

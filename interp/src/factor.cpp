@@ -7,6 +7,8 @@
 
 #include <Eigen/SparseCholesky>
 #include <algorithm>
+#include <cstdlib>
+#include <mutex>
 #include <string>
 
 #ifdef MBI_HAVE_CHOLMOD
@@ -191,7 +193,12 @@ CholeskyFactor factor_with_cholmod(const Eigen::SparseMatrix<double>& A) {
   As.stype = -1;  // symmetric: CHOLMOD reads the lower triangle
   // serial: BLAS's and CHOLMOD's own threads would spin for milliseconds after it (threads.hpp)
   const SerialForeignPools serial;
+  // METIS keeps its random state in globals: orderings computed at once by two threads would
+  // depend on timing (and so would the factor's round-off), so one thread orders at a time
+  static std::mutex ordering;
+  std::unique_lock<std::mutex> one_at_a_time(ordering);
   cholmod_factor* L = cholmod_analyze(&As, &c);
+  one_at_a_time.unlock();
   const bool analyzed = L != nullptr && c.status >= CHOLMOD_OK;
   const bool factored = analyzed && cholmod_factorize(&As, L, &c) && c.status >= CHOLMOD_OK;
   std::string why;
@@ -248,7 +255,7 @@ CholeskyFactor cholesky(const Eigen::SparseMatrix<double>& A, bool use_cholmod) 
       if (F.rows[F.rowp[q] + (k - F.super[q])] != k)
         throw Error("unexpected layout of the Cholesky factor (supernode " +
                     std::to_string(q) + ")");
-  F.schedule(kGroups);
+  F.schedule(std::getenv("MBI_GROUPS") ? std::atoi(std::getenv("MBI_GROUPS")) : kGroups);
   return F;
 }
 

@@ -79,25 +79,28 @@ void parallel_blocks(long long count, long long block, int threads, FunctionRef<
 // ---------------------------------------------------------------- steps
 
 namespace {
-constexpr std::uint64_t kPosMask = (std::uint64_t(1) << 40) - 1;
+constexpr std::uint64_t kHalf = (std::uint64_t(1) << 20) - 1;  // blocks taken from one end
 std::uint64_t tag_of(std::uint64_t step) { return (step >> 1) & ((std::uint64_t(1) << 24) - 1); }
 }  // namespace
 
-bool Steps::take(std::uint64_t tag, long long count, long long block, long long& begin, long long& end) {
+bool Steps::take(std::uint64_t tag, long long count, long long block, bool front, long long& begin, long long& end) {
+  const long long blocks = (count + block - 1) / block;
   std::uint64_t v = claim_.load(std::memory_order_relaxed);
   for (;;) {
-    const long long at = static_cast<long long>(v & kPosMask);
-    if ((v >> kShift) != tag || at >= count) return false;
-    if (claim_.compare_exchange_weak(v, v + static_cast<std::uint64_t>(block), std::memory_order_acq_rel)) {
-      begin = at;
-      end = at + block < count ? at + block : count;
+    const long long f = static_cast<long long>(v & kHalf), k = static_cast<long long>((v >> 20) & kHalf);
+    if ((v >> kShift) != tag || f + k >= blocks) return false;
+    const std::uint64_t next = front ? v + 1 : v + (std::uint64_t(1) << 20);
+    if (claim_.compare_exchange_weak(v, next, std::memory_order_acq_rel)) {
+      const long long i = front ? f : blocks - 1 - k;
+      begin = i * block;
+      end = begin + block < count ? begin + block : count;
       return true;
     }
   }
 }
 
-void Steps::work(std::uint64_t tag, const Fn* fn, long long count, long long block) {
-  for (long long b, e; take(tag, count, block, b, e);) {
+void Steps::work(std::uint64_t tag, const Fn* fn, long long count, long long block, bool front) {
+  for (long long b, e; take(tag, count, block, front, b, e);) {
     (*fn)(b, e);
     done_.fetch_add(e - b, std::memory_order_release);
   }
@@ -105,7 +108,7 @@ void Steps::work(std::uint64_t tag, const Fn* fn, long long count, long long blo
 
 void Steps::run(long long count, long long block, Fn fn) {
   // a seqlock: the step number is odd while the step's fields are written
-  block = block > 0 ? block : 1;
+  block = std::max(block > 0 ? block : 1, (count + static_cast<long long>(kHalf) - 1) / static_cast<long long>(kHalf));
   const std::uint64_t s = step_.load(std::memory_order_relaxed);
   step_.store(s + 1, std::memory_order_relaxed);
   std::atomic_thread_fence(std::memory_order_release);
@@ -115,7 +118,7 @@ void Steps::run(long long count, long long block, Fn fn) {
   done_.store(0, std::memory_order_relaxed);
   claim_.store(tag_of(s + 2) << kShift, std::memory_order_relaxed);
   step_.store(s + 2, std::memory_order_release);
-  work(tag_of(s + 2), &fn, count, block);
+  work(tag_of(s + 2), &fn, count, block, true);
   wait_until([&] { return done_.load(std::memory_order_acquire) >= count; });
 }
 
@@ -134,7 +137,7 @@ void Steps::join() {
     const long long count = count_.load(std::memory_order_relaxed), block = block_.load(std::memory_order_relaxed);
     std::atomic_thread_fence(std::memory_order_acquire);
     if (step_.load(std::memory_order_relaxed) != s) continue;  // rewritten while read
-    work(tag_of(s), fn, count, block);
+    work(tag_of(s), fn, count, block, false);
     last = s;
   }
 }

@@ -72,7 +72,9 @@ void parallel_blocks(long long count, long long block, int threads, FunctionRef<
 /// step (run), every thread of the job takes blocks of it, and run returns once all its blocks are
 /// done, so the next step may read what this one wrote. Between steps the caller may work alone.
 /// The caller calls run and close; every other thread of the job calls join, which takes blocks
-/// of each step until close (spinning between steps, then yielding its core).
+/// of each step until close (spinning between steps, then yielding its core). The caller takes
+/// blocks from the front, the others from the back: with two threads each keeps about the same
+/// part of every step, and of the data it touches, in its own cache from step to step.
 class Steps {
  public:
   using Fn = FunctionRef<void(long long, long long)>;
@@ -84,12 +86,13 @@ class Steps {
   void join();
 
  private:
-  // claim word: step tag (high 24 bits) and the next block's start (low 40 bits), so that a
-  // thread late for one step can never take a block of the next under the old step's function
+  // claim word: step tag (high 24 bits), then the blocks taken from the back and from the front
+  // (20 bits each), so that a thread late for one step can never take a block of the next under
+  // the old step's function
   static constexpr int kShift = 40;
   static constexpr std::uint64_t kClosed = ~std::uint64_t(0);
-  bool take(std::uint64_t tag, long long count, long long block, long long& begin, long long& end);
-  void work(std::uint64_t tag, const Fn* fn, long long count, long long block);
+  bool take(std::uint64_t tag, long long count, long long block, bool front, long long& begin, long long& end);
+  void work(std::uint64_t tag, const Fn* fn, long long count, long long block, bool front);
 
   alignas(64) std::atomic<std::uint64_t> claim_{0};
   alignas(64) std::atomic<long long> done_{0};

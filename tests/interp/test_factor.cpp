@@ -1,10 +1,13 @@
 // The internal sparse Cholesky factor (interp/src/factor.hpp) against Eigen's dense LLT, an
 // independent solver: every width of right-hand sides, both factorizations, the serial sweeps and
 // the sweeps split into groups of subtrees with the top part's supernodes shared out between the
-// threads (the threaded schedule, forced on a small matrix; threaded where OpenMP has 2 threads).
+// threads (the grouped schedule, forced on a small matrix), on 1 to 3 of the library's threads
+// with the same result.
 #include <catch2/catch.hpp>
 
 #include "factor.hpp"
+
+#include <mbi/interp/threads.hpp>
 
 #include <Eigen/Dense>
 #include <random>
@@ -73,12 +76,12 @@ TEST_CASE("sparse Cholesky sweeps equal a dense LLT for 1 to 8 right-hand sides,
   for (bool cholmod : which) {
     CholeskyFactor F = mbi::interp::detail::cholesky(A, cholmod);
     CAPTURE(F.method);
-    for (int threads : {1, 2, 3}) {
-      F.schedule(threads, 0);
-      CAPTURE(threads);
-      if (threads > 1) {
+    for (int groups : {1, 2, 3}) {
+      F.schedule(groups, 0);
+      CAPTURE(groups);
+      if (groups > 1) {
         // the split exists and covers every supernode once
-        CHECK(F.bins == threads);
+        CHECK(F.bins == groups);
         size_t count = F.top.size();
         for (const auto& g : F.groups) {
           CHECK(!g.empty());
@@ -93,6 +96,17 @@ TEST_CASE("sparse Cholesky sweeps equal a dense LLT for 1 to 8 right-hand sides,
         for (int w = 1; w <= 8; ++w) {
           CAPTURE(w);
           CHECK(solve_error(F, ref, w, 100 + w) < 1e-12);
+          // the same values on any number of threads
+          Eigen::MatrixXd one;
+          for (int threads : {1, 2, 3}) {
+            mbi::interp::set_threads(threads);
+            Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> X =
+                Eigen::MatrixXd::Constant(A.rows(), w, 1.0) + Eigen::MatrixXd::Identity(A.rows(), w);
+            F.solve(X.data(), w);
+            if (threads == 1) one = X;
+            else CHECK(Eigen::MatrixXd(X) == one);
+          }
+          mbi::interp::set_threads(0);
         }
       }
     }

@@ -8,3 +8,4 @@
 #include <mbi/interp/metrics.hpp>
 #include <mbi/interp/modified_bi.hpp>
 #include <mbi/interp/phong.hpp>
+#include <mbi/interp/threads.hpp>
