@@ -7,7 +7,6 @@
 
 #include <Eigen/SparseCholesky>
 #include <algorithm>
-#include <cstdlib>
 #include <mutex>
 #include <string>
 
@@ -255,7 +254,7 @@ CholeskyFactor cholesky(const Eigen::SparseMatrix<double>& A, bool use_cholmod) 
       if (F.rows[F.rowp[q] + (k - F.super[q])] != k)
         throw Error("unexpected layout of the Cholesky factor (supernode " +
                     std::to_string(q) + ")");
-  F.schedule(std::getenv("MBI_GROUPS") ? std::atoi(std::getenv("MBI_GROUPS")) : kGroups);
+  F.schedule(kGroups);
   return F;
 }
 

@@ -9,7 +9,6 @@
 #include <mbi/error.hpp>
 
 #include <algorithm>
-#include <cstdlib>
 #include <cstring>
 #include <thread>
 #include <vector>
@@ -150,7 +149,7 @@ __attribute__((always_inline)) inline void sweep_body(const CholeskyFactor& F, c
 // the caller adds them in chunk order and solves the triangle. The chunks do not depend on the
 // number of threads, nor, therefore, do the sums. Smaller supernodes run on the caller.
 constexpr int kTopBlock = 16;
-static const std::ptrdiff_t kTopRows = std::getenv("MBI_TOPROWS") ? std::atoi(std::getenv("MBI_TOPROWS")) : 128;
+constexpr std::ptrdiff_t kTopRows = 128;
 
 // rows [lo, hi) of supernode block columns j .. j+B: X[r[i]] -= sum_k L(i, j+k) y_k
 template <int S>
