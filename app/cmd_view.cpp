@@ -1,5 +1,6 @@
 // mbi view SCENE [--mesh FILE] [--method M] [--script FILE] [--record FILE] [--frames N]
-//               [--screenshot PATH] [--report FILE] [--size WxH] [--paused] [--no-split]
+//               [--screenshot PATH] [--report FILE] [--force] [--width W] [--height H]
+//               [--paused] [--no-split] [--wireframe] [--no-panel]
 #include "commands.hpp"
 
 #include <mbi/pipeline/method.hpp>
@@ -13,7 +14,7 @@ namespace {
 struct ViewArgs {
   std::string scene, mesh, method, script, record, screenshot, report;
   int frames = 0, width = 1280, height = 720;
-  bool paused = false, no_split = false, wireframe = false, no_panel = false;
+  bool paused = false, no_split = false, wireframe = false, no_panel = false, force = false;
 };
 
 int run_view(const ViewArgs& a) {
@@ -31,6 +32,7 @@ int run_view(const ViewArgs& a) {
   o.split = !a.no_split;
   o.wireframe = a.wireframe;
   o.panel = !a.no_panel;
+  o.force = a.force;
   viewer::view_scene(sc, a.mesh, o);
   return 0;
 }
@@ -49,6 +51,8 @@ const Registrar reg{
           ->check(CLI::Range(0, 100000000));
       sub.add_option("--screenshot", a->screenshot, "write the last frame as PNG when closing");
       sub.add_option("--report", a->report, "write per-frame state (pokes, handles, energies) as JSON");
+      sub.add_flag("--force", a->force,
+                   "overwrite existing outputs (--record, --screenshot, --report, p screenshots); inputs never");
       sub.add_option("--width", a->width, "window width")->check(CLI::Range(160, 8192));
       sub.add_option("--height", a->height, "window height")->check(CLI::Range(120, 8192));
       sub.add_flag("--paused", a->paused, "start paused");

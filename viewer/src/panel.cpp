@@ -22,6 +22,7 @@ const char* kHelp =
     "  m      next method       s  split view (BI | method)\n"
     "  w      control wireframe h  handle markers\n"
     "  f      frame the model   p  screenshot (mbi-screenshot-NNNN.png)\n"
+    "  [ / ]  alpha / 2, alpha x 2 (0.001 to 1)\n"
     "  ?      this help         q / escape  quit";
 
 void statistics(const Stage& stage, const FrameTimes& times) {
@@ -55,10 +56,9 @@ void view_switches(Stage& stage, ViewerOptions& options) {
   ImGui::Checkbox("control wireframe", &options.wireframe);
   ImGui::Checkbox("handle markers", &options.handles);
   float a = static_cast<float>(stage.alpha);
-  if (ImGui::SliderFloat("alpha", &a, 0.001f, 1.0f, "%.3f", ImGuiSliderFlags_Logarithmic) && a > 0) {
-    stage.alpha = a;
-    stage.pipe.set_alpha(stage.alpha);
-  }
+  if (ImGui::SliderFloat("alpha", &a, static_cast<float>(Stage::kMinAlpha), static_cast<float>(Stage::kMaxAlpha), "%.3f",
+                         ImGuiSliderFlags_Logarithmic))
+    stage.set_alpha(a);
 }
 
 // Time stepping, damping and gravity: the running simulation takes them at once.

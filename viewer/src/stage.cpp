@@ -2,6 +2,7 @@
 
 #include <mbi/interp/embed.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 namespace mbi::viewer {
@@ -47,6 +48,12 @@ void Stage::set_views(bool split) {
 void Stage::set_method(pipeline::Method method, bool split) {
   pipe.set_method(method);
   set_views(split);
+}
+
+void Stage::set_alpha(double a) {
+  if (!std::isfinite(a)) return;
+  alpha = std::clamp(a, kMinAlpha, kMaxAlpha);
+  pipe.set_alpha(alpha);
 }
 
 void Stage::frame(Camera& camera, const Eigen::Vector3d& up) const {

@@ -56,6 +56,9 @@ struct Stage {
 
   void set_views(bool split);
   void set_method(pipeline::Method method, bool split);
+  /// The interpolation weight, kept within [kMinAlpha, kMaxAlpha] (the panel slider's range).
+  void set_alpha(double a);
+  static constexpr double kMinAlpha = 0.001, kMaxAlpha = 1.0;
   /// The camera framing the control mesh; 2D looks at the picture from the front (y down).
   void frame(Camera& camera, const Eigen::Vector3d& up) const;
   /// The pipeline's driver when it is a simulation, else nullptr.

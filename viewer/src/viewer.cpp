@@ -1,4 +1,3 @@
-#include <mbi/io/atomic_file.hpp>
 #include <mbi/viewer/viewer.hpp>
 
 #include "draw.hpp"
@@ -24,6 +23,8 @@ const char* key_name(int key) {
     case GLFW_KEY_SPACE: return "space";
     case GLFW_KEY_ESCAPE: return "escape";
     case GLFW_KEY_SLASH: return "?";
+    case GLFW_KEY_LEFT_BRACKET: return "[";
+    case GLFW_KEY_RIGHT_BRACKET: return "]";
     default: break;
   }
   static char buf[2] = {0, 0};
@@ -72,8 +73,8 @@ struct Viewer::Impl {
   std::unique_ptr<gpu::Renderer> renderer;
   Camera camera;
   int frame = 0;
+  std::unique_ptr<SessionFiles> files;
   Inputs inputs;
-  nlohmann::json report = nlohmann::json::array();
   Controls controls;
   FrameTimes times;
   io::Image last_shot;
@@ -123,13 +124,18 @@ struct Viewer::Impl {
 
   void handle(const Event& e, Stage& stage, Interaction& in);
   void key(const std::string& k, Stage& stage, Interaction& in);
+  void snapshot();
   void advance(Stage& stage, Interaction& in);
   Eigen::MatrixXd draw(Stage& stage, Interaction& in);
   void finish();
 };
 
-Viewer::Viewer(const ViewerOptions& options) : impl_(std::make_unique<Impl>()) {
+Viewer::Viewer(const ViewerOptions& options) : Viewer(options, std::make_unique<SessionFiles>(options)) {}
+
+Viewer::Viewer(const ViewerOptions& options, std::unique_ptr<SessionFiles> files) : impl_(std::make_unique<Impl>()) {
   impl_->opt = options;
+  impl_->files = std::move(files);
+  impl_->inputs.open(*impl_->files);
   impl_->window = open_window(options);
   impl_->context = gpu::Context::adopt_current();
   impl_->renderer = std::make_unique<gpu::Renderer>(*impl_->context);
@@ -143,7 +149,6 @@ Viewer::Viewer(const ViewerOptions& options) : impl_(std::make_unique<Impl>()) {
   ImGui::GetIO().IniFilename = nullptr;
   ImGui_ImplGlfw_InitForOpenGL(impl_->window, true);  // chains to the callbacks above
   ImGui_ImplOpenGL3_Init("#version 330 core");
-  impl_->inputs.open(options.script, options.record);
 }
 
 Viewer::~Viewer() {
@@ -192,13 +197,24 @@ void Viewer::Impl::key(const std::string& k, Stage& stage, Interaction& in) {
   } else if (k == "w") opt.wireframe = !opt.wireframe;
   else if (k == "h") opt.handles = !opt.handles;
   else if (k == "f" || k == "v") stage.frame(camera, opt.up);
-  else if (k == "p") {
-    char name[64];
-    std::snprintf(name, sizeof name, "mbi-screenshot-%04d.png", frame);
-    controls.message = std::string("screenshot: ") + name;
-    io::write_png(name, last_shot.width > 0 ? last_shot : io::Image(1, 1));
-  } else if (k == "?") controls.help = !controls.help;
+  else if (k == "[" || k == "]") stage.set_alpha(stage.alpha * (k == "[" ? 0.5 : 2.0));
+  else if (k == "p") snapshot();
+  else if (k == "?") controls.help = !controls.help;
   else if (k == "q" || k == "escape") controls.close = true;
+}
+
+// The p key: a screenshot now; one that cannot be written is said (panel, stderr, report), and
+// the session goes on.
+void Viewer::Impl::snapshot() {
+  char name[64];
+  std::snprintf(name, sizeof name, "mbi-screenshot-%04d.png", frame);
+  try {
+    files->snapshot(name, last_shot.width > 0 ? last_shot : io::Image(1, 1));
+    controls.message = std::string("screenshot: ") + name;
+  } catch (const std::exception& e) {
+    controls.message = std::string("screenshot not written: ") + e.what();
+    std::fprintf(stderr, "mbi view: %s\n", controls.message.c_str());
+  }
 }
 
 // One step when playing or asked to; direct mode has no time: it follows the handles every frame.
@@ -224,10 +240,7 @@ Eigen::MatrixXd Viewer::Impl::draw(Stage& stage, Interaction& in) {
   return X3;
 }
 
-void Viewer::Impl::finish() {
-  if (!opt.screenshot.empty()) io::write_png(opt.screenshot, last_shot);
-  if (!opt.report.empty()) io::write_text_atomic(opt.report, report.dump(1) + "\n");
-}
+void Viewer::Impl::finish() { files->finish(last_shot); }
 
 void Viewer::show(const Shown& shown) {
   Impl& s = *impl_;
@@ -248,8 +261,12 @@ void Viewer::show(const Shown& shown) {
     if (shown.per_frame) shown.per_frame(*this);
     s.advance(stage, in);
     const Eigen::MatrixXd X3 = s.draw(stage, in);
-    if (!s.opt.report.empty())
-      s.report.push_back(frame_report(stage, in, s.times, X3, s.camera, s.window_size(), s.report.empty()));
+    if (s.files->reporting()) {
+      nlohmann::json fr = frame_report(stage, in, s.times, X3, s.camera, s.window_size(), s.frame == 0);
+      if (!s.controls.message.empty()) fr["message"] = s.controls.message;
+      s.files->report(fr);
+    }
+    s.files->check();
     glfwSwapBuffers(s.window);
     ++s.frame;
     if (s.opt.frames > 0 && s.frame >= s.opt.frames) break;
