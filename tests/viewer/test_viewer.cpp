@@ -6,17 +6,10 @@
 #include <mbi/io/image.hpp>
 #include <mbi/viewer/camera.hpp>
 
-#include "common/files.hpp"
 #include "common/grid_meshes.hpp"
-#include "common/temp_dir.hpp"
-
-#include <nlohmann/json.hpp>
-
-#include <sys/wait.h>
+#include "viewer_run.hpp"
 
 #include <cmath>
-#include <cstdlib>
-#include <fstream>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -26,28 +19,11 @@ using namespace mbi::viewer;
 
 namespace {
 
-struct Run {
-  int code = -1;
-  std::string err;
-};
+using Run = mbi::test::ViewRun;
+using mbi::test::non_background;
+using mbi::test::view;
 
-// `mbi view` under a fresh Xvfb server; extra environment as "NAME=value ...".
-Run view(const std::string& args, const TempDir& dir, bool display = true) {
-  const fs::path err = dir / "stderr.txt";
-  const std::string cmd = std::string(display ? "xvfb-run -a -s '-screen 0 1400x900x24' " : "env -u DISPLAY ") +
-                          "\"" + MBI_EXE + "\" view " + args + " > /dev/null 2> \"" + err.string() + "\"";
-  const int status = std::system(cmd.c_str());
-  Run r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.err = mbi::test::slurp(err);
-  return r;
-}
-
-nlohmann::json report(const fs::path& file) {
-  std::ifstream in(file);
-  REQUIRE(in);
-  return nlohmann::json::parse(in);
-}
+nlohmann::json report(const fs::path& file) { return mbi::test::read_report(file); }
 
 Eigen::Vector3d vec(const nlohmann::json& j) { return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()}; }
 
@@ -64,13 +40,7 @@ double differing(const mbi::io::Image& a, const mbi::io::Image& b, int tol = 8) 
   return double(n) / (a.width * a.height);
 }
 
-double non_background(const mbi::io::Image& a) {
-  long long n = 0;
-  for (size_t i = 0; i < a.rgb.size(); i += 3) n += !(a.rgb[i] == 255 && a.rgb[i + 1] == 255 && a.rgb[i + 2] == 255);
-  return double(n) / (a.width * a.height);
-}
-
-std::string q(const fs::path& p) { return "\"" + p.string() + "\""; }
+std::string q(const fs::path& p) { return mbi::test::quoted(p); }
 
 }  // namespace
 
@@ -108,7 +78,7 @@ TEST_CASE("viewer picking: the ray under a pixel hits the expected point, also a
   CHECK_FALSE(cast(cam.ray(2, 2, w, h), V, F));
 }
 
-TEST_CASE("viewer pokes: the spring's response does not depend on mass or size; the target is bounded", "[viewer]") {
+TEST_CASE("viewer pokes: the spring's response does not depend on mass or size, and the target is bounded", "[viewer]") {
   // natural frequency sqrt(k / m) is the same for any mass
   for (double mass : {1e-3, 1.0, 1e4}) CHECK(std::sqrt(poke_stiffness(mass, 0.2) / mass) == Approx(2 * std::acos(-1.0) / 0.2));
   Ray r;
