@@ -98,6 +98,11 @@ class ModifiedBI {
   /// M for deformed control positions X (n x d). Throws Error on a size mismatch or NaN.
   VertexMatrices solve(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
 
+  /// The transpose of solve(), which is linear in X (fact 11): dL/dX (n x d) from
+  /// G = dL/dM ((n d) x d). One solve with the cached factor (the system is symmetric) and one
+  /// product with H_mx^T. Throws Error on a size mismatch or NaN.
+  Eigen::MatrixXd solve_transpose(const VertexMatrices& G) const;
+
   /// Bezier control points for positions X and matrices M (M = 0 gives BI).
   BezierPoints bezier(const Eigen::Ref<const Eigen::MatrixXd>& X, const VertexMatrices& M) const;
 
