@@ -16,7 +16,7 @@ namespace {
 // Adds each point's Bernstein weights times its row of G into its element's K x D block of acc
 // (row-major, element after element), for the points [begin, end).
 template <int D>
-void scatter(const Embedding& emb, const ConstPointsRef& G, long long begin, long long end, double* acc) {
+void scatter(const Embedding& emb, const ConstPointsRef<double>& G, long long begin, long long end, double* acc) {
   constexpr int K = (D + 1) * (D + 2) / 2;
   static constexpr std::array<std::pair<int, int>, 6> edges3{{{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}}};
   static constexpr std::array<std::pair<int, int>, 3> edges2{{{0, 1}, {0, 2}, {1, 2}}};
@@ -38,7 +38,7 @@ void scatter(const Embedding& emb, const ConstPointsRef& G, long long begin, lon
 }
 
 // The first row of G that is not finite (-1: none).
-long long first_non_finite(const ConstPointsRef& G) {
+long long first_non_finite(const ConstPointsRef<double>& G) {
   for (Eigen::Index p = 0; p < G.rows(); ++p)
     for (Eigen::Index c = 0; c < G.cols(); ++c)
       if (!std::isfinite(G(p, c))) return p;
@@ -47,7 +47,7 @@ long long first_non_finite(const ConstPointsRef& G) {
 
 }  // namespace
 
-BezierPoints evaluate_transpose(const Embedding& emb, const ConstPointsRef& G, int elements, int threads) {
+BezierPoints evaluate_transpose(const Embedding& emb, const ConstPointsRef<double>& G, int elements, int threads) {
   const int d = emb.dim();
   if (d != 2 && d != 3) throw Error("the embedding must be 2D or 3D");
   if (G.rows() != emb.size() || G.cols() != d)

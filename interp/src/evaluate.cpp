@@ -63,7 +63,7 @@ inline void bezier_eval(const Scalar* P /* K x D row-major */, const Scalar* b, 
 
 template <int D, typename Scalar>
 void kernel(const MatX<Scalar>& Prow /* D x (m K), column per control point */, const Embedding& emb,
-            const MatX<Scalar>* grads /* D x (m (D+1)) */, const MatX<Scalar>* normals_rest,
+            const MatX<Scalar>* grads /* D x (m (D+1)) */, const ConstPointsRef<Scalar>* normals_rest,
             PointsRef<Scalar>& pos, PointsRef<Scalar>* normals_out, int threads) {
   constexpr int K = (D + 1) * (D + 2) / 2;
   const long long np = emb.size();
@@ -119,7 +119,7 @@ void kernel(const MatX<Scalar>& Prow /* D x (m K), column per control point */, 
 // Checks B and emb, and for normals (normals_rest given) the basis gradients and the rest
 // normals; returns d. Everything is checked before an output is touched.
 template <typename Scalar>
-int check_all(const BezierPoints& B, const Embedding& emb, const MatX<Scalar>* normals_rest) {
+int check_all(const BezierPoints& B, const Embedding& emb, const ConstPointsRef<Scalar>* normals_rest) {
   const int d = check_inputs(B, emb);
   if (normals_rest) {
     const long long m = B.rows() / ((d + 1) * (d + 2) / 2);
@@ -143,7 +143,7 @@ void check_output(const char* what, Eigen::Index rows, Eigen::Index cols, const 
 
 // Inputs checked by check_all, outputs p x d.
 template <typename Scalar>
-void run(const BezierPoints& B, const Embedding& emb, int d, const MatX<Scalar>* normals_rest,
+void run(const BezierPoints& B, const Embedding& emb, int d, const ConstPointsRef<Scalar>* normals_rest,
          PointsRef<Scalar> positions, PointsRef<Scalar>* normals_out, int threads) {
   // control points as D x (m K) so that each element's points are contiguous
   const MatX<Scalar> Prow = B.transpose().template cast<Scalar>();
@@ -168,11 +168,12 @@ void evaluate(const BezierPoints& B, const Embedding& emb,
               const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& normals_rest,
               Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& positions,
               Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& normals_out, int threads) {
-  const int d = check_all<Scalar>(B, emb, &normals_rest);
+  const ConstPointsRef<Scalar> rest(normals_rest);
+  const int d = check_all<Scalar>(B, emb, &rest);
   normals_out.resize(emb.size(), d);
   positions.resize(emb.size(), d);
   PointsRef<Scalar> normals(normals_out);
-  run<Scalar>(B, emb, d, &normals_rest, positions, &normals, threads);
+  run<Scalar>(B, emb, d, &rest, positions, &normals, threads);
 }
 
 template <typename Scalar>
@@ -184,8 +185,8 @@ void evaluate(const BezierPoints& B, const Embedding& emb, PointsRef<Scalar> pos
 
 template <typename Scalar>
 void evaluate(const BezierPoints& B, const Embedding& emb,
-              const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& normals_rest,
-              PointsRef<Scalar> positions, PointsRef<Scalar> normals_out, int threads) {
+              const ConstPointsRef<Scalar>& normals_rest, PointsRef<Scalar> positions,
+              PointsRef<Scalar> normals_out, int threads) {
   const int d = check_all<Scalar>(B, emb, &normals_rest);
   check_output("positions", positions.rows(), positions.cols(), emb, d);
   check_output("normals", normals_out.rows(), normals_out.cols(), emb, d);
@@ -200,9 +201,9 @@ template void evaluate<double>(const BezierPoints&, const Embedding&, const Eige
                                Eigen::MatrixXd&, Eigen::MatrixXd&, int);
 template void evaluate<float>(const BezierPoints&, const Embedding&, PointsRef<float>, int);
 template void evaluate<double>(const BezierPoints&, const Embedding&, PointsRef<double>, int);
-template void evaluate<float>(const BezierPoints&, const Embedding&, const Eigen::MatrixXf&,
+template void evaluate<float>(const BezierPoints&, const Embedding&, const ConstPointsRef<float>&,
                               PointsRef<float>, PointsRef<float>, int);
-template void evaluate<double>(const BezierPoints&, const Embedding&, const Eigen::MatrixXd&,
+template void evaluate<double>(const BezierPoints&, const Embedding&, const ConstPointsRef<double>&,
                                PointsRef<double>, PointsRef<double>, int);
 
 Eigen::MatrixXd jacobian(const Eigen::Ref<const Eigen::MatrixXd>& U,

@@ -114,15 +114,7 @@ bool FastEvaluator::supported(Simd s) {
   return true;
 }
 
-const char* FastEvaluator::name(Simd s) {
-  switch (s) {
-    case Simd::Auto: return "auto";
-    case Simd::Avx512: return "avx512";
-    case Simd::Avx2: return "avx2";
-    case Simd::Portable: return "portable";
-  }
-  return "?";
-}
+const char* FastEvaluator::name(Simd s) { return kSimdNames.name(s); }
 
 FastEvaluator::FastEvaluator(const Embedding& emb, int threads, Simd simd) : threads_(threads) {
   d_ = emb.dim();

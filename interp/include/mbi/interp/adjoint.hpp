@@ -18,15 +18,12 @@
 
 namespace mbi::interp {
 
-/// p x d values read where they are (a numpy array, one frame of a batch), any strides.
-using ConstPointsRef = Eigen::Ref<const Eigen::MatrixXd, 0, Eigen::Stride<Eigen::Dynamic, Eigen::Dynamic>>;
-
 /// The transpose of evaluate<double>(): dL/dB ((m K) x d, the BezierPoints layout) from
 /// G = dL/dpositions (p x d) for the points of emb in a mesh of m elements. Each point adds its
 /// Bernstein weights times its row of G to its element's K rows. threads = 0: all cores; the
 /// sums run in an order fixed by the thread count. Throws Error on mismatched sizes, an element
 /// outside [0, m), or a non-finite G (named by its row).
-BezierPoints evaluate_transpose(const Embedding& emb, const ConstPointsRef& G, int elements,
+BezierPoints evaluate_transpose(const Embedding& emb, const ConstPointsRef<double>& G, int elements,
                                 int threads = 0);
 
 /// The two parts of the transpose of bezier_points(U, T, X, M).

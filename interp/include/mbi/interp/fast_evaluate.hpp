@@ -17,6 +17,7 @@
 // Results agree with interp::evaluate<double> to float round-off (a few ulp of the coordinate
 // magnitudes: tests/interp/test_fast_evaluate.cpp states the bound). interp::evaluate<double>
 // stays the exact path (files, tests).
+#include <mbi/base/names.hpp>
 #include <mbi/interp/embed.hpp>
 #include <mbi/interp/modified_bi.hpp>
 
@@ -40,6 +41,8 @@ enum class Simd {
   Avx2,      ///< AVX2 and FMA: one point (positions) or two (with normals) to a 256-bit vector
   Portable,  ///< plain C++, any CPU
 };
+inline constexpr auto kSimdNames = name_table<Simd>(
+    {{Simd::Auto, "auto"}, {Simd::Avx512, "avx512"}, {Simd::Avx2, "avx2"}, {Simd::Portable, "portable"}});
 
 class FastEvaluator {
  public:
