@@ -165,7 +165,7 @@ Eigen::MatrixXd Deformer::deform(const Eigen::Ref<const Eigen::MatrixXd>& X) con
   return positions;
 }
 
-void Deformer::deform_batch(const interp::ConstPointsRef& X, interp::PointsRef<double> positions) const {
+void Deformer::deform_batch(const interp::ConstPointsRef<double>& X, interp::PointsRef<double> positions) const {
   const Eigen::Index n = vertices(), p = points(), d = dim();
   if (X.cols() != d || X.rows() % n != 0)
     throw Error("poses must be (frames " + std::to_string(n) + ") x " + std::to_string(d) + ", got " +
@@ -192,7 +192,7 @@ void Deformer::deform_float(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::R
   I.fast_evaluator().evaluate(B, positions.data(), normals.data());
 }
 
-Eigen::MatrixXd Deformer::vjp(const interp::ConstPointsRef& G) const {
+Eigen::MatrixXd Deformer::vjp(const interp::ConstPointsRef<double>& G) const {
   const Impl& I = *impl_;
   I.check_points("dL/dpositions", G.rows(), G.cols());
   const interp::BezierPoints GB = interp::evaluate_transpose(I.embedding, G, elements(), I.options.threads);
@@ -202,7 +202,7 @@ Eigen::MatrixXd Deformer::vjp(const interp::ConstPointsRef& G) const {
   return std::move(t.X);
 }
 
-void Deformer::vjp_batch(const interp::ConstPointsRef& G, interp::PointsRef<double> out) const {
+void Deformer::vjp_batch(const interp::ConstPointsRef<double>& G, interp::PointsRef<double> out) const {
   const Eigen::Index n = vertices(), p = points(), d = dim();
   if (G.cols() != d || (p > 0 ? G.rows() % p != 0 : G.rows() != 0))
     throw Error("dL/dpositions must be (frames " + std::to_string(p) + ") x " + std::to_string(d) +

@@ -82,7 +82,7 @@ class Deformer {
               interp::PointsRef<double> normals) const;
   Eigen::MatrixXd deform(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
   /// Frames at once: X (frames n) x d, positions (frames p) x d; frame k = rows [k n, k n + n).
-  void deform_batch(const interp::ConstPointsRef& X, interp::PointsRef<double> positions) const;
+  void deform_batch(const interp::ConstPointsRef<double>& X, interp::PointsRef<double> positions) const;
 
   /// The float kernel (interp::FastEvaluator, built on the first call): positions, and normals
   /// (needs rest normals), as row-major p x d floats (interleaved xyz, a GPU buffer's layout).
@@ -92,9 +92,9 @@ class Deformer {
 
   /// dL/dX (n x d) from G = dL/dpositions (p x d): the transpose of deform(), exact. Throws
   /// Error on a size mismatch or a non-finite G.
-  Eigen::MatrixXd vjp(const interp::ConstPointsRef& G) const;
+  Eigen::MatrixXd vjp(const interp::ConstPointsRef<double>& G) const;
   /// Frames at once: G (frames p) x d, out (frames n) x d.
-  void vjp_batch(const interp::ConstPointsRef& G, interp::PointsRef<double> out) const;
+  void vjp_batch(const interp::ConstPointsRef<double>& G, interp::PointsRef<double> out) const;
 
  private:
   struct Impl;
