@@ -70,9 +70,8 @@ void bind_modified_bi(py::module_& m) {
       [](Solver& s, const py::object& X, const py::object& out) {
         const int n = s.object.vertices(), d = s.object.dim();
         const Input x = pose(X, n, d);
-        Output o = float_output(out, "out", static_cast<Eigen::Index>(n) * d, d);
-        s.run([&](const ModifiedBI& b) { o.map = b.solve(x.map); });
-        return o.array;
+        return result(out, static_cast<Eigen::Index>(n) * d, d,
+                      [&] { return s.run([&](const ModifiedBI& b) { return b.solve(x.map); }); });
       },
       "X"_a, py::kw_only(), "out"_a = py::none(),
       "M ((n d), d) for the deformed control positions X (n, d): rows [i d, i d + d) hold M_i. "
@@ -90,9 +89,8 @@ void bind_modified_bi(py::module_& m) {
         const int n = s.object.vertices(), d = s.object.dim();
         const Input x = pose(X, n, d), mm = vertex_matrices(M, "M", n, d);
         const int K = (d + 1) * (d + 2) / 2;
-        Output o = float_output(out, "out", static_cast<Eigen::Index>(s.object.elements()) * K, d);
-        s.run([&](const ModifiedBI& b) { o.map = b.bezier(x.map, mm.map); });
-        return o.array;
+        return result(out, static_cast<Eigen::Index>(s.object.elements()) * K, d,
+                      [&] { return s.run([&](const ModifiedBI& b) { return b.bezier(x.map, mm.map); }); });
       },
       "X"_a, "M"_a, py::kw_only(), "out"_a = py::none(),
       "Element Bezier points ((m K), d), K = (d+1)(d+2)/2: per element its d+1 vertices, then its edge points.");
@@ -114,9 +112,8 @@ void bind_phong(py::module_& m) {
           "M",
           [](const Phong& p, const py::object& X, const py::object& out) {
             const Input x = pose(X, p.vertices(), p.dim());
-            Output o = float_output(out, "out", static_cast<Eigen::Index>(p.vertices()) * p.dim(), p.dim());
-            without_gil([&] { o.map = p.M(x.map); });
-            return o.array;
+            return result(out, static_cast<Eigen::Index>(p.vertices()) * p.dim(), p.dim(),
+                          [&] { return without_gil([&] { return p.M(x.map); }); });
           },
           "X"_a, py::kw_only(), "out"_a = py::none(), "M ((n d), d) at pose X (n, d).")
       .def(

@@ -21,6 +21,17 @@ auto without_gil(F&& f) {
   return f();
 }
 
+/// A control-sized result (M, Bezier points) that compute() makes (releasing the GIL itself):
+/// moved into a new array when out is None (no copy; Fortran order, which FastEvaluator reads
+/// in place), else written into out (rows x cols, checked before compute() runs).
+template <class F>
+py::array result(const py::handle& out, Eigen::Index rows, Eigen::Index cols, F&& compute) {
+  if (out.is_none()) return to_numpy(compute());
+  Output o = float_output(out, "out", rows, cols);
+  o.map = compute();
+  return o.array;
+}
+
 /// An object whose calls change state it keeps (a FastEvaluator's per-call terms, a Deformer's
 /// evaluator): one call at a time. The lock is taken after the GIL is released and let go
 /// before it is taken back, so that a thread waiting here never holds the GIL.
