@@ -25,11 +25,14 @@ run_packages=(
 )
 # Testing: Catch2 (the test suite), Xvfb with xauth (the viewer's tests run under xvfb-run),
 # Python (scripts/test.sh --sanitizers), Google Benchmark (mbi-bench), matplotlib and git (the
-# benchmark report's plots and commit), clang with its libFuzzer runtime (scripts/fuzz.sh).
+# benchmark report's plots and commit), clang with its libFuzzer runtime (scripts/fuzz.sh);
+# the Python package (python/: pybind11, the headers, numpy, pytest, PyTorch for its autograd
+# wrapper, venv for the install test).
 test_packages=(
   catch2 xvfb xauth python3
   libbenchmark-dev python3-matplotlib git
   clang libclang-rt-14-dev
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-torch python3-venv python3-setuptools
 )
 
 case "${1:-test}" in
