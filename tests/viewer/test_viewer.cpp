@@ -10,6 +10,7 @@
 #include "viewer_run.hpp"
 
 #include <cmath>
+#include <map>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -220,4 +221,27 @@ TEST_CASE("mbi view: the 2D image-warp scene draws the warped picture", "[viewer
   REQUIRE(r.code == 0);
   const mbi::io::Image img = mbi::io::read_png(dir / "warp.png");
   CHECK(non_background(img) > 0.2);
+}
+
+TEST_CASE("mbi view --gpu: auto picks the CPU kernel on llvmpipe, and both evaluators draw the same picture",
+          "[viewer][xvfb]") {
+  TempDir dir("view");
+  const std::string scene = q(fs::path(source_dir()) / "scenes" / "twist-bar.toml");
+  std::map<std::string, mbi::io::Image> shots;
+  for (const std::string gpu : {"auto", "on", "off"}) {
+    const fs::path rep = dir / (gpu + ".json"), shot = dir / (gpu + ".png");
+    const Run r = view(scene + " --frames 3 --paused --no-panel --gpu " + gpu + " --report " + q(rep) +
+                           " --screenshot " + q(shot),
+                       dir);
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    const nlohmann::json ev = report(rep).back()["evaluator"];
+    const std::string name = ev["name"];
+    INFO(gpu << ": " << name << " (" << ev["why"].get<std::string>() << ")");
+    CHECK(name.rfind(gpu == "on" ? "gpu" : "cpu", 0) == 0);  // Xvfb's OpenGL is llvmpipe
+    if (gpu == "auto") CHECK(ev["why"].get<std::string>().find("llvmpipe") != std::string::npos);
+    shots[gpu] = mbi::io::read_png(shot);
+  }
+  CHECK(non_background(shots["off"]) > 0.01);
+  CHECK(differing(shots["on"], shots["off"]) < 0.002);
 }

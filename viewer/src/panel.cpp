@@ -30,7 +30,7 @@ void statistics(const Stage& stage, const FrameTimes& times) {
   ImGui::Text("%.1f fps   frame %d", times.fps, stage.pipe.frame());
   ImGui::Text("simulation %.2f ms  solve %.2f ms", tm.drive_ms, tm.solve_ms);
   ImGui::Text("interpolation %.2f ms  drawing %.2f ms", times.interpolation_ms, times.drawing_ms);
-  ImGui::TextDisabled("%s", stage.gpu.name().c_str());
+  ImGui::TextDisabled("%s (%s)", stage.evaluator.name().c_str(), stage.evaluator_why.c_str());
   ImGui::Text("%lld dense vertices, %lld control vertices, %lld elements",
               static_cast<long long>(stage.pipe.embedding().size()), static_cast<long long>(stage.U.rows()),
               static_cast<long long>(stage.T.rows()));

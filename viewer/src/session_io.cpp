@@ -162,6 +162,7 @@ nlohmann::json frame_report(const Stage& stage, const Interaction& in, const Fra
   fr["direct"] = in.direct();
   fr["method"] = pipeline::method_name(pipe.method());
   fr["alpha"] = stage.alpha;
+  fr["evaluator"] = {{"name", stage.evaluator.name()}, {"why", stage.evaluator_why}};
   fr["finite"] = X.allFinite();
   fr["timings_ms"] = {{"simulation", pipe.timings().drive_ms}, {"solve", pipe.timings().solve_ms},
                       {"interpolation", times.interpolation_ms}, {"drawing", times.drawing_ms}};

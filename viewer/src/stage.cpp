@@ -1,5 +1,7 @@
 #include "stage.hpp"
 
+#include "evaluation.hpp"
+
 #include <mbi/interp/embed.hpp>
 
 #include <algorithm>
@@ -10,6 +12,7 @@ namespace {
 
 gpu::GpuEvaluator& gpu_evaluator(pipeline::FramePipeline& pipe) {
   auto* gpu = dynamic_cast<gpu::GpuEvaluator*>(&pipe.evaluator());
+  if (auto* drawn = dynamic_cast<DrawnEvaluator*>(&pipe.evaluator())) gpu = &drawn->buffers();
   if (!gpu) throw ViewerError("the viewer shows pipelines built with Viewer::evaluator()");
   return *gpu;
 }
@@ -23,6 +26,7 @@ const io::Image* checked_image(const Shown& shown) {
 
 Stage::Stage(const Shown& shown)
     : pipe(shown.pipe),
+      evaluator(shown.pipe.evaluator()),
       gpu(gpu_evaluator(shown.pipe)),
       F(shown.faces),
       image(checked_image(shown)),

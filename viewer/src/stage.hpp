@@ -40,7 +40,9 @@ struct Stage {
   explicit Stage(const Shown& shown);
 
   pipeline::FramePipeline& pipe;
-  gpu::GpuEvaluator& gpu;
+  pipeline::Evaluator& evaluator;  ///< the pipeline's: the GPU pass or a DrawnEvaluator
+  gpu::GpuEvaluator& gpu;          ///< the buffers drawn
+  std::string evaluator_why;       ///< why this evaluator (the HUD)
   const Eigen::MatrixXi& F;
   const io::Image* image;
   const int d;                     ///< 2 or 3

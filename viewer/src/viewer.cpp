@@ -1,6 +1,7 @@
 #include <mbi/viewer/viewer.hpp>
 
 #include "draw.hpp"
+#include "evaluation.hpp"
 #include "interaction.hpp"
 #include "panel.hpp"
 #include "session_io.hpp"
@@ -11,6 +12,8 @@
 #include <backends/imgui_impl_glfw.h>
 #include <backends/imgui_impl_opengl3.h>
 #include <imgui.h>
+
+#include <mbi/scenes/evaluator.hpp>
 
 #include <algorithm>
 #include <cstdio>
@@ -69,7 +72,8 @@ GLFWwindow* open_window(const ViewerOptions& options) {
 struct Viewer::Impl {
   ViewerOptions opt;
   GLFWwindow* window = nullptr;
-  std::unique_ptr<gpu::Context> context;
+  std::shared_ptr<gpu::Context> context;
+  std::string evaluator_why;  ///< why options.gpu chose the evaluator (the HUD)
   std::unique_ptr<gpu::Renderer> renderer;
   Camera camera;
   int frame = 0;
@@ -161,10 +165,12 @@ Viewer::~Viewer() {
   glfwTerminate();
 }
 
-std::unique_ptr<gpu::GpuEvaluator> Viewer::evaluator() {
-  gpu::GpuOptions o;
-  o.measure = true;
-  return std::make_unique<gpu::GpuEvaluator>(*impl_->context, o);
+std::unique_ptr<pipeline::Evaluator> Viewer::evaluator() {
+  const EvaluatorChoice choice = choose_evaluator(impl_->opt.gpu, impl_->context->renderer());
+  impl_->evaluator_why = choice.why;
+  scenes::Evaluation e = scenes::make_evaluator(choice.use, [](const std::string&) {}, impl_->context);
+  if (e.context) return std::move(e.evaluator);
+  return std::make_unique<DrawnEvaluator>(std::move(e.evaluator), std::make_unique<gpu::GpuEvaluator>(*impl_->context));
 }
 
 int Viewer::frame() const { return impl_->frame; }
@@ -245,6 +251,7 @@ void Viewer::Impl::finish() { files->finish(last_shot); }
 void Viewer::show(const Shown& shown) {
   Impl& s = *impl_;
   Stage stage(shown);
+  stage.evaluator_why = s.evaluator_why;
   s.renderer->set_faces(shown.faces);
   stage.frame(s.camera, s.opt.up);
   stage.set_views(s.opt.split);
