@@ -5,6 +5,7 @@
 
 #include <mbi/io/image.hpp>
 #include <mbi/viewer/camera.hpp>
+#include <mbi/viewer/layout.hpp>
 
 #include "common/grid_meshes.hpp"
 #include "viewer_run.hpp"
@@ -244,4 +245,52 @@ TEST_CASE("mbi view --gpu: auto picks the CPU kernel on llvmpipe, and both evalu
   }
   CHECK(non_background(shots["off"]) > 0.01);
   CHECK(differing(shots["on"], shots["off"]) < 0.002);
+}
+
+TEST_CASE("viewer layout: the panel and the views never overlap, at framebuffer scale 1 and 2, open or folded",
+          "[viewer]") {
+  for (const double scale : {1.0, 2.0})
+    for (const int views : {1, 2})
+      for (const bool collapsed : {false, true})
+        for (const auto& [w, h] : {std::pair{1280, 720}, std::pair{640, 480}, std::pair{160, 120}, std::pair{3000, 900}}) {
+          const int fbw = static_cast<int>(w * scale), fbh = static_cast<int>(h * scale);
+          const Layout l = make_layout(w, h, fbw, fbh, views, true, collapsed);
+          INFO(w << " x " << h << " at scale " << scale << ", " << views << " views, folded " << collapsed);
+          REQUIRE(l.views.size() == static_cast<size_t>(views));
+          CHECK(l.panel.w > 0);
+          double covered = l.panel.w;
+          for (size_t k = 0; k < l.views.size(); ++k) {
+            const Rect& v = l.views[k];
+            const Rect& fb = l.view_viewports[k];
+            CHECK_FALSE(overlap(l.panel, v));
+            for (size_t j = 0; j < k; ++j) CHECK_FALSE(overlap(l.views[j], v));
+            CHECK(fb.x >= l.panel.w * scale - 1e-9);  // in framebuffer pixels too
+            CHECK(fb.x + fb.w <= fbw);
+            CHECK(fb.x == Approx(v.x * scale));
+            CHECK(v.w > 0);
+            covered += v.w;
+          }
+          CHECK(covered == Approx(w).margin(1.0));  // the views fill the rest of the window
+        }
+  const Layout none = make_layout(800, 600, 800, 600, 2, false, false);
+  CHECK(none.panel.w == 0);
+  CHECK(none.views[0].x == 0);
+}
+
+TEST_CASE("mbi view: the docked panel covers no view, each view is labelled with its method", "[viewer][xvfb]") {
+  TempDir dir("view");
+  const Run r = view(q(fs::path(source_dir()) / "scenes" / "twist-bar.toml") + " --frames 3 --method modified-bi --report " +
+                         q(dir / "layout.json"),
+                     dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const nlohmann::json l = report(dir / "layout.json").back()["layout"];
+  auto rect = [](const nlohmann::json& j) { return Rect{j[0], j[1], j[2], j[3]}; };
+  const Rect panel = rect(l["panel"]);
+  CHECK(panel.w > 100);
+  REQUIRE(l["views"].size() == 2);
+  CHECK(l["views"][0]["label"] == "bi");
+  CHECK(l["views"][1]["label"] == "modified-bi");
+  for (const auto& v : l["views"]) CHECK_FALSE(overlap(panel, rect(v["rect"])));
+  CHECK_FALSE(overlap(rect(l["views"][0]["rect"]), rect(l["views"][1]["rect"])));
 }

@@ -39,7 +39,8 @@ void draw_views(gpu::Renderer& renderer, Stage& stage, const Interaction& in, co
   const int n = static_cast<int>(stage.views.size());
   double gpu_ms = 0;
   for (int k = 0; k < n; ++k) {
-    const int x0 = fb_width * k / n, x1 = fb_width * (k + 1) / n;
+    const Rect& vp_rect = stage.layout.view_viewports[static_cast<size_t>(k)];
+    const int x0 = static_cast<int>(vp_rect.x), x1 = static_cast<int>(vp_rect.x + vp_rect.w);
     glViewport(x0, 0, x1 - x0, fb_height);
     stage.evaluator.evaluate(stage.pipe.bezier_with(stage.views[static_cast<size_t>(k)]), stage.d == 3);
     gpu_ms += stage.evaluator.timings().upload_ms + stage.evaluator.timings().pass_ms;

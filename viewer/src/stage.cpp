@@ -82,8 +82,11 @@ Eigen::MatrixXd Stage::control_positions_3d() const {
   return X3;
 }
 
-double Stage::view_width(const WindowSize& window) const {
-  return static_cast<double>(window.width) / static_cast<int>(views.size());
+int Stage::view_at(double x) const {
+  const int n = static_cast<int>(layout.views.size());
+  int k = 0;
+  while (k + 1 < n && x >= layout.views[static_cast<size_t>(k + 1)].x) ++k;
+  return k;
 }
 
 }  // namespace mbi::viewer

@@ -126,6 +126,14 @@ struct Viewer::Impl {
     return {std::max(w, 1), std::max(h, 1)};
   }
 
+  // The panel and the views for this window size and the views shown
+  void lay_out(Stage& stage) const {
+    const WindowSize w = window_size();
+    int fbw, fbh;
+    glfwGetFramebufferSize(window, &fbw, &fbh);
+    stage.layout = make_layout(w.width, w.height, std::max(fbw, 1), std::max(fbh, 1), static_cast<int>(stage.views.size()),
+                               opt.panel, controls.collapsed);
+  }
   void handle(const Event& e, Stage& stage, Interaction& in);
   void key(const std::string& k, Stage& stage, Interaction& in);
   void snapshot();
@@ -200,7 +208,8 @@ void Viewer::Impl::key(const std::string& k, Stage& stage, Interaction& in) {
   } else if (k == "s") {
     opt.split = !opt.split;
     stage.set_views(opt.split);
-  } else if (k == "w") opt.wireframe = !opt.wireframe;
+  } else if (k == "c") controls.toggle_collapse = true;
+  else if (k == "w") opt.wireframe = !opt.wireframe;
   else if (k == "h") opt.handles = !opt.handles;
   else if (k == "f" || k == "v") stage.frame(camera, opt.up);
   else if (k == "[" || k == "]") stage.set_alpha(stage.alpha * (k == "[" ? 0.5 : 2.0));
@@ -240,6 +249,7 @@ Eigen::MatrixXd Viewer::Impl::draw(Stage& stage, Interaction& in) {
   int fbw, fbh;
   glfwGetFramebufferSize(window, &fbw, &fbh);
   Eigen::MatrixXd X3 = stage.control_positions_3d();
+  lay_out(stage);
   draw_views(*renderer, stage, in, camera, opt, X3, fbw, fbh, times);
   draw_gui(stage, in, opt, controls, times, window_size());
   last_shot = read_framebuffer(fbw, fbh);
@@ -264,6 +274,7 @@ void Viewer::show(const Shown& shown) {
   stage.pipe.step(false);  // frame 0
   while (!glfwWindowShouldClose(s.window) && !s.controls.close) {
     glfwPollEvents();
+    s.lay_out(stage);
     for (const Event& e : s.inputs.take(s.frame)) s.handle(e, stage, in);
     if (shown.per_frame) shown.per_frame(*this);
     s.advance(stage, in);

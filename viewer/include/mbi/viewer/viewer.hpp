@@ -1,7 +1,8 @@
 #pragma once
 // mbi::viewer -- the interactive viewer (`mbi view SCENE`): a GLFW window with OpenGL core, a
-// Dear ImGui panel, the dense mesh drawn from GL buffers (filled by the GPU pass or the CPU kernel: options.gpu), driven by one frame
-// pipeline. Pokes (grab the surface, a bounded spring pulls it), direct mode (click control
+// Dear ImGui panel docked at the left, the views labelled with their method beside it (layout.hpp),
+// the dense mesh drawn from GL buffers that the GPU pass or the CPU kernel fills (options.gpu),
+// driven by one frame pipeline. Pokes (grab the surface, a bounded spring pulls it), direct mode (click control
 // vertices to make them handles and drag them: paper Eq. 10/11), BI | modified-BI split view.
 //
 // A few lines open a viewer on any pipeline (in the spirit of polyscope):
