@@ -3,6 +3,25 @@
 // at frame 10,000 is at most 10 MB above that at frame 100.
 #include <catch2/catch.hpp>
 
+// Under AddressSanitizer (the sanitizer pass: -O0) frames are many times slower and freed memory
+// waits in ASan's quarantine (up to 256 MB), so resident memory says nothing about leaks there:
+// that pass runs a tenth of the session for its reports and leaves the memory bound to the
+// release pass.
+#if defined(__SANITIZE_ADDRESS__)
+#define MBI_SOAK_UNDER_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define MBI_SOAK_UNDER_ASAN 1
+#endif
+#endif
+#ifdef MBI_SOAK_UNDER_ASAN
+constexpr int kFrames = 1000;
+constexpr bool kCheckMemory = false;
+#else
+constexpr int kFrames = 10000;
+constexpr bool kCheckMemory = true;
+#endif
+
 #include "viewer_run.hpp"
 
 #include <cmath>
@@ -13,7 +32,6 @@ using mbi::test::quoted;
 
 TEST_CASE("mbi view soak: 10,000 frames of pokes, method switches and alpha changes in bounded memory",
           "[viewer][xvfb][soak]") {
-  constexpr int kFrames = 10000;
   mbi::test::TempDir dir("soak");
   {
     // every 100 frames a poke (the right view's middle in a 320 x 240 window, pulled for 30
@@ -52,5 +70,5 @@ TEST_CASE("mbi view soak: 10,000 frames of pokes, method switches and alpha chan
   const long long at100 = rep[100]["resident_kb"], at_end = rep[kFrames - 1]["resident_kb"];
   WARN("resident memory: frame 100 " << at100 << " kB, frame " << kFrames << " " << at_end << " kB (+"
                                      << at_end - at100 << " kB); " << poked << " poked frames");
-  CHECK(at_end - at100 <= 10000);
+  if (kCheckMemory) CHECK(at_end - at100 <= 10000);
 }
