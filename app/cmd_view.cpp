@@ -1,12 +1,13 @@
 // mbi view SCENE [--mesh FILE] [--method M] [--script FILE] [--record FILE] [--frames N]
 //               [--screenshot PATH] [--report FILE] [--force] [--width W] [--height H]
-//               [--paused] [--no-split] [--wireframe] [--no-panel]
+//               [--paused] [--no-split] [--wireframe] [--no-panel] [--gpu auto|on|off]
 #include "commands.hpp"
 
 #include <mbi/pipeline/method.hpp>
 #include <mbi/viewer/scene_view.hpp>
 
 #include <cstdio>
+#include <optional>
 
 namespace mbi::cli {
 namespace {
@@ -14,12 +15,14 @@ namespace {
 struct ViewArgs {
   std::string scene, mesh, method, script, record, screenshot, report;
   int frames = 0, width = 1280, height = 720;
+  std::optional<scenes::GpuUse> gpu;
   bool paused = false, no_split = false, wireframe = false, no_panel = false, force = false;
 };
 
 int run_view(const ViewArgs& a) {
   scenes::Scene sc = scenes::load_scene(a.scene);
   if (!a.method.empty()) sc.interpolation.method = *pipeline::parse_method(a.method);
+  if (a.gpu) sc.interpolation.gpu = *a.gpu;
   viewer::ViewerOptions o;
   o.width = a.width;
   o.height = a.height;
@@ -58,6 +61,9 @@ const Registrar reg{
       sub.add_flag("--paused", a->paused, "start paused");
       sub.add_flag("--no-split", a->no_split, "only the scene's method (no BI panel)");
       sub.add_flag("--wireframe", a->wireframe, "show the control mesh's edges");
+      add_choice(sub, "--gpu", a->gpu, scenes::kGpuUseNames,
+                 "evaluator: auto (the CPU kernel on a software OpenGL renderer such as llvmpipe, else "
+                 "the GPU), on (the GPU), off (the CPU); default: the scene's interpolation.gpu, auto");
       sub.add_flag("--no-panel", a->no_panel, "hide the control panel (clean screenshots)");
       return [a] { return run_view(*a); };
     }};

@@ -5,11 +5,13 @@
 
 #include <mbi/io/image.hpp>
 #include <mbi/viewer/camera.hpp>
+#include <mbi/viewer/layout.hpp>
 
 #include "common/grid_meshes.hpp"
 #include "viewer_run.hpp"
 
 #include <cmath>
+#include <map>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -220,4 +222,75 @@ TEST_CASE("mbi view: the 2D image-warp scene draws the warped picture", "[viewer
   REQUIRE(r.code == 0);
   const mbi::io::Image img = mbi::io::read_png(dir / "warp.png");
   CHECK(non_background(img) > 0.2);
+}
+
+TEST_CASE("mbi view --gpu: auto picks the CPU kernel on llvmpipe, and both evaluators draw the same picture",
+          "[viewer][xvfb]") {
+  TempDir dir("view");
+  const std::string scene = q(fs::path(source_dir()) / "scenes" / "twist-bar.toml");
+  std::map<std::string, mbi::io::Image> shots;
+  for (const std::string gpu : {"auto", "on", "off"}) {
+    const fs::path rep = dir / (gpu + ".json"), shot = dir / (gpu + ".png");
+    const Run r = view(scene + " --frames 3 --paused --no-panel --gpu " + gpu + " --report " + q(rep) +
+                           " --screenshot " + q(shot),
+                       dir);
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    const nlohmann::json ev = report(rep).back()["evaluator"];
+    const std::string name = ev["name"];
+    INFO(gpu << ": " << name << " (" << ev["why"].get<std::string>() << ")");
+    CHECK(name.rfind(gpu == "on" ? "gpu" : "cpu", 0) == 0);  // Xvfb's OpenGL is llvmpipe
+    if (gpu == "auto") CHECK(ev["why"].get<std::string>().find("llvmpipe") != std::string::npos);
+    shots[gpu] = mbi::io::read_png(shot);
+  }
+  CHECK(non_background(shots["off"]) > 0.01);
+  CHECK(differing(shots["on"], shots["off"]) < 0.002);
+}
+
+TEST_CASE("viewer layout: the panel and the views never overlap, at framebuffer scale 1 and 2, open or folded",
+          "[viewer]") {
+  for (const double scale : {1.0, 2.0})
+    for (const int views : {1, 2})
+      for (const bool collapsed : {false, true})
+        for (const auto& [w, h] : {std::pair{1280, 720}, std::pair{640, 480}, std::pair{160, 120}, std::pair{3000, 900}}) {
+          const int fbw = static_cast<int>(w * scale), fbh = static_cast<int>(h * scale);
+          const Layout l = make_layout(w, h, fbw, fbh, views, true, collapsed);
+          INFO(w << " x " << h << " at scale " << scale << ", " << views << " views, folded " << collapsed);
+          REQUIRE(l.views.size() == static_cast<size_t>(views));
+          CHECK(l.panel.w > 0);
+          double covered = l.panel.w;
+          for (size_t k = 0; k < l.views.size(); ++k) {
+            const Rect& v = l.views[k];
+            const Rect& fb = l.view_viewports[k];
+            CHECK_FALSE(overlap(l.panel, v));
+            for (size_t j = 0; j < k; ++j) CHECK_FALSE(overlap(l.views[j], v));
+            CHECK(fb.x >= l.panel.w * scale - 1e-9);  // in framebuffer pixels too
+            CHECK(fb.x + fb.w <= fbw);
+            CHECK(fb.x == Approx(v.x * scale));
+            CHECK(v.w > 0);
+            covered += v.w;
+          }
+          CHECK(covered == Approx(w).margin(1.0));  // the views fill the rest of the window
+        }
+  const Layout none = make_layout(800, 600, 800, 600, 2, false, false);
+  CHECK(none.panel.w == 0);
+  CHECK(none.views[0].x == 0);
+}
+
+TEST_CASE("mbi view: the docked panel covers no view, each view is labelled with its method", "[viewer][xvfb]") {
+  TempDir dir("view");
+  const Run r = view(q(fs::path(source_dir()) / "scenes" / "twist-bar.toml") + " --frames 3 --method modified-bi --report " +
+                         q(dir / "layout.json"),
+                     dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const nlohmann::json l = report(dir / "layout.json").back()["layout"];
+  auto rect = [](const nlohmann::json& j) { return Rect{j[0], j[1], j[2], j[3]}; };
+  const Rect panel = rect(l["panel"]);
+  CHECK(panel.w > 100);
+  REQUIRE(l["views"].size() == 2);
+  CHECK(l["views"][0]["label"] == "bi");
+  CHECK(l["views"][1]["label"] == "modified-bi");
+  for (const auto& v : l["views"]) CHECK_FALSE(overlap(panel, rect(v["rect"])));
+  CHECK_FALSE(overlap(rect(l["views"][0]["rect"]), rect(l["views"][1]["rect"])));
 }

@@ -11,6 +11,7 @@ void view_scene(const scenes::Scene& scene_in, const std::filesystem::path& mesh
   scenes::Scene scene = scene_in;
   for (const std::filesystem::path& p : scenes::input_files(scene, mesh_override)) options.inputs.push_back(p);
   options.up = scene.output.up;
+  options.gpu = scene.interpolation.gpu;
   if (options.title == "mbi") options.title = "mbi view: " + scene.name;
   // the files before any work, the models before the window
   auto files = std::make_unique<SessionFiles>(options);

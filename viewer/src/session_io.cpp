@@ -162,6 +162,13 @@ nlohmann::json frame_report(const Stage& stage, const Interaction& in, const Fra
   fr["direct"] = in.direct();
   fr["method"] = pipeline::method_name(pipe.method());
   fr["alpha"] = stage.alpha;
+  auto rect = [](const Rect& r) { return nlohmann::json{r.x, r.y, r.w, r.h}; };
+  nlohmann::json views = nlohmann::json::array();
+  for (size_t k = 0; k < stage.layout.views.size(); ++k)
+    views.push_back({{"rect", rect(stage.layout.views[k])}, {"viewport", rect(stage.layout.view_viewports[k])},
+                     {"label", pipeline::method_name(stage.views[k])}});
+  fr["layout"] = {{"window", {window.width, window.height}}, {"panel", rect(stage.layout.panel)}, {"views", views}};
+  fr["evaluator"] = {{"name", stage.evaluator.name()}, {"why", stage.evaluator_why}};
   fr["finite"] = X.allFinite();
   fr["timings_ms"] = {{"simulation", pipe.timings().drive_ms}, {"solve", pipe.timings().solve_ms},
                       {"interpolation", times.interpolation_ms}, {"drawing", times.drawing_ms}};
@@ -186,12 +193,11 @@ nlohmann::json frame_report(const Stage& stage, const Interaction& in, const Fra
   fr["camera"] = {{"target", xyz(camera.target)}, {"radius", camera.radius}, {"yaw", camera.yaw}, {"pitch", camera.pitch}};
   if (const long long kb = resident_kb(); kb >= 0) fr["resident_kb"] = kb;
   if (controls_on_screen) {
-    const int last = static_cast<int>(stage.views.size()) - 1;
-    const double vw = stage.view_width(window);
+    const Rect& r = stage.layout.views.back();
     nlohmann::json cs = nlohmann::json::array();
     for (Eigen::Index i = 0; i < X3.rows(); ++i) {
-      const Eigen::Vector2d q = camera.project(X3.row(i).transpose(), static_cast<int>(std::lround(vw)), window.height);
-      cs.push_back({q.x() + last * vw, q.y()});
+      const Eigen::Vector2d q = camera.project(X3.row(i).transpose(), static_cast<int>(std::lround(r.w)), window.height);
+      cs.push_back({q.x() + r.x, q.y()});
     }
     fr["control_window"] = cs;
   }

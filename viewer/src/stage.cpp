@@ -1,5 +1,7 @@
 #include "stage.hpp"
 
+#include "evaluation.hpp"
+
 #include <mbi/interp/embed.hpp>
 
 #include <algorithm>
@@ -10,6 +12,7 @@ namespace {
 
 gpu::GpuEvaluator& gpu_evaluator(pipeline::FramePipeline& pipe) {
   auto* gpu = dynamic_cast<gpu::GpuEvaluator*>(&pipe.evaluator());
+  if (auto* drawn = dynamic_cast<DrawnEvaluator*>(&pipe.evaluator())) gpu = &drawn->buffers();
   if (!gpu) throw ViewerError("the viewer shows pipelines built with Viewer::evaluator()");
   return *gpu;
 }
@@ -23,6 +26,7 @@ const io::Image* checked_image(const Shown& shown) {
 
 Stage::Stage(const Shown& shown)
     : pipe(shown.pipe),
+      evaluator(shown.pipe.evaluator()),
       gpu(gpu_evaluator(shown.pipe)),
       F(shown.faces),
       image(checked_image(shown)),
@@ -78,8 +82,11 @@ Eigen::MatrixXd Stage::control_positions_3d() const {
   return X3;
 }
 
-double Stage::view_width(const WindowSize& window) const {
-  return static_cast<double>(window.width) / static_cast<int>(views.size());
+int Stage::view_at(double x) const {
+  const int n = static_cast<int>(layout.views.size());
+  int k = 0;
+  while (k + 1 < n && x >= layout.views[static_cast<size_t>(k + 1)].x) ++k;
+  return k;
 }
 
 }  // namespace mbi::viewer

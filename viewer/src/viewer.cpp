@@ -1,6 +1,7 @@
 #include <mbi/viewer/viewer.hpp>
 
 #include "draw.hpp"
+#include "evaluation.hpp"
 #include "interaction.hpp"
 #include "panel.hpp"
 #include "session_io.hpp"
@@ -11,6 +12,8 @@
 #include <backends/imgui_impl_glfw.h>
 #include <backends/imgui_impl_opengl3.h>
 #include <imgui.h>
+
+#include <mbi/scenes/evaluator.hpp>
 
 #include <algorithm>
 #include <cstdio>
@@ -69,7 +72,8 @@ GLFWwindow* open_window(const ViewerOptions& options) {
 struct Viewer::Impl {
   ViewerOptions opt;
   GLFWwindow* window = nullptr;
-  std::unique_ptr<gpu::Context> context;
+  std::shared_ptr<gpu::Context> context;
+  std::string evaluator_why;  ///< why options.gpu chose the evaluator (the HUD)
   std::unique_ptr<gpu::Renderer> renderer;
   Camera camera;
   int frame = 0;
@@ -122,6 +126,14 @@ struct Viewer::Impl {
     return {std::max(w, 1), std::max(h, 1)};
   }
 
+  // The panel and the views for this window size and the views shown
+  void lay_out(Stage& stage) const {
+    const WindowSize w = window_size();
+    int fbw, fbh;
+    glfwGetFramebufferSize(window, &fbw, &fbh);
+    stage.layout = make_layout(w.width, w.height, std::max(fbw, 1), std::max(fbh, 1), static_cast<int>(stage.views.size()),
+                               opt.panel, controls.collapsed);
+  }
   void handle(const Event& e, Stage& stage, Interaction& in);
   void key(const std::string& k, Stage& stage, Interaction& in);
   void snapshot();
@@ -161,10 +173,12 @@ Viewer::~Viewer() {
   glfwTerminate();
 }
 
-std::unique_ptr<gpu::GpuEvaluator> Viewer::evaluator() {
-  gpu::GpuOptions o;
-  o.measure = true;
-  return std::make_unique<gpu::GpuEvaluator>(*impl_->context, o);
+std::unique_ptr<pipeline::Evaluator> Viewer::evaluator() {
+  const EvaluatorChoice choice = choose_evaluator(impl_->opt.gpu, impl_->context->renderer());
+  impl_->evaluator_why = choice.why;
+  scenes::Evaluation e = scenes::make_evaluator(choice.use, [](const std::string&) {}, impl_->context);
+  if (e.context) return std::move(e.evaluator);
+  return std::make_unique<DrawnEvaluator>(std::move(e.evaluator), std::make_unique<gpu::GpuEvaluator>(*impl_->context));
 }
 
 int Viewer::frame() const { return impl_->frame; }
@@ -194,7 +208,8 @@ void Viewer::Impl::key(const std::string& k, Stage& stage, Interaction& in) {
   } else if (k == "s") {
     opt.split = !opt.split;
     stage.set_views(opt.split);
-  } else if (k == "w") opt.wireframe = !opt.wireframe;
+  } else if (k == "c") controls.toggle_collapse = true;
+  else if (k == "w") opt.wireframe = !opt.wireframe;
   else if (k == "h") opt.handles = !opt.handles;
   else if (k == "f" || k == "v") stage.frame(camera, opt.up);
   else if (k == "[" || k == "]") stage.set_alpha(stage.alpha * (k == "[" ? 0.5 : 2.0));
@@ -234,6 +249,7 @@ Eigen::MatrixXd Viewer::Impl::draw(Stage& stage, Interaction& in) {
   int fbw, fbh;
   glfwGetFramebufferSize(window, &fbw, &fbh);
   Eigen::MatrixXd X3 = stage.control_positions_3d();
+  lay_out(stage);
   draw_views(*renderer, stage, in, camera, opt, X3, fbw, fbh, times);
   draw_gui(stage, in, opt, controls, times, window_size());
   last_shot = read_framebuffer(fbw, fbh);
@@ -245,6 +261,7 @@ void Viewer::Impl::finish() { files->finish(last_shot); }
 void Viewer::show(const Shown& shown) {
   Impl& s = *impl_;
   Stage stage(shown);
+  stage.evaluator_why = s.evaluator_why;
   s.renderer->set_faces(shown.faces);
   stage.frame(s.camera, s.opt.up);
   stage.set_views(s.opt.split);
@@ -257,6 +274,7 @@ void Viewer::show(const Shown& shown) {
   stage.pipe.step(false);  // frame 0
   while (!glfwWindowShouldClose(s.window) && !s.controls.close) {
     glfwPollEvents();
+    s.lay_out(stage);
     for (const Event& e : s.inputs.take(s.frame)) s.handle(e, stage, in);
     if (shown.per_frame) shown.per_frame(*this);
     s.advance(stage, in);

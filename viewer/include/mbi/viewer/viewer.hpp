@@ -1,7 +1,8 @@
 #pragma once
 // mbi::viewer -- the interactive viewer (`mbi view SCENE`): a GLFW window with OpenGL core, a
-// Dear ImGui panel, the dense mesh drawn from the GPU evaluator's buffers, driven by one frame
-// pipeline. Pokes (grab the surface, a bounded spring pulls it), direct mode (click control
+// Dear ImGui panel docked at the left, the views labelled with their method beside it (layout.hpp),
+// the dense mesh drawn from GL buffers that the GPU pass or the CPU kernel fills (options.gpu),
+// driven by one frame pipeline. Pokes (grab the surface, a bounded spring pulls it), direct mode (click control
 // vertices to make them handles and drag them: paper Eq. 10/11), BI | modified-BI split view.
 //
 // A few lines open a viewer on any pipeline (in the spirit of polyscope):
@@ -23,6 +24,7 @@
 #include <mbi/gpu/evaluator.hpp>
 #include <mbi/io/image.hpp>
 #include <mbi/pipeline/frame_pipeline.hpp>
+#include <mbi/scenes/scene.hpp>
 #include <mbi/sim/corotational.hpp>
 #include <mbi/viewer/error.hpp>
 
@@ -32,10 +34,6 @@
 #include <optional>
 #include <string>
 #include <vector>
-
-namespace mbi::scenes {
-struct Scene;
-}
 
 namespace mbi::viewer {
 
@@ -47,6 +45,8 @@ struct ViewerOptions {
   bool handles = true;                   ///< handle markers (direct mode)
   bool playing = true;
   bool panel = true;                     ///< the ImGui panel
+  /// Evaluator: Auto picks the CPU kernel on a software OpenGL renderer, else the GPU pass.
+  scenes::GpuUse gpu = scenes::GpuUse::Auto;
   int frames = 0;                        ///< > 0: close after this many frames
   std::filesystem::path screenshot;      ///< written when the viewer closes (PNG)
   std::filesystem::path script;          ///< input events to replay
@@ -83,8 +83,9 @@ class Viewer {
   Viewer(const Viewer&) = delete;
   Viewer& operator=(const Viewer&) = delete;
 
-  /// A GPU evaluator in the viewer's context, for the pipeline to show.
-  std::unique_ptr<gpu::GpuEvaluator> evaluator();
+  /// The evaluator options.gpu asks for, for the pipeline to show: the GPU pass in the viewer's
+  /// context, or the CPU kernel uploading its results into the buffers the renderer draws.
+  std::unique_ptr<pipeline::Evaluator> evaluator();
 
   /// Shows `shown` until the window closes or options.frames pass, then writes the files the
   /// options ask for (the first show() only). Throws ViewerError (a pipeline not built with
