@@ -548,7 +548,7 @@ TEST_CASE("gpu: a run on the GPU writes what the CPU writes, within float accura
   }
 }
 
-TEST_CASE("gpu: without OpenGL, auto falls back and says so once; on is an error", "[runner][gpu]") {
+TEST_CASE("gpu: without OpenGL, auto falls back and says so once, on is an error", "[runner][gpu]") {
   mbi::test::TempDir dir("nogl");
   const Scene sc = load_scene(source_dir() / "scenes" / "twist-bar.toml");
   ::setenv("MBI_GL", "none", 1);
