@@ -3,7 +3,8 @@
 #         -DOUTPUTS=none|any -DMESSAGE=<regex> -DARGS=<;-list> -P bad_input_case.cmake
 # Placeholders in ARGS: @BAD@ the corpus folder, @OUT@ an empty folder for this case,
 # @FIFO@ a named pipe made in @OUT@, @DIR@ an (empty) directory made in @OUT@, @FILE@ a
-# regular file made in @OUT@ (so @FILE@/x cannot be created).
+# regular file made in @OUT@ (so @FILE@/x cannot be created), @LOCKED@ an empty directory made
+# in @OUT@ that another process (flock(1)) holds locked while mbi runs (io::FolderLock).
 # Checks: the exit code, stderr matching MESSAGE, no crash (sanitizer reports fail the case), no
 # output left under @OUT@ when OUTPUTS is none, and every corpus file unchanged (inputs are
 # never modified).
@@ -31,6 +32,10 @@ foreach(a IN LISTS ARGS)
     file(MAKE_DIRECTORY "${out}/a-dir")
     list(APPEND setup_made "${out}/a-dir")
   endif()
+  if(a MATCHES "@LOCKED@" AND NOT EXISTS "${out}/locked")
+    file(MAKE_DIRECTORY "${out}/locked")
+    list(APPEND setup_made "${out}/locked")
+  endif()
   if(a MATCHES "@FILE@" AND NOT EXISTS "${out}/a-file")
     file(WRITE "${out}/a-file" "not a folder\n")
     list(APPEND setup_made "${out}/a-file")
@@ -39,6 +44,7 @@ foreach(a IN LISTS ARGS)
   string(REPLACE "@FIFO@" "${out}/in.fifo" a "${a}")
   string(REPLACE "@DIR@" "${out}/a-dir" a "${a}")
   string(REPLACE "@FILE@" "${out}/a-file" a "${a}")
+  string(REPLACE "@LOCKED@" "${out}/locked" a "${a}")
   string(REPLACE "@OUT@" "${out}" a "${a}")
   list(APPEND args "${a}")
 endforeach()
@@ -51,9 +57,19 @@ foreach(f IN LISTS corpus)
   string(APPEND before "${f} ${h}\n")
 endforeach()
 
-execute_process(COMMAND "${EXE}" ${args}
-  WORKING_DIRECTORY "${WORK}"
-  RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr TIMEOUT 60)
+if(ARGS MATCHES "@LOCKED@")
+  # a pipeline: flock holds the folder and says so, then mbi starts; the holder ends on SIGPIPE
+  # once mbi has gone
+  execute_process(
+    COMMAND flock "${out}/locked" sh -c "echo locked; while sleep 0.1; do echo; done"
+    COMMAND sh -c "read held && exec \"$0\" \"$@\"" "${EXE}" ${args}
+    WORKING_DIRECTORY "${WORK}"
+    RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr TIMEOUT 60)
+else()
+  execute_process(COMMAND "${EXE}" ${args}
+    WORKING_DIRECTORY "${WORK}"
+    RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr TIMEOUT 60)
+endif()
 
 set(failures "")
 if(NOT code STREQUAL "${EXIT}")
