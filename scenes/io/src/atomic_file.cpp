@@ -90,6 +90,10 @@ std::string staging_suffix(const std::filesystem::path& target) {
   return ext;
 }
 
+// How long OutputSet waits for a folder another process holds: a commit holds it for
+// milliseconds, a run for its whole length.
+constexpr std::chrono::seconds kCommitWait(5);
+
 std::string errno_text() { return errno != 0 ? std::strerror(errno) : "an I/O error"; }
 
 }  // namespace
@@ -267,7 +271,7 @@ std::size_t OutputSet::add(const std::filesystem::path& target, const std::strin
   {  // a folder a run holds is refused now, not after the work
     const std::filesystem::path dir = target.parent_path().empty() ? "." : target.parent_path();
     try {
-      if (std::filesystem::is_directory(dir, ec)) FolderLock probe(dir, std::chrono::seconds(10));
+      if (std::filesystem::is_directory(dir, ec)) FolderLock probe(dir, kCommitWait);
     } catch (const IoError& err) {
       throw IoError(named + ": " + err.what());
     }
@@ -336,7 +340,7 @@ void OutputSet::commit() {
   });
   std::vector<FolderLock> locks;
   for (std::size_t k = 0; k < dirs.size(); ++k)
-    if (k == 0 || !(dirs[k].first == dirs[k - 1].first)) locks.emplace_back(dirs[k].second, std::chrono::seconds(10));
+    if (k == 0 || !(dirs[k].first == dirs[k - 1].first)) locks.emplace_back(dirs[k].second, kCommitWait);
   // Every output is complete before the first rename. Renames within one folder do not fail
   // for a checked target (the folder was writable at add()); they run one after another, so only
   // a change of the folders under our feet between two of them could leave some done. The

@@ -71,8 +71,8 @@ FolderLock::FolderLock(const std::filesystem::path& dir, std::chrono::millisecon
     if (err != EWOULDBLOCK)
       throw IoError(shown.string() + ": cannot lock this folder (" + std::strerror(err) + ")");
     const std::string holder = folder_lock_holder(shown);
-    throw IoError(shown.string() + ": another mbi command is writing into this folder (" +
-                  (holder.empty() ? "its process is not known" : holder) +
+    throw IoError(shown.string() + ": another process is writing into this folder (" +
+                  (holder.empty() ? "which one is not known" : holder) +
                   "); wait until it ends, or choose another folder");
   }
 }

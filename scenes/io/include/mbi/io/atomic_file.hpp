@@ -91,6 +91,10 @@ std::optional<FileId> file_id(const std::filesystem::path& p);
 /// renames every staging file over its target at the end. Destroyed without commit() (an error
 /// on the way), it removes every staging file, and no target has been created or replaced.
 ///
+/// Two commands never mix their outputs: add() and commit() take the lock of each target's
+/// folder (FolderLock, folder_lock.hpp), waiting up to 5 s while another process holds it (a
+/// commit holds it for milliseconds; a run holds its folder to the end, and is then named).
+///
 /// The overwrite rule of every mbi command: an existing target is refused unless `force`; a
 /// target that is one of the command's inputs (by file identity: other spellings, hard links and
 /// symbolic links included) or another output of the same command is refused even with `force`.
