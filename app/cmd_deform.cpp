@@ -223,6 +223,28 @@ void print_summary(const DeformArgs& a, const Problem& pb, const interp::Embeddi
               r.embed_ms, r.precompute_ms, r.phong_ms, r.solve_ms, r.evaluate_ms);
 }
 
+// The deformed dense model (positions `out`, p x d; `normals` or null) as output i of `outputs`.
+// The format follows the extension of `name`; a surface keeps what its file held besides
+// positions (write_surface); points alone make a vertices-only surface.
+void write_deformed(const io::OutputSet& outputs, std::size_t i, const std::string& name, const Problem& pb,
+                    const Eigen::MatrixXd& out, const Eigen::MatrixXd* normals) {
+  Eigen::MatrixXd full(out.rows(), out.cols() + pb.P_extra.cols());
+  full << out, pb.P_extra;
+  if (is_point_list(name)) {
+    outputs.write(i, [&](const fs::path& op) { io::write_points(op, full); });
+    return;
+  }
+  if (full.cols() > 3)
+    throw std::runtime_error(name + ": points with " + std::to_string(full.cols()) +
+                             " coordinates cannot be written as a surface (use .txt/.xyz)");
+  io::SurfaceMesh s = pb.surface ? *pb.surface : io::SurfaceMesh{};
+  s.V = Eigen::MatrixXd::Zero(full.rows(), 3);
+  s.V.leftCols(full.cols()) = full;
+  if (normals) s.N = *normals;
+  else s.N.resize(0, 0);
+  outputs.write(i, [&](const fs::path& op) { io::write_surface(op, s); });
+}
+
 int run_deform(const DeformArgs& a) {
   const bool example = !a.example.empty();
   if (!example) {
@@ -310,25 +332,7 @@ int run_deform(const DeformArgs& a) {
   const interp::Embedding& embedding = pipe->embedding();
 
   // Outputs: nothing is written unless everything above succeeded.
-  if (!a.out.empty()) {
-    Eigen::MatrixXd full(out.rows(), d + pb.P_extra.cols());
-    full << out, pb.P_extra;
-    if (is_point_list(a.out)) {
-      outputs.write(i_out, [&](const fs::path& op) { io::write_points(op, full); });
-    } else {
-      // The output's format follows its extension; a surface keeps what its file held besides
-      // positions (write_surface); points alone make a vertices-only surface.
-      if (full.cols() > 3)
-        throw std::runtime_error(a.out + ": points with " + std::to_string(full.cols()) +
-                                 " coordinates cannot be written as a surface (use .txt/.xyz)");
-      io::SurfaceMesh s = pb.surface ? *pb.surface : io::SurfaceMesh{};
-      s.V = Eigen::MatrixXd::Zero(full.rows(), 3);
-      s.V.leftCols(full.cols()) = full;
-      if (po.normals) s.N = pipe->normals();
-      else s.N.resize(0, 0);
-      outputs.write(i_out, [&](const fs::path& op) { io::write_surface(op, s); });
-    }
-  }
+  if (!a.out.empty()) write_deformed(outputs, i_out, a.out, pb, out, po.normals ? &pipe->normals() : nullptr);
   if (!a.stats.empty()) {
     const nlohmann::json j = stats_json(a, pb, embedding, r);
     check_finite(j, a.stats);

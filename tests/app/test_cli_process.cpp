@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/run_mbi.hpp"
+#include "common/skip.hpp"
 
 #include <fcntl.h>
 #include <signal.h>
@@ -34,7 +35,7 @@ using nlohmann::json;
 namespace {
 
 #if defined(__SANITIZE_ADDRESS__)
-constexpr bool kSanitized = true;  // ASan's quarantine keeps freed blocks resident
+constexpr bool kSanitized = true;
 #else
 constexpr bool kSanitized = false;
 #endif
@@ -223,7 +224,7 @@ TEST_CASE("a full disk fails the frame everywhere: dense.pc2 and metrics.json li
   CHECK(temporaries(dir / "o") == 0);
 }
 
-TEST_CASE("deform and cage on a full disk: the error names --out's file; nothing is left",
+TEST_CASE("deform and cage on a full disk: the error names --out's file, nothing is left",
           "[cli][process][full]") {
   TempDir dir("full-out");
   small_obj(dir / "small.obj");
@@ -241,7 +242,7 @@ TEST_CASE("deform and cage on a full disk: the error names --out's file; nothing
 
 TEST_CASE("soak: resident memory of mbi run at frame 10,000 is within 10 MB of frame 100",
           "[cli][process][soak]") {
-  if (kSanitized) return;  // ASan holds freed memory in its quarantine: RSS is not the program's
+  if (kSanitized) mbi::test::skip("ASan's quarantine keeps freed memory resident");
   TempDir dir("soak");
   small_obj(dir / "small.obj");
   write(dir / "s.toml", scene("soak", "small.obj", "every = 1000\nimage = false\n"));
@@ -255,9 +256,9 @@ TEST_CASE("soak: resident memory of mbi run at frame 10,000 is within 10 MB of f
   CHECK(at10000 - at100 <= 10 * 1024);
 }
 
-TEST_CASE("3D pictures: the stored frames do not grow resident memory; all are drawn alike",
+TEST_CASE("3D pictures: the stored frames do not grow resident memory, all are drawn alike",
           "[cli][process][soak]") {
-  if (kSanitized) return;
+  if (kSanitized) mbi::test::skip("ASan's quarantine keeps freed memory resident");
   TempDir dir("pictures");
   small_obj(dir / "small.obj");
   write(dir / "s.toml", scene("p", "small.obj", "every = 1\n"));

@@ -429,7 +429,7 @@ frames = 2
   CHECK_THAT(msg, Catch::Contains("simulate") && Catch::Contains("3D"));
 }
 
-TEST_CASE("RunOptions::stop: the next frame is the last; before the first, nothing is written",
+TEST_CASE("RunOptions::stop: the next frame is the last, before the first nothing is written",
           "[runner][stop]") {
   mbi::test::TempDir dir("run");
   const fs::path file = dir / "s.toml";

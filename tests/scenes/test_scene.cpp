@@ -154,7 +154,7 @@ TEST_CASE("structural errors", "[scene]") {
   CHECK_THAT(error_of(write(dir, "mode = \"drag\"\n" + std::string(minimal))), Catch::Contains("at least one [[drags]]"));
 }
 
-TEST_CASE("a poke without first/last acts over the whole run; keys a drag scene would ignore are errors",
+TEST_CASE("a poke without first/last acts over the whole run, keys a drag scene would ignore are errors",
           "[scene]") {
   mbi::test::TempDir dir("scene");
   const std::string poke = "[[pokes]]\nat = [0.5, 0.5, 0.5]\nforce = [1, 0, 0]\n";

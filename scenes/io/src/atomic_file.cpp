@@ -225,6 +225,24 @@ std::optional<std::pair<FileId, std::string>> where(const std::filesystem::path&
   if (!id) return std::nullopt;
   return std::pair{*id, p.filename().string()};
 }
+const char* kind_of(std::filesystem::file_type t) {
+  using T = std::filesystem::file_type;
+  return t == T::fifo ? "a FIFO (named pipe)" : t == T::socket ? "a socket"
+         : t == T::block ? "a block device" : t == T::character ? "a character device"
+                                                                : "of another kind";
+}
+
+// A folder another process holds (a run) is refused now, not after the work.
+void refuse_held_folder(const std::filesystem::path& target, const std::string& named) {
+  const std::filesystem::path dir = target.parent_path().empty() ? "." : target.parent_path();
+  std::error_code ec;
+  try {
+    if (std::filesystem::is_directory(dir, ec)) FolderLock probe(dir, kCommitWait);
+  } catch (const IoError& err) {
+    throw IoError(named + ": " + err.what());
+  }
+}
+
 }  // namespace
 
 OutputSet::~OutputSet() {
@@ -258,24 +276,11 @@ std::size_t OutputSet::add(const std::filesystem::path& target, const std::strin
   if (present) {
     if (std::filesystem::is_directory(target, ec)) throw IoError(named + ": is a folder");
     // a FIFO, socket or device is refused as such: --force would not change that
-    if (!std::filesystem::is_regular_file(st) && !std::filesystem::is_symlink(st)) {
-      using T = std::filesystem::file_type;
-      const T t = st.type();
-      const char* kind = t == T::fifo ? "a FIFO (named pipe)" : t == T::socket ? "a socket"
-                         : t == T::block ? "a block device" : t == T::character ? "a character device"
-                                                                                : "of another kind";
-      throw IoError(named + ": exists and is not a regular file (" + kind + ")");
-    }
+    if (!std::filesystem::is_regular_file(st) && !std::filesystem::is_symlink(st))
+      throw IoError(named + ": exists and is not a regular file (" + kind_of(st.type()) + ")");
     if (!force_) throw IoError(named + ": exists (use --force to overwrite)");
   }
-  {  // a folder a run holds is refused now, not after the work
-    const std::filesystem::path dir = target.parent_path().empty() ? "." : target.parent_path();
-    try {
-      if (std::filesystem::is_directory(dir, ec)) FolderLock probe(dir, kCommitWait);
-    } catch (const IoError& err) {
-      throw IoError(named + ": " + err.what());
-    }
-  }
+  refuse_held_folder(target, named);
   Entry e;
   e.target = target;
   if (stem_of) {  // the stem's staging name with this target's extension

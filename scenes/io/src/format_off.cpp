@@ -10,6 +10,26 @@ namespace mbi::io::detail {
 
 using std::filesystem::path;
 
+namespace {
+// One vertex line: x y z, or x y z w of a homogeneous 4OFF, the point being (x, y, z) / w.
+std::array<double, 3> read_vertex(const Line& l, const std::string& field, bool homogeneous, const path& file) {
+  const std::size_t want = homogeneous ? 4 : 3;
+  if (l.tok.size() < want)
+    fail(file, l.number, field + (homogeneous ? ": expected 4 coordinates (x y z w: 4OFF)" : ": expected 3 coordinates"));
+  std::array<double, 3> p{};
+  for (int c = 0; c < 3; ++c)
+    p[c] = to_coordinate(l.tok[c], file, l.number, field + " coordinate " + std::to_string(c));
+  if (!homogeneous) return p;
+  const double w = to_coordinate(l.tok[3], file, l.number, field + " w");
+  if (w == 0) fail(file, l.number, field + ": w = 0 (a point at infinity)");
+  for (int c = 0; c < 3; ++c) {
+    p[c] /= w;  // a tiny w can make it overflow: checked as any coordinate
+    check_coordinate(p[c], file, l.number, field + " coordinate " + std::to_string(c) + " / w");
+  }
+  return p;
+}
+}  // namespace
+
 SurfaceMesh parse_off(std::string_view data, const path& file) {
   const auto lines = tokenize(skip_bom(data));
   if (lines.empty()) fail(file, 0, "empty file (expected an OFF header)");
@@ -44,24 +64,8 @@ SurfaceMesh parse_off(std::string_view data, const path& file) {
   SurfaceMesh m;
   std::vector<std::array<double, 3>> v(static_cast<std::size_t>(nv));
   std::size_t at = li + 1;
-  for (long long i = 0; i < nv; ++i, ++at) {
-    const auto& l = lines[at];
-    const std::string field = "vertex " + std::to_string(i);
-    const std::size_t want = homogeneous ? 4 : 3;
-    if (l.tok.size() < want)
-      fail(file, l.number, field + (homogeneous ? ": expected 4 coordinates (x y z w: 4OFF)" : ": expected 3 coordinates"));
-    auto& p = v[static_cast<std::size_t>(i)];
-    for (int c = 0; c < 3; ++c)
-      p[c] = to_coordinate(l.tok[c], file, l.number, field + " coordinate " + std::to_string(c));
-    if (homogeneous) {
-      const double w = to_coordinate(l.tok[3], file, l.number, field + " w");
-      if (w == 0) fail(file, l.number, field + ": w = 0 (a point at infinity)");
-      for (int c = 0; c < 3; ++c) {
-        p[c] /= w;  // a tiny w can make it overflow: checked as any coordinate
-        check_coordinate(p[c], file, l.number, field + " coordinate " + std::to_string(c) + " / w");
-      }
-    }
-  }
+  for (long long i = 0; i < nv; ++i, ++at)
+    v[static_cast<std::size_t>(i)] = read_vertex(lines[at], "vertex " + std::to_string(i), homogeneous, file);
   m.polygons.reserve(static_cast<std::size_t>(nf));
   for (long long f = 0; f < nf; ++f, ++at) {
     const auto& l = lines[at];
