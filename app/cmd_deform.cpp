@@ -7,6 +7,7 @@
 // Prints the face discontinuity of BI, Phong and modified-BI side by side, and for --example the
 // error of each against the closed-form deformation.
 #include "commands.hpp"
+#include "signals.hpp"
 
 #include <mbi/base/timer.hpp>
 #include <mbi/generate/procedural.hpp>
@@ -141,7 +142,7 @@ interp::Embedding embed_points(const Problem& pb, double& embed_ms) {
 
 // What the frame gave, for the statistics and the summary.
 struct Result {
-  const interp::ModifiedBI* solver = nullptr;
+  const interp::ModifiedBI* solver = nullptr;  // null: no interior face (one element)
   interp::DiscontinuityTable table;  // BI, Phong and modified-BI
   std::vector<std::pair<std::string, interp::Accuracy>> accuracy;  // --example: BI, Phong, modified-BI
   double embed_ms = 0, precompute_ms = 0, phong_ms = 0, solve_ms = 0, evaluate_ms = 0;
@@ -168,15 +169,16 @@ nlohmann::json stats_json(const DeformArgs& a, const Problem& pb, const interp::
   nlohmann::json j;
   j["method"] = a.method;
   j["dim"] = pb.U.cols();
-  j["alpha"] = r.solver->alpha();
-  j["beta"] = r.solver->beta();
+  // without an interior face modified-BI is not built: no alpha, beta or gauge
+  j["alpha"] = r.solver ? nlohmann::json(r.solver->alpha()) : nlohmann::json(nullptr);
+  j["beta"] = r.solver ? nlohmann::json(r.solver->beta()) : nlohmann::json(nullptr);
   j["pin_boundary"] = a.pin_boundary;
   j["control_vertices"] = pb.U.rows();
   j["elements"] = pb.T.rows();
   j["points"] = pb.P.rows();
   j["outside_points"] = embedding.outside.size();
   j["max_outside_distance"] = embedding.max_outside_distance;
-  j["null_space_dim"] = r.solver->null_space_dim();
+  j["null_space_dim"] = r.solver ? nlohmann::json(r.solver->null_space_dim()) : nlohmann::json(nullptr);
   j["disc"] = scenes::disc_json(r.table, scenes::disc_roundoff(pb.U));
   if (!r.accuracy.empty()) {
     const char* keys[] = {"bi", "phong", "modified_bi"};
@@ -202,9 +204,12 @@ void print_summary(const DeformArgs& a, const Problem& pb, const interp::Embeddi
               d == 3 ? "tetrahedra" : "triangles", d);
   std::printf("dense:   %s: %d points (%zu outside)\n", pb.mesh_name.c_str(),
               static_cast<int>(pb.P.rows()), embedding.outside.size());
-  std::printf("method:  %s, alpha %.4g, beta %.4g%s, gauge null space %d\n", a.method.c_str(),
-              r.solver->alpha(), r.solver->beta(), a.pin_boundary ? ", boundary pinned" : "",
-              r.solver->null_space_dim());
+  if (r.solver)
+    std::printf("method:  %s, alpha %.4g, beta %.4g%s, gauge null space %d\n", a.method.c_str(),
+                r.solver->alpha(), r.solver->beta(), a.pin_boundary ? ", boundary pinned" : "",
+                r.solver->null_space_dim());
+  else
+    std::printf("method:  %s (no interior face: modified-BI is not built)\n", a.method.c_str());
   std::printf("\nface discontinuity over %d interior faces (paper Table 2):\n%s", r.table.faces,
               scenes::format_table(r.table, scenes::disc_roundoff(pb.U)).c_str());
   if (!r.accuracy.empty())
@@ -216,6 +221,28 @@ void print_summary(const DeformArgs& a, const Problem& pb, const interp::Embeddi
               r.table.e_total);
   std::printf("\ntimes (ms): embed %.2f  precompute %.2f  Phong weights %.2f  solve %.3f  evaluate %.2f\n",
               r.embed_ms, r.precompute_ms, r.phong_ms, r.solve_ms, r.evaluate_ms);
+}
+
+// The deformed dense model (positions `out`, p x d; `normals` or null) as output i of `outputs`.
+// The format follows the extension of `name`; a surface keeps what its file held besides
+// positions (write_surface); points alone make a vertices-only surface.
+void write_deformed(const io::OutputSet& outputs, std::size_t i, const std::string& name, const Problem& pb,
+                    const Eigen::MatrixXd& out, const Eigen::MatrixXd* normals) {
+  Eigen::MatrixXd full(out.rows(), out.cols() + pb.P_extra.cols());
+  full << out, pb.P_extra;
+  if (is_point_list(name)) {
+    outputs.write(i, [&](const fs::path& op) { io::write_points(op, full); });
+    return;
+  }
+  if (full.cols() > 3)
+    throw std::runtime_error(name + ": points with " + std::to_string(full.cols()) +
+                             " coordinates cannot be written as a surface (use .txt/.xyz)");
+  io::SurfaceMesh s = pb.surface ? *pb.surface : io::SurfaceMesh{};
+  s.V = Eigen::MatrixXd::Zero(full.rows(), 3);
+  s.V.leftCols(full.cols()) = full;
+  if (normals) s.N = *normals;
+  else s.N.resize(0, 0);
+  outputs.write(i, [&](const fs::path& op) { io::write_surface(op, s); });
 }
 
 int run_deform(const DeformArgs& a) {
@@ -232,6 +259,7 @@ int run_deform(const DeformArgs& a) {
     inputs = {a.control, a.deformed, a.mesh};
     for (const fs::path& p : io::control_mesh_files(a.control)) inputs.push_back(p);
   }
+  handle_interrupts(nullptr);  // all or nothing: a signal ends it at once, no temporaries
   io::OutputSet outputs(inputs, a.force);
   const std::size_t i_out = a.out.empty() ? 0 : outputs.add(a.out, "--out");
   const std::size_t i_stats = a.stats.empty() ? 0 : outputs.add(a.stats, "--stats");
@@ -262,6 +290,13 @@ int run_deform(const DeformArgs& a) {
   }
   po.interp.alpha = a.alpha_given ? a.alpha : 0.0;
   po.interp.pin_boundary = a.pin_boundary;
+  // One element has no interior face: BI and Phong need none; modified-BI minimises the
+  // discontinuity across interior faces and needs at least one.
+  const bool has_faces = interp::interior_faces(pb.T).rows() > 0;
+  if (!has_faces && po.method == pipeline::Method::ModifiedBI)
+    throw std::runtime_error(pb.control_name + ": the control mesh has no interior face (one element); "
+                             "modified-BI minimises the discontinuity across interior faces and needs at "
+                             "least two face-adjacent elements (--method bi or phong take it)");
   auto given = std::make_unique<pipeline::GivenDriver>(pb.U);
   given->set(pb.X);
   std::optional<pipeline::FramePipeline> pipe;
@@ -270,7 +305,8 @@ int run_deform(const DeformArgs& a) {
     pipe.emplace(pb.U, pb.T, std::move(emb), std::move(given), po,
                  std::make_unique<pipeline::CpuEvaluator>(pipeline::Precision::Double, a.threads),
                  rest_normals);
-    solver = &pipe->solver();  // the comparison table needs modified-BI in any case
+    // the comparison table needs modified-BI, where there is an interior face to compare
+    if (has_faces) solver = &pipe->solver();
   } catch (const interp::Error& e) {
     throw std::runtime_error(pb.control_name + ": " + std::string(e.what()));
   }
@@ -286,36 +322,21 @@ int run_deform(const DeformArgs& a) {
   if (!out.allFinite()) throw std::runtime_error("evaluation produced non-finite positions");
 
   // BI, Phong and modified-BI side by side, whatever the method
-  r.table = interp::discontinuity_table(*solver, pb.X, pipe->modified_bi_M(), pipe->phong_M());
+  if (solver) {
+    r.table = interp::discontinuity_table(*solver, pb.X, pipe->modified_bi_M(), pipe->phong_M());
+  } else {  // no face to measure: every column 0 over 0 faces
+    r.table.phong = interp::Summary{};
+  }
   r.accuracy = accuracy_rows(pb, *pipe);
   r.phong_ms = pipe->phong_precompute_ms();
   const interp::Embedding& embedding = pipe->embedding();
 
   // Outputs: nothing is written unless everything above succeeded.
-  if (!a.out.empty()) {
-    Eigen::MatrixXd full(out.rows(), d + pb.P_extra.cols());
-    full << out, pb.P_extra;
-    const fs::path op = outputs.staging(i_out);
-    if (is_point_list(op)) {
-      io::write_points(op, full);
-    } else {
-      // The output's format follows its extension; a surface keeps what its file held besides
-      // positions (write_surface); points alone make a vertices-only surface.
-      if (full.cols() > 3)
-        throw std::runtime_error(a.out + ": points with " + std::to_string(full.cols()) +
-                                 " coordinates cannot be written as a surface (use .txt/.xyz)");
-      io::SurfaceMesh s = pb.surface ? *pb.surface : io::SurfaceMesh{};
-      s.V = Eigen::MatrixXd::Zero(full.rows(), 3);
-      s.V.leftCols(full.cols()) = full;
-      if (po.normals) s.N = pipe->normals();
-      else s.N.resize(0, 0);
-      io::write_surface(op, s);
-    }
-  }
+  if (!a.out.empty()) write_deformed(outputs, i_out, a.out, pb, out, po.normals ? &pipe->normals() : nullptr);
   if (!a.stats.empty()) {
     const nlohmann::json j = stats_json(a, pb, embedding, r);
     check_finite(j, a.stats);
-    io::write_text_atomic(outputs.staging(i_stats), j.dump(2) + "\n");
+    outputs.write(i_stats, [&](const fs::path& p) { io::write_text_atomic(p, j.dump(2) + "\n"); });
   }
   outputs.commit();
   print_summary(a, pb, embedding, r);

@@ -4,7 +4,9 @@
 # Placeholders in ARGS: @BAD@ the corpus folder, @OUT@ an empty folder for this case,
 # @FIFO@ a named pipe made in @OUT@, @DIR@ an (empty) directory made in @OUT@, @FILE@ a
 # regular file made in @OUT@ (so @FILE@/x cannot be created), @CHR@ a character device made in
-# @OUT@ with the numbers of /dev/null (mknod: the case is skipped where that is not allowed).
+# @OUT@ with the numbers of /dev/null (mknod: the case is skipped where that is not allowed),
+# @LOCKED@ an empty directory made in @OUT@ that another process (flock(1)) holds locked while
+# mbi runs (io::FolderLock).
 # An argument @FSIZE_LIMIT=N@ (anywhere; removed) runs mbi with a file-size limit of N KiB
 # (ulimit -f, SIGXFSZ ignored): a write past N KiB fails (EFBIG) as on a full disk, without
 # mounting one. -DXVFB=ON runs mbi under a fresh Xvfb server (the viewer's cases).
@@ -48,6 +50,10 @@ foreach(a IN LISTS ARGS)
     file(MAKE_DIRECTORY "${out}/a-dir")
     list(APPEND setup_made "${out}/a-dir")
   endif()
+  if(a MATCHES "@LOCKED@" AND NOT EXISTS "${out}/locked")
+    file(MAKE_DIRECTORY "${out}/locked")
+    list(APPEND setup_made "${out}/locked")
+  endif()
   if(a MATCHES "@FILE@" AND NOT EXISTS "${out}/a-file")
     file(WRITE "${out}/a-file" "not a folder\n")
     list(APPEND setup_made "${out}/a-file")
@@ -57,6 +63,7 @@ foreach(a IN LISTS ARGS)
   string(REPLACE "@DIR@" "${out}/a-dir" a "${a}")
   string(REPLACE "@FILE@" "${out}/a-file" a "${a}")
   string(REPLACE "@CHR@" "${out}/null" a "${a}")
+  string(REPLACE "@LOCKED@" "${out}/locked" a "${a}")
   string(REPLACE "@OUT@" "${out}" a "${a}")
   list(APPEND args "${a}")
 endforeach()
@@ -77,9 +84,19 @@ endif()
 if(XVFB)
   set(command xvfb-run -a -s "-screen 0 1400x900x24" ${command})
 endif()
-execute_process(COMMAND ${command}
-  WORKING_DIRECTORY "${WORK}"
-  RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr TIMEOUT 60)
+if(ARGS MATCHES "@LOCKED@")
+  # a pipeline: flock holds the folder and says so, then mbi starts; the holder ends on SIGPIPE
+  # once mbi has gone
+  execute_process(
+    COMMAND flock "${out}/locked" sh -c "echo locked; while sleep 0.1; do echo; done"
+    COMMAND sh -c "read held && exec \"$0\" \"$@\"" ${command}
+    WORKING_DIRECTORY "${WORK}"
+    RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr TIMEOUT 60)
+else()
+  execute_process(COMMAND ${command}
+    WORKING_DIRECTORY "${WORK}"
+    RESULT_VARIABLE code OUTPUT_VARIABLE stdout ERROR_VARIABLE stderr TIMEOUT 60)
+endif()
 
 set(failures "")
 if(NOT code STREQUAL "${EXIT}")

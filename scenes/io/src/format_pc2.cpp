@@ -58,10 +58,19 @@ void Pc2Writer::append(const Eigen::Ref<const Eigen::MatrixXd>& P) {
   for (Eigen::Index i = 0; i < P.rows(); ++i)
     for (Eigen::Index c = 0; c < P.cols(); ++c)
       buf[static_cast<std::size_t>(3 * i + c)] = static_cast<float>(P(i, c));
-  if constexpr (std::endian::native == std::endian::big) {
-    for (float x : buf) put_le<float>(*out_, x);
-  } else {
-    out_->write(buf.data(), buf.size() * sizeof(float));
+  // All of the sample or none: flushed now, so that a full disk fails this sample, which is
+  // then cut off; the file holds exactly the samples counted.
+  const long end = 32 + 12 * static_cast<long>(num_points_) * samples_;
+  try {
+    if constexpr (std::endian::native == std::endian::big) {
+      for (float x : buf) put_le<float>(*out_, x);
+    } else {
+      out_->write(buf.data(), buf.size() * sizeof(float));
+    }
+    out_->flush();
+  } catch (const IoError&) {
+    out_->truncate(end);
+    throw;
   }
   ++samples_;
 }

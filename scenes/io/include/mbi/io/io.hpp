@@ -245,7 +245,8 @@ class Pc2Writer {
   Pc2Writer(const Pc2Writer&) = delete;
   Pc2Writer& operator=(const Pc2Writer&) = delete;
 
-  /// Appends one sample: P is numPoints x 3 (or x 2: z = 0), finite.
+  /// Appends one sample: P is numPoints x 3 (or x 2: z = 0), finite. All of it or, on a write
+  /// error (IoError: a full disk), none: the file keeps exactly samples() samples.
   void append(const Eigen::Ref<const Eigen::MatrixXd>& P);
   /// Writes numSamples into the header, flushes, and moves the file into place.
   void finish();
