@@ -66,6 +66,20 @@ void Pc2Writer::append(const Eigen::Ref<const Eigen::MatrixXd>& P) {
   ++samples_;
 }
 
+void Pc2Writer::append(const float* xyz) {
+  if (!out_) fail(file_, 0, "append after finish()");
+  const std::size_t n = 3 * static_cast<std::size_t>(num_points_);
+  for (std::size_t i = 0; i < n; ++i)
+    if (!std::isfinite(xyz[i]))
+      fail(file_, 0, "sample " + std::to_string(samples_) + " point " + std::to_string(i / 3) + ": non-finite coordinate");
+  if constexpr (std::endian::native == std::endian::big) {
+    for (std::size_t i = 0; i < n; ++i) put_le<float>(*out_, xyz[i]);
+  } else {
+    out_->write(xyz, n * sizeof(float));
+  }
+  ++samples_;
+}
+
 void Pc2Writer::finish() {
   if (!out_) fail(file_, 0, "finish() called twice");
   out_->seek(28);

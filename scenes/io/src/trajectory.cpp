@@ -107,6 +107,13 @@ std::vector<path> glob_files(const std::string& spec) {
 
 }  // namespace
 
+path numbered_file(const std::string& pattern, int k) {
+  const std::optional<Pattern> p = printf_pattern(pattern);
+  if (!p) fail(pattern, 0, "a numbered name takes one %d or %0Nd (e.g. out_%04d.obj)");
+  if (k < 0) fail(pattern, 0, "negative frame number " + std::to_string(k));
+  return p->name(k);
+}
+
 struct Trajectory::Impl {
   std::string spec;
   std::unique_ptr<PointCacheReader> cache;

@@ -261,6 +261,8 @@ class Pc2Writer {
 
   /// Appends one sample: P is numPoints x 3 (or x 2: z = 0), finite.
   void append(const Eigen::Ref<const Eigen::MatrixXd>& P);
+  /// The same from numPoints x 3 finite floats, row after row (interleaved x y z).
+  void append(const float* xyz);
   /// Writes numSamples into the header, flushes, and moves the file into place.
   void finish();
   int samples() const { return samples_; }
@@ -361,6 +363,10 @@ std::vector<PvdEntry> read_pvd(const std::filesystem::path& file);
 // ----------------------------------------------------------------------------------------------
 // Control trajectories
 // ----------------------------------------------------------------------------------------------
+
+/// The file of number k of a printf pattern ("out/m_%04d.obj" -> "out/m_0007.obj"): one %d or
+/// %0Nd (N <= 12) in the file name, %% for a percent sign. Throws IoError on any other pattern.
+std::filesystem::path numbered_file(const std::string& pattern, int k);
 
 /// The positions of a control mesh's nodes over time, read one frame at a time, from
 ///  - a PC2 or MDD point cache (one row per node),
