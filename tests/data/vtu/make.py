@@ -128,8 +128,26 @@ def write_mdd(path, frames, times, rest=None):
             f.write(np.asarray(x, ">f4").tobytes())
 
 
+def sphere(path):
+    """A UV sphere of 144 vertices inside the box, for the end-to-end scene (sag.toml)."""
+    c, r, n = (0.3535, 0.3535, 0.707), 0.25, 8
+    vs, fs = [], []
+    for i in range(n + 1):
+        th = math.pi * i / n
+        for j in range(2 * n):
+            ph = math.pi * j / n
+            vs.append((c[0] + r * math.sin(th) * math.cos(ph), c[1] + r * math.sin(th) * math.sin(ph), c[2] + r * math.cos(th)))
+    for i in range(n):
+        for j in range(2 * n):
+            a, b = i * 2 * n + j, i * 2 * n + (j + 1) % (2 * n)
+            fs += [(a, a + 2 * n, b + 2 * n), (a, b + 2 * n, b)]
+    with open(path, "w") as f:
+        f.write("".join("v %r %r %r\n" % v for v in vs) + "".join("f %d %d %d\n" % (a + 1, b + 1, c + 1) for a, b, c in fs))
+
+
 def fixtures():
     pts, tets = box()
+    sphere(os.path.join(HERE, "sphere.obj"))
     with open(os.path.join(HERE, "box.node"), "w") as f:
         f.write("%d 3 0 0\n" % len(pts) + "".join("%d %r %r %r\n" % (i, *p) for i, p in enumerate(pts)))
     with open(os.path.join(HERE, "box.ele"), "w") as f:
