@@ -4,6 +4,9 @@
 // and one frame decoded.
 #include "io_common.hpp"
 
+#include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <functional>
 #include <string>
 #include <string_view>
@@ -34,6 +37,21 @@ CacheLayout mdd_layout(const HeadReader& head, unsigned long long size, const st
 /// kMaxCoordinate, which float32 cannot reach).
 void decode_cache_frame(const char* bytes, int points, bool big_endian, Eigen::MatrixXd& out,
                         const std::filesystem::path& file, int frame);
+
+/// The index of the first of n floats that is not finite, n when all are (a vectorised pass:
+/// a frame of a million points is checked at memory speed before it is written).
+inline std::size_t first_non_finite(const float* x, std::size_t n) {
+  std::uint32_t any = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    std::uint32_t u;
+    std::memcpy(&u, x + i, 4);
+    any |= static_cast<std::uint32_t>((u & 0x7f800000u) == 0x7f800000u);
+  }
+  if (!any) return n;
+  std::size_t i = 0;
+  while (std::isfinite(x[i])) ++i;
+  return i;
+}
 
 /// Every frame of a cache in memory (parse_pc2, parse_mdd).
 PointCache parse_cache(std::string_view data, const CacheLayout& layout, const std::filesystem::path& file);

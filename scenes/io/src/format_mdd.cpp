@@ -71,10 +71,11 @@ void MddWriter::append(const float* xyz) {
   if (static_cast<std::size_t>(samples_) >= times_.size())
     fail(file_, 0, "frame " + std::to_string(samples_) + ": more frames than the " + std::to_string(times_.size()) + " announced");
   const std::size_t n = 3 * static_cast<std::size_t>(num_points_);
+  const std::size_t bad = detail::first_non_finite(xyz, n);
+  if (bad < n)
+    fail(file_, 0, "frame " + std::to_string(samples_) + " point " + std::to_string(bad / 3) + ": non-finite coordinate");
   buffer_.resize(4 * n);
   for (std::size_t i = 0; i < n; ++i) {
-    if (!std::isfinite(xyz[i]))
-      fail(file_, 0, "frame " + std::to_string(samples_) + " point " + std::to_string(i / 3) + ": non-finite coordinate");
     std::uint32_t u = std::bit_cast<std::uint32_t>(xyz[i]);
     if constexpr (std::endian::native == std::endian::little) u = __builtin_bswap32(u);
     std::memcpy(buffer_.data() + 4 * i, &u, 4);

@@ -69,9 +69,9 @@ void Pc2Writer::append(const Eigen::Ref<const Eigen::MatrixXd>& P) {
 void Pc2Writer::append(const float* xyz) {
   if (!out_) fail(file_, 0, "append after finish()");
   const std::size_t n = 3 * static_cast<std::size_t>(num_points_);
-  for (std::size_t i = 0; i < n; ++i)
-    if (!std::isfinite(xyz[i]))
-      fail(file_, 0, "sample " + std::to_string(samples_) + " point " + std::to_string(i / 3) + ": non-finite coordinate");
+  const std::size_t bad = detail::first_non_finite(xyz, n);
+  if (bad < n)
+    fail(file_, 0, "sample " + std::to_string(samples_) + " point " + std::to_string(bad / 3) + ": non-finite coordinate");
   if constexpr (std::endian::native == std::endian::big) {
     for (std::size_t i = 0; i < n; ++i) put_le<float>(*out_, xyz[i]);
   } else {
