@@ -3,10 +3,14 @@
 //   mbi deform --control REST --deformed X --mesh DENSE --out OUT
 //              [--method bi|modified-bi|phong] [--alpha A] [--pin-boundary] [--stats STATS.json]
 //   mbi deform --example twist-bar [--out OUT] [--stats STATS.json]
+//   mbi deform --control REST --deformed TRAJECTORY --mesh DENSE --out CACHE|NUMBERED ...
+//              (a whole animation: deform_sequence.cpp)
 //
 // Prints the face discontinuity of BI, Phong and modified-BI side by side, and for --example the
 // error of each against the closed-form deformation.
 #include "commands.hpp"
+#include "deform_outside.hpp"
+#include "deform_sequence.hpp"
 #include "signals.hpp"
 
 #include <mbi/base/timer.hpp>
@@ -47,7 +51,16 @@ struct DeformArgs {
   bool pin_boundary = false;
   bool force = false;
   int threads = 0;
+  std::optional<double> max_outside;
+  double fps = 24;
 };
+
+SequenceArgs sequence_args(const DeformArgs& a) {
+  return {.control = a.control, .deformed = a.deformed, .mesh = a.mesh, .out = a.out, .stats = a.stats,
+          .method = *pipeline::parse_method(a.method), .alpha = a.alpha_given ? std::optional(a.alpha) : std::nullopt,
+          .pin_boundary = a.pin_boundary, .force = a.force, .threads = a.threads, .max_outside = a.max_outside,
+          .fps = a.fps};
+}
 
 // What the command works on, wherever it came from (files or the built-in example).
 struct Problem {
@@ -247,6 +260,7 @@ void write_deformed(const io::OutputSet& outputs, std::size_t i, const std::stri
 
 int run_deform(const DeformArgs& a) {
   const bool example = !a.example.empty();
+  if (!example && is_sequence(a.deformed, a.out)) return run_deform_sequence(sequence_args(a));
   if (!example) {
     for (const auto& [flag, v] : {std::pair{"--control", &a.control}, {"--deformed", &a.deformed},
                                   {"--mesh", &a.mesh}, {"--out", &a.out}})
@@ -278,6 +292,7 @@ int run_deform(const DeformArgs& a) {
 
   double embed_ms = 0;
   interp::Embedding emb = embed_points(pb, embed_ms);
+  if (a.max_outside) refuse_far_points(emb, pb.U, pb.T, pb.P, *a.max_outside, pb.mesh_name, pb.control_name);
 
   // One frame through the pipeline: the given positions drive it, BI skips the solve.
   pipeline::PipelineOptions po;
@@ -353,11 +368,13 @@ const Registrar reg{
                      "or legacy VTK .vtk");
       sub.add_option("--deformed", a->deformed,
                      "REQUIRED (unless --example) deformed control positions, one per control node in file order: "
-                     ".node, .msh, .vtk or plain text (n lines of d numbers)");
+                     ".node, .msh, .vtk, .vtu or plain text (n lines of d numbers); or a whole trajectory: .pc2, .mdd, "
+                     ".pvd, numbered files x_%04d.vtk or a quoted glob 'x_*.vtk'");
       sub.add_option("--mesh", a->mesh, "REQUIRED (unless --example) dense model: .obj/.ply/.off/.stl, or points .txt/.xyz");
       sub.add_option("--out", a->out,
                      "REQUIRED (unless --example) output, format by extension: .obj/.ply/.off/.stl (keeping the input's "
-                     "attributes when the format is the same) or points .txt/.xyz");
+                     "attributes when the format is the same) or points .txt/.xyz; for a trajectory a point cache "
+                     ".pc2/.mdd or numbered files out_%04d.obj");
       sub.add_option("--method", a->method, "interpolation")
           ->check(CLI::IsMember(pipeline::kMethodNames.names()));
       sub.add_option_function<double>(
@@ -369,6 +386,11 @@ const Registrar reg{
           "weight of E_vibr (> 0; default 0.1 in 3D, 0.2 in 2D)");
       sub.add_flag("--pin-boundary", a->pin_boundary, "M = 0 on the control mesh boundary");
       sub.add_option("--stats", a->stats, "write statistics and timings as JSON");
+      sub.add_option("--max-outside", a->max_outside,
+                     "refuse dense points farther outside the control mesh than this times the model size")
+          ->check(CLI::NonNegativeNumber);
+      sub.add_option("--fps", a->fps, "frames per second where times meet frames (MDD times, PC2 frames; default 24)")
+          ->check(CLI::PositiveNumber);
       sub.add_flag("--force", a->force, "overwrite existing --out / --stats files");
       sub.add_option("--example", a->example, "built-in example instead of files: twist-bar");
       sub.add_option("--threads", a->threads, "evaluation threads (0 = all cores)")

@@ -2,6 +2,7 @@
 //               [--screenshot PATH] [--report FILE] [--force] [--width W] [--height H]
 //               [--paused] [--no-split] [--wireframe] [--no-panel] [--gpu auto|on|off]
 #include "commands.hpp"
+#include "signals.hpp"
 
 #include <mbi/pipeline/method.hpp>
 #include <mbi/viewer/scene_view.hpp>
@@ -36,6 +37,7 @@ int run_view(const ViewArgs& a) {
   o.wireframe = a.wireframe;
   o.panel = !a.no_panel;
   o.force = a.force;
+  handle_interrupts(nullptr);  // Ctrl-C ends the session at once, leaving no reserved temporaries
   viewer::view_scene(sc, a.mesh, o);
   return 0;
 }

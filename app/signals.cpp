@@ -16,7 +16,7 @@ std::atomic<int>* g_stop = nullptr;
 extern "C" void on_signal(int sig) {
   if (g_stop && g_stop->load() == 0) {
     g_stop->store(sig);
-    const char note[] = "\nmbi run: stopping: the next frame is the last, then the outputs are "
+    const char note[] = "\nmbi: stopping: the frame in progress is the last, then the outputs are "
                         "finished; interrupt again to stop at once\n";
     [[maybe_unused]] const ssize_t n = ::write(STDERR_FILENO, note, sizeof note - 1);
     return;
