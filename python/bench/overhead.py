@@ -6,9 +6,11 @@ vector-Jacobian product against the forward map.
 1. Per-call overhead (median over N calls, default 10,000, each timed alone): ModifiedBI.solve at
    448 control vertices (a 7 x 7 x 6-cell box) and FastEvaluator.evaluate of P points (default
    1,000,000) into an out= array, from Python, against the same C++ call timed in C++
-   (mbi._mbi._timing: one clock reading before and after the call, in C++). Each Python call is
-   paired with a C++ call just before or after it (at random); "added" is the median of the
-   pairs' differences.
+   (mbi._mbi._timing: one clock reading before and after the call, in C++). Two figures of what
+   Python adds: "pairs", the median difference between each Python call and a C++ call just
+   before or after it (at random); "within the call", the median of each Python call's time
+   less the time it spent in C++ itself (the bindings clock their section without the GIL),
+   which leaves out the noise of a shared machine between two calls.
 2. Dense arrays allocated per call with out=: numpy's allocations as tracemalloc counts them.
 3. Deformer.vjp against Deformer.deform (float64, modified-BI, same sizes): median of 30 calls.
 """
@@ -53,17 +55,18 @@ def python_times(call, calls):
 def paired(py_call, cpp_times, calls):
     """`calls` pairs of one call timed from Python and one timed in C++, back to back in a random
     order (a slow spell of a shared machine falls on both alike). Returns the medians (s) of the
-    Python times, of the C++ times and of the pairs' differences."""
-    py, cpp = np.empty(calls), np.empty(calls)
+    Python times, of the C++ times, of the pairs' differences, and of each Python call's time
+    less its own C++ part (mbi._mbi._timing.last_call)."""
+    py, cpp, own = np.empty(calls), np.empty(calls), np.empty(calls)
     first = np.random.default_rng(1).integers(0, 2, calls)  # which of the pair runs first: either, by turns
     for k in range(calls):
+        if not first[k]:
+            cpp[k] = cpp_times(1)[0]
+        py[k] = python_times(py_call, 1)[0]
+        own[k] = py[k] - _mbi._timing.last_call()
         if first[k]:
-            py[k] = python_times(py_call, 1)[0]
             cpp[k] = cpp_times(1)[0]
-        else:
-            cpp[k] = cpp_times(1)[0]
-            py[k] = python_times(py_call, 1)[0]
-    return float(np.median(py)), float(np.median(cpp)), float(np.median(py - cpp))
+    return float(np.median(py)), float(np.median(cpp)), float(np.median(py - cpp)), float(np.median(own))
 
 
 def allocated_per_call(call, calls=100):
@@ -99,8 +102,8 @@ def main():
           f"solve path {'dense operator' if solver.dense_operator else 'sparse'}; kernel {fast.simd}, "
           f"{fast.threads} threads; medians over {args.calls} calls")
     print()
-    print("| call | from Python (us) | C++ alone (us) | added: median of pair differences (us) |")
-    print("|---|---|---|---|")
+    print("| call | from Python (us) | C++ alone (us) | added: pairs (us) | added: within the call (us) |")
+    print("|---|---|---|---|---|")
     rows = [
         ("ModifiedBI.solve(X, out=M)", lambda: solver.solve(X, out=M),
          lambda n: _mbi._timing.solve(solver, X, n)),
@@ -111,8 +114,8 @@ def main():
          lambda n: _mbi._timing.fast_evaluate(small, B, out_small, n)),
     ]
     for name, py_call, cpp_times in rows:
-        py, cpp, added = paired(py_call, cpp_times, args.calls)
-        print(f"| {name} | {py * 1e6:.2f} | {cpp * 1e6:.2f} | {added * 1e6:+.2f} |")
+        py, cpp, added, own = paired(py_call, cpp_times, args.calls)
+        print(f"| {name} | {py * 1e6:.2f} | {cpp * 1e6:.2f} | {added * 1e6:+.2f} | {own * 1e6:+.2f} |")
     print()
     M_out = np.empty_like(M)
     print("numpy bytes allocated at the peak of 100 calls (tracemalloc): "
