@@ -6,7 +6,7 @@ import sys
 import pytest
 
 EXAMPLES = os.path.join(os.path.dirname(__file__), os.pardir, "examples")
-SMALL = os.environ.get("MBI_SANITIZED") == "1"  # ASan runs 10x slower: smaller sizes
+SMALL = os.environ.get("MBI_SANITIZED") == "1"  # ASan is far slower: smaller sizes there
 
 
 def run(name, *args):
