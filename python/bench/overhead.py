@@ -3,12 +3,13 @@ vector-Jacobian product against the forward map.
 
     PYTHONPATH=build/release/python python3 python/bench/overhead.py [--calls N] [--points P]
 
-1. Per-call overhead (median over N calls, default 10,000, each timed alone): ModifiedBI.solve at
-   448 control vertices (a 7 x 7 x 6-cell box) and FastEvaluator.evaluate of P points (default
-   1,000,000) into an out= array, from Python, against the same C++ call timed in C++
-   (mbi._mbi._timing: one clock reading before and after the call, in C++). Each Python call is
-   paired with a C++ call just before or after it (at random); "added" is the median of the
-   pairs' differences.
+1. Per-call overhead (medians over N calls, default 10,000, each timed alone): ModifiedBI.solve
+   at 448 control vertices (a 7 x 7 x 6-cell box) and FastEvaluator.evaluate of P points (default
+   1,000,000) into an out= array. From Python, and the same C++ call in a C++ loop
+   (mbi._mbi._timing), in alternating blocks of 100 calls: "difference" is the difference of the
+   two medians. "Added within the call" is the median of each Python call's time less the time
+   it spent in C++ itself (the bindings clock their section without the GIL): what Python adds to
+   that very call, free of the noise of a shared machine between two calls.
 2. Dense arrays allocated per call with out=: numpy's allocations as tracemalloc counts them.
 3. Deformer.vjp against Deformer.deform (float64, modified-BI, same sizes): median of 30 calls.
 """
@@ -41,29 +42,30 @@ def box(nx, ny, nz):
 
 
 def python_times(call, calls):
-    times = np.empty(calls)
-    clock = time.perf_counter_ns
+    """Seconds of each of `calls` calls from Python, and of the C++ part of each (the section the
+    bindings run without the GIL, mbi._mbi._timing.last_call)."""
+    total, section = np.empty(calls), np.empty(calls)
+    clock, last_call = time.perf_counter_ns, _mbi._timing.last_call
     for k in range(calls):
         t0 = clock()
         call()
-        times[k] = clock() - t0
-    return times * 1e-9
+        t1 = clock()
+        section[k] = last_call()
+        total[k] = (t1 - t0) * 1e-9
+    return total, section
 
 
-def paired(py_call, cpp_times, calls):
-    """`calls` pairs of one call timed from Python and one timed in C++, back to back in a random
-    order (a slow spell of a shared machine falls on both alike). Returns the medians (s) of the
-    Python times, of the C++ times and of the pairs' differences."""
-    py, cpp = np.empty(calls), np.empty(calls)
-    first = np.random.default_rng(1).integers(0, 2, calls)  # which of the pair runs first: either, by turns
-    for k in range(calls):
-        if first[k]:
-            py[k] = python_times(py_call, 1)[0]
-            cpp[k] = cpp_times(1)[0]
-        else:
-            cpp[k] = cpp_times(1)[0]
-            py[k] = python_times(py_call, 1)[0]
-    return float(np.median(py)), float(np.median(cpp)), float(np.median(py - cpp))
+def compare(py_call, cpp_times, calls, block=100):
+    """`calls` calls from Python and `calls` in a C++ loop, in alternating blocks (a slow spell of
+    a shared machine falls on both alike). Returns the medians (s) of the Python times, of the
+    C++ times, and of each Python call's time less its own C++ part."""
+    py, cpp, own = [], [], []
+    for _ in range(max(1, calls // block)):
+        total, section = python_times(py_call, block)
+        py.append(total)
+        own.append(total - section)
+        cpp.append(cpp_times(block))
+    return tuple(float(np.median(np.concatenate(v))) for v in (py, cpp, own))
 
 
 def allocated_per_call(call, calls=100):
@@ -99,8 +101,8 @@ def main():
           f"solve path {'dense operator' if solver.dense_operator else 'sparse'}; kernel {fast.simd}, "
           f"{fast.threads} threads; medians over {args.calls} calls")
     print()
-    print("| call | from Python (us) | C++ alone (us) | added: median of pair differences (us) |")
-    print("|---|---|---|---|")
+    print("| call | from Python (us) | C++ alone (us) | difference (us) | added within the call (us) |")
+    print("|---|---|---|---|---|")
     rows = [
         ("ModifiedBI.solve(X, out=M)", lambda: solver.solve(X, out=M),
          lambda n: _mbi._timing.solve(solver, X, n)),
@@ -111,8 +113,8 @@ def main():
          lambda n: _mbi._timing.fast_evaluate(small, B, out_small, n)),
     ]
     for name, py_call, cpp_times in rows:
-        py, cpp, added = paired(py_call, cpp_times, args.calls)
-        print(f"| {name} | {py * 1e6:.2f} | {cpp * 1e6:.2f} | {added * 1e6:+.2f} |")
+        py, cpp, own = compare(py_call, cpp_times, args.calls)
+        print(f"| {name} | {py * 1e6:.2f} | {cpp * 1e6:.2f} | {(py - cpp) * 1e6:+.2f} | {own * 1e6:+.2f} |")
     print()
     M_out = np.empty_like(M)
     print("numpy bytes allocated at the peak of 100 calls (tracemalloc): "
@@ -125,8 +127,8 @@ def main():
     deformer = mbi.Deformer(U, T, P)
     pos, G = np.empty((args.points, 3)), rng.standard_normal((args.points, 3))
     dX = np.empty_like(U)
-    forward = np.median(python_times(lambda: deformer.deform(X, out=pos), args.vjp_calls))
-    vjp = np.median(python_times(lambda: deformer.vjp(G, out=dX), args.vjp_calls))
+    forward = np.median(python_times(lambda: deformer.deform(X, out=pos), args.vjp_calls)[0])
+    vjp = np.median(python_times(lambda: deformer.vjp(G, out=dX), args.vjp_calls)[0])
     print(f"Deformer (modified-bi, float64), medians of {args.vjp_calls} calls: deform {forward * 1e3:.2f} ms, "
           f"vjp {vjp * 1e3:.2f} ms: vjp / deform = {vjp / forward:.2f}")
 

@@ -27,6 +27,15 @@ std::string shape_text(Eigen::Index rows, Eigen::Index cols, Eigen::Index frames
   return "(" + std::to_string(rows) + ", " + std::to_string(cols) + ")";
 }
 
+// out= must be (rows, cols), or (frames, rows / frames, cols) for frames > 0 (no strings built
+// unless it is not: this runs every frame)
+void check_output_shape(const py::array& a, const char* name, Eigen::Index rows, Eigen::Index cols,
+                        Eigen::Index frames) {
+  const bool ok = frames > 0 ? a.ndim() == 3 && a.shape(0) == frames && a.shape(1) == rows / frames && a.shape(2) == cols
+                             : a.ndim() == 2 && a.shape(0) == rows && a.shape(1) == cols;
+  if (!ok) throw Error(std::string(name) + " must have shape " + shape_text(rows, cols, frames) + ", got " + shape_of(a));
+}
+
 std::string dtype_of(const py::array& a) { return py::str(a.dtype()).cast<std::string>(); }
 
 // obj as a numpy array (array-likes such as lists go through numpy.asarray).
@@ -148,9 +157,7 @@ Output float_output(const py::handle& out, const char* name, Eigen::Index rows, 
   }
   if (!py::isinstance<py::array>(out)) throw Error(std::string(name) + " must be a numpy array");
   py::array a = py::reinterpret_borrow<py::array>(out);
-  const std::string want = shape_text(rows, cols, frames);
-  if (shape_of(a) != want)
-    throw Error(std::string(name) + " must have shape " + want + ", got " + shape_of(a));
+  check_output_shape(a, name, rows, cols, frames);
   if (!float64_in_place(a))
     throw Error(std::string(name) + " must be a float64 array with positive strides, got dtype " + dtype_of(a));
   if (!a.writeable()) throw Error(std::string(name) + " is read-only");
@@ -169,8 +176,7 @@ std::pair<py::array, FloatMap> float32_output(const py::handle& out, const char*
   }
   if (!py::isinstance<py::array>(out)) throw Error(std::string(name) + " must be a numpy array");
   py::array a = py::reinterpret_borrow<py::array>(out);
-  if (shape_of(a) != shape_text(rows, cols, frames))
-    throw Error(std::string(name) + " must have shape " + shape_text(rows, cols, frames) + ", got " + shape_of(a));
+  check_output_shape(a, name, rows, cols, frames);
   if (!py::isinstance<py::array_t<float>>(a) || a.dtype().kind() != 'f')
     throw Error(std::string(name) + " must be a float32 array, got dtype " + dtype_of(a));
   if (!(a.flags() & py::array::c_style)) throw Error(std::string(name) + " must be C-contiguous");

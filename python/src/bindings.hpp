@@ -2,6 +2,8 @@
 // The parts of the extension module mbi._mbi, one file each, and what they share.
 #include "arrays.hpp"
 
+#include <mbi/base/timer.hpp>
+
 #include <mutex>
 #include <utility>
 
@@ -13,11 +15,22 @@ void bind_evaluate(py::module_& m);    // bind_evaluate.cpp: evaluate, FastEvalu
 void bind_deformer(py::module_& m);    // bind_deformer.cpp: Deformer
 void bind_timing(py::module_& m);      // timing.cpp: C++ baselines of the overhead benchmark
 
+/// Seconds the calling thread last spent in a section without the GIL: the C++ part of its last
+/// call, which python/bench/overhead.py subtracts from the call's time seen from Python.
+inline thread_local double last_section_seconds = 0;
+
+/// Records the time from its construction to its destruction in last_section_seconds.
+struct SectionClock {
+  Clock::time_point t0 = Clock::now();
+  ~SectionClock() { last_section_seconds = ms_since(t0) * 1e-3; }
+};
+
 /// Runs f() without the GIL (every call that does real work), so that other Python threads run
 /// meanwhile; nothing in f may touch a Python object.
 template <class F>
 auto without_gil(F&& f) {
   py::gil_scoped_release release;
+  SectionClock clock;
   return f();
 }
 
@@ -42,6 +55,7 @@ struct Guarded {
   template <class F>
   auto run(F&& f) {
     py::gil_scoped_release release;
+    SectionClock clock;
     std::lock_guard<std::mutex> lock(mutex);
     return f(object);
   }

@@ -1,7 +1,6 @@
-// mbi._mbi._timing: the C++ side of the overhead benchmark (python/bench/overhead.py). Each
-// function times `calls` calls of a C++ call in C++ (no Python in between), one clock reading
-// before and after each, and returns the seconds of each call; the benchmark times the same call
-// from Python and compares medians.
+// mbi._mbi._timing: the C++ side of the overhead benchmark (python/bench/overhead.py): the
+// seconds of the C++ part of the last call (last_call), and C++ loops that time `calls` calls of
+// a C++ call in C++ (no Python in between), one clock reading before and after each.
 #include "bindings.hpp"
 
 #include <mbi/base/timer.hpp>
@@ -34,6 +33,9 @@ py::array time_calls(Guarded<T>& object, int calls, F&& call) {
 void bind_timing(py::module_& m) {
   using namespace pybind11::literals;
   py::module_ t = m.def_submodule("_timing", "C++ baselines of the overhead benchmark (python/bench/overhead.py)");
+  t.def(
+      "last_call", [] { return last_section_seconds; },
+      "Seconds the last call of this thread spent in C++ without the GIL (the C++ call it wraps).");
   t.def(
       "solve",
       [](Guarded<interp::ModifiedBI>& s, const py::object& X, int calls) {

@@ -1,5 +1,6 @@
 """mbi.Deformer: the same results as the pieces it binds, batches equal to single poses, out=
 arrays written in place without allocating dense arrays, normals, float32 results."""
+import os
 import tracemalloc
 
 import numpy as np
@@ -109,7 +110,7 @@ def test_out_is_written_in_place(mesh):
 def test_out_allocates_no_dense_array(mesh):
     U, T = mesh
     d = U.shape[1]
-    p = 200_000
+    p = 20_000 if os.environ.get("MBI_SANITIZED") else 200_000  # ASan is far slower
     deformer = mbi.Deformer(U, T, meshes.points(U, p))
     X = meshes.pose(U)
     out, out32 = np.empty((p, d)), np.empty((p, d), np.float32)

@@ -1,6 +1,7 @@
 """The GIL is released while mbi works: calls from two Python threads on two objects run at the
 same time and give the same results as one after the other; one object shared by two threads
 stays consistent (its calls take turns)."""
+import os
 import threading
 import time
 
@@ -30,7 +31,7 @@ def run_threads(work, count=2):
 
 def test_two_threads_run_at_once_and_agree():
     U, T = meshes.box(4, 3, 3)
-    P = meshes.points(U, 300_000)
+    P = meshes.points(U, 30_000 if os.environ.get("MBI_SANITIZED") else 300_000)  # ASan is far slower
     poses = [meshes.pose(U, seed=s) for s in range(6)]
     deformers = [mbi.Deformer(U, T, P, threads=1) for _ in range(2)]
     expect = [deformers[0].deform(X) for X in poses]
