@@ -167,7 +167,7 @@ TEST_CASE("sequence: SIGINT stops after the frame in progress; the cache holds t
   for (const auto& e : fs::directory_iterator(dir.path())) CHECK(e.path().filename().string().rfind(".mbi-tmp", 0) != 0);
 }
 
-TEST_CASE("--max-outside refuses points far outside, naming how many and the worst", "[app][sequence]") {
+TEST_CASE("mbi deform --max-outside refuses points far outside, naming how many and the worst", "[app][sequence]") {
   TempDir dir("seq");
   Eigen::MatrixXd P(3, 3);
   P << 0.3, 0.3, 0.3, 0.3, 0.3, 1.5, 0.3, 0.3, 2.0;  // the box's top is at z = 1.414
