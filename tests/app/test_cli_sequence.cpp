@@ -143,7 +143,7 @@ TEST_CASE("sequence: a bad frame ends it with every earlier frame complete", "[a
 
 TEST_CASE("sequence: SIGINT stops after the frame in progress; the cache holds the frames done", "[app][sequence]") {
   TempDir dir("seq");
-  // 4,000 frames of 200,000 points: long enough to be interrupted
+  // 4,000 frames of 200,000 points: long enough to be interrupted a second after they start
   const Eigen::MatrixXd P = (Eigen::MatrixXd::Random(200000, 3).array() * 0.3 + 0.35).matrix();
   mbi::io::write_points(dir / "p.xyz", P);
   {
@@ -154,8 +154,10 @@ TEST_CASE("sequence: SIGINT stops after the frame in progress; the cache holds t
   }
   const std::string cmd = "(" + q(MBI_EXE) + " deform --control " + q(data("box.node")) + " --mesh " + q(dir / "p.xyz") +
                           " --deformed " + q(dir / "long.pc2") + " --out " + q(dir / "o.pc2") + " > " + q(dir / "out.txt") +
-                          " 2> " + q(dir / "err.txt") + " & pid=$!; sleep 3; kill -INT $pid; wait $pid; echo $? > " +
-                          q(dir / "code.txt") + ")";
+                          " 2> " + q(dir / "err.txt") + " & pid=$!; " +
+                          // the cache's temporary appears as the frames start (slow builds: ASan)
+                          "for i in $(seq 1200); do ls " + q(dir.path()) + "/.mbi-tmp.*.tmp > /dev/null 2>&1 && break; " +
+                          "sleep 0.1; done; sleep 1; kill -INT $pid; wait $pid; echo $? > " + q(dir / "code.txt") + ")";
   REQUIRE(std::system(cmd.c_str()) == 0);
   const std::string err = mbi::test::slurp(dir / "err.txt");
   INFO(err);
