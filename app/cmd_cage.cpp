@@ -1,6 +1,7 @@
 // mbi cage DENSE --vertices N --out BASE [--stats STATS.json] [--mesher voxel|tetgen]: builds a
 // control mesh around a dense surface and writes BASE.node / BASE.ele (TetGen format).
 #include "commands.hpp"
+#include "signals.hpp"
 
 #include <mbi/generate/cage.hpp>
 #include <mbi/io/atomic_file.hpp>
@@ -43,10 +44,13 @@ const mbi::cli::Registrar reg(
       mbi::cli::add_threads_option(sub);
       return [a]() {
         namespace fs = std::filesystem;
-        // BASE, without a .node/.ele/.face extension
+        mbi::cli::handle_interrupts(nullptr);  // all or nothing: a signal ends it at once
+        // BASE, without a .node/.ele/.face extension; a folder's name ("dir/", ".") is refused
+        // (it would make ".node" in the folder, or hidden "..node")
         fs::path base(a->out);
         const std::string ext = mbi::io::lower_extension(base);
         if (ext == ".node" || ext == ".ele" || ext == ".face") base.replace_extension();
+        mbi::io::check_file_name(base, "--out");
         fs::path node = base, ele = base;
         node += ".node";
         ele += ".ele";
@@ -67,8 +71,8 @@ const mbi::cli::Registrar reg(
               "), a 2D input; TetGen makes tetrahedra only: use the voxel mesher (the default) "
               "for a 2D triangle cage, or --force-3d for tetrahedra");
         const mbi::generate::CageResult cage = mbi::generate::make_cage(dense.V, dense.F, opt);
-        mbi::io::write_tetgen(outputs.staging(i_node), cage.U, cage.T);
-        if (!a->vtk.empty()) mbi::io::write_vtk(outputs.staging(i_vtk), cage.U, cage.T);
+        outputs.write(i_node, [&](const fs::path& p) { mbi::io::write_tetgen(p, cage.U, cage.T); });
+        if (!a->vtk.empty()) outputs.write(i_vtk, [&](const fs::path& p) { mbi::io::write_vtk(p, cage.U, cage.T); });
         nlohmann::json j;
         j["input"] = a->dense;
         j["dense_vertices"] = dense.V.rows();
@@ -86,7 +90,7 @@ const mbi::cli::Registrar reg(
         j["seconds"] = cage.seconds;
         if (!a->stats.empty()) {
           mbi::cli::check_finite(j, a->stats);
-          mbi::io::write_text_atomic(outputs.staging(i_stats), j.dump(2) + "\n");
+          outputs.write(i_stats, [&](const fs::path& p) { mbi::io::write_text_atomic(p, j.dump(2) + "\n"); });
         }
         outputs.commit();
         // TetGen companions of BASE left from an earlier mesh would not match this one: they go

@@ -3,10 +3,15 @@
 //   mbi deform --control REST --deformed X --mesh DENSE --out OUT
 //              [--method bi|modified-bi|phong] [--alpha A] [--pin-boundary] [--stats STATS.json]
 //   mbi deform --example twist-bar [--out OUT] [--stats STATS.json]
+//   mbi deform --control REST --deformed TRAJECTORY --mesh DENSE --out CACHE|NUMBERED ...
+//              (a whole animation: deform_sequence.cpp)
 //
 // Prints the face discontinuity of BI, Phong and modified-BI side by side, and for --example the
 // error of each against the closed-form deformation.
 #include "commands.hpp"
+#include "deform_outside.hpp"
+#include "deform_sequence.hpp"
+#include "signals.hpp"
 
 #include <mbi/base/timer.hpp>
 #include <mbi/generate/procedural.hpp>
@@ -45,7 +50,16 @@ struct DeformArgs {
   bool alpha_given = false;
   bool pin_boundary = false;
   bool force = false;
+  std::optional<double> max_outside;
+  double fps = 24;
 };
+
+SequenceArgs sequence_args(const DeformArgs& a) {
+  return {.control = a.control, .deformed = a.deformed, .mesh = a.mesh, .out = a.out, .stats = a.stats,
+          .method = *pipeline::parse_method(a.method), .alpha = a.alpha_given ? std::optional(a.alpha) : std::nullopt,
+          .pin_boundary = a.pin_boundary, .force = a.force, .max_outside = a.max_outside,
+          .fps = a.fps};
+}
 
 // What the command works on, wherever it came from (files or the built-in example).
 struct Problem {
@@ -140,7 +154,7 @@ interp::Embedding embed_points(const Problem& pb, double& embed_ms) {
 
 // What the frame gave, for the statistics and the summary.
 struct Result {
-  const interp::ModifiedBI* solver = nullptr;
+  const interp::ModifiedBI* solver = nullptr;  // null: no interior face (one element)
   interp::DiscontinuityTable table;  // BI, Phong and modified-BI
   std::vector<std::pair<std::string, interp::Accuracy>> accuracy;  // --example: BI, Phong, modified-BI
   double embed_ms = 0, precompute_ms = 0, phong_ms = 0, solve_ms = 0, evaluate_ms = 0;
@@ -167,15 +181,16 @@ nlohmann::json stats_json(const DeformArgs& a, const Problem& pb, const interp::
   nlohmann::json j;
   j["method"] = a.method;
   j["dim"] = pb.U.cols();
-  j["alpha"] = r.solver->alpha();
-  j["beta"] = r.solver->beta();
+  // without an interior face modified-BI is not built: no alpha, beta or gauge
+  j["alpha"] = r.solver ? nlohmann::json(r.solver->alpha()) : nlohmann::json(nullptr);
+  j["beta"] = r.solver ? nlohmann::json(r.solver->beta()) : nlohmann::json(nullptr);
   j["pin_boundary"] = a.pin_boundary;
   j["control_vertices"] = pb.U.rows();
   j["elements"] = pb.T.rows();
   j["points"] = pb.P.rows();
   j["outside_points"] = embedding.outside.size();
   j["max_outside_distance"] = embedding.max_outside_distance;
-  j["null_space_dim"] = r.solver->null_space_dim();
+  j["null_space_dim"] = r.solver ? nlohmann::json(r.solver->null_space_dim()) : nlohmann::json(nullptr);
   j["disc"] = scenes::disc_json(r.table, scenes::disc_roundoff(pb.U));
   if (!r.accuracy.empty()) {
     const char* keys[] = {"bi", "phong", "modified_bi"};
@@ -201,9 +216,12 @@ void print_summary(const DeformArgs& a, const Problem& pb, const interp::Embeddi
               d == 3 ? "tetrahedra" : "triangles", d);
   std::printf("dense:   %s: %d points (%zu outside)\n", pb.mesh_name.c_str(),
               static_cast<int>(pb.P.rows()), embedding.outside.size());
-  std::printf("method:  %s, alpha %.4g, beta %.4g%s, gauge null space %d\n", a.method.c_str(),
-              r.solver->alpha(), r.solver->beta(), a.pin_boundary ? ", boundary pinned" : "",
-              r.solver->null_space_dim());
+  if (r.solver)
+    std::printf("method:  %s, alpha %.4g, beta %.4g%s, gauge null space %d\n", a.method.c_str(),
+                r.solver->alpha(), r.solver->beta(), a.pin_boundary ? ", boundary pinned" : "",
+                r.solver->null_space_dim());
+  else
+    std::printf("method:  %s (no interior face: modified-BI is not built)\n", a.method.c_str());
   std::printf("\nface discontinuity over %d interior faces (paper Table 2):\n%s", r.table.faces,
               scenes::format_table(r.table, scenes::disc_roundoff(pb.U)).c_str());
   if (!r.accuracy.empty())
@@ -217,8 +235,31 @@ void print_summary(const DeformArgs& a, const Problem& pb, const interp::Embeddi
               r.embed_ms, r.precompute_ms, r.phong_ms, r.solve_ms, r.evaluate_ms);
 }
 
+// The deformed dense model (positions `out`, p x d; `normals` or null) as output i of `outputs`.
+// The format follows the extension of `name`; a surface keeps what its file held besides
+// positions (write_surface); points alone make a vertices-only surface.
+void write_deformed(const io::OutputSet& outputs, std::size_t i, const std::string& name, const Problem& pb,
+                    const Eigen::MatrixXd& out, const Eigen::MatrixXd* normals) {
+  Eigen::MatrixXd full(out.rows(), out.cols() + pb.P_extra.cols());
+  full << out, pb.P_extra;
+  if (is_point_list(name)) {
+    outputs.write(i, [&](const fs::path& op) { io::write_points(op, full); });
+    return;
+  }
+  if (full.cols() > 3)
+    throw std::runtime_error(name + ": points with " + std::to_string(full.cols()) +
+                             " coordinates cannot be written as a surface (use .txt/.xyz)");
+  io::SurfaceMesh s = pb.surface ? *pb.surface : io::SurfaceMesh{};
+  s.V = Eigen::MatrixXd::Zero(full.rows(), 3);
+  s.V.leftCols(full.cols()) = full;
+  if (normals) s.N = *normals;
+  else s.N.resize(0, 0);
+  outputs.write(i, [&](const fs::path& op) { io::write_surface(op, s); });
+}
+
 int run_deform(const DeformArgs& a) {
   const bool example = !a.example.empty();
+  if (!example && is_sequence(a.deformed, a.out)) return run_deform_sequence(sequence_args(a));
   if (!example) {
     for (const auto& [flag, v] : {std::pair{"--control", &a.control}, {"--deformed", &a.deformed},
                                   {"--mesh", &a.mesh}, {"--out", &a.out}})
@@ -231,6 +272,7 @@ int run_deform(const DeformArgs& a) {
     inputs = {a.control, a.deformed, a.mesh};
     for (const fs::path& p : io::control_mesh_files(a.control)) inputs.push_back(p);
   }
+  handle_interrupts(nullptr);  // all or nothing: a signal ends it at once, no temporaries
   io::OutputSet outputs(inputs, a.force);
   const std::size_t i_out = a.out.empty() ? 0 : outputs.add(a.out, "--out");
   const std::size_t i_stats = a.stats.empty() ? 0 : outputs.add(a.stats, "--stats");
@@ -249,6 +291,7 @@ int run_deform(const DeformArgs& a) {
 
   double embed_ms = 0;
   interp::Embedding emb = embed_points(pb, embed_ms);
+  if (a.max_outside) refuse_far_points(emb, pb.U, pb.T, pb.P, *a.max_outside, pb.mesh_name, pb.control_name);
 
   // One frame through the pipeline: the given positions drive it, BI skips the solve.
   pipeline::PipelineOptions po;
@@ -261,6 +304,13 @@ int run_deform(const DeformArgs& a) {
   }
   po.interp.alpha = a.alpha_given ? a.alpha : 0.0;
   po.interp.pin_boundary = a.pin_boundary;
+  // One element has no interior face: BI and Phong need none; modified-BI minimises the
+  // discontinuity across interior faces and needs at least one.
+  const bool has_faces = interp::interior_faces(pb.T).rows() > 0;
+  if (!has_faces && po.method == pipeline::Method::ModifiedBI)
+    throw std::runtime_error(pb.control_name + ": the control mesh has no interior face (one element); "
+                             "modified-BI minimises the discontinuity across interior faces and needs at "
+                             "least two face-adjacent elements (--method bi or phong take it)");
   auto given = std::make_unique<pipeline::GivenDriver>(pb.U);
   given->set(pb.X);
   std::optional<pipeline::FramePipeline> pipe;
@@ -269,7 +319,8 @@ int run_deform(const DeformArgs& a) {
     pipe.emplace(pb.U, pb.T, std::move(emb), std::move(given), po,
                  std::make_unique<pipeline::CpuEvaluator>(pipeline::Precision::Double),
                  rest_normals);
-    solver = &pipe->solver();  // the comparison table needs modified-BI in any case
+    // the comparison table needs modified-BI, where there is an interior face to compare
+    if (has_faces) solver = &pipe->solver();
   } catch (const interp::Error& e) {
     throw std::runtime_error(pb.control_name + ": " + std::string(e.what()));
   }
@@ -285,36 +336,21 @@ int run_deform(const DeformArgs& a) {
   if (!out.allFinite()) throw std::runtime_error("evaluation produced non-finite positions");
 
   // BI, Phong and modified-BI side by side, whatever the method
-  r.table = interp::discontinuity_table(*solver, pb.X, pipe->modified_bi_M(), pipe->phong_M());
+  if (solver) {
+    r.table = interp::discontinuity_table(*solver, pb.X, pipe->modified_bi_M(), pipe->phong_M());
+  } else {  // no face to measure: every column 0 over 0 faces
+    r.table.phong = interp::Summary{};
+  }
   r.accuracy = accuracy_rows(pb, *pipe);
   r.phong_ms = pipe->phong_precompute_ms();
   const interp::Embedding& embedding = pipe->embedding();
 
   // Outputs: nothing is written unless everything above succeeded.
-  if (!a.out.empty()) {
-    Eigen::MatrixXd full(out.rows(), d + pb.P_extra.cols());
-    full << out, pb.P_extra;
-    const fs::path op = outputs.staging(i_out);
-    if (is_point_list(op)) {
-      io::write_points(op, full);
-    } else {
-      // The output's format follows its extension; a surface keeps what its file held besides
-      // positions (write_surface); points alone make a vertices-only surface.
-      if (full.cols() > 3)
-        throw std::runtime_error(a.out + ": points with " + std::to_string(full.cols()) +
-                                 " coordinates cannot be written as a surface (use .txt/.xyz)");
-      io::SurfaceMesh s = pb.surface ? *pb.surface : io::SurfaceMesh{};
-      s.V = Eigen::MatrixXd::Zero(full.rows(), 3);
-      s.V.leftCols(full.cols()) = full;
-      if (po.normals) s.N = pipe->normals();
-      else s.N.resize(0, 0);
-      io::write_surface(op, s);
-    }
-  }
+  if (!a.out.empty()) write_deformed(outputs, i_out, a.out, pb, out, po.normals ? &pipe->normals() : nullptr);
   if (!a.stats.empty()) {
     const nlohmann::json j = stats_json(a, pb, embedding, r);
     check_finite(j, a.stats);
-    io::write_text_atomic(outputs.staging(i_stats), j.dump(2) + "\n");
+    outputs.write(i_stats, [&](const fs::path& p) { io::write_text_atomic(p, j.dump(2) + "\n"); });
   }
   outputs.commit();
   print_summary(a, pb, embedding, r);
@@ -331,11 +367,13 @@ const Registrar reg{
                      "or legacy VTK .vtk");
       sub.add_option("--deformed", a->deformed,
                      "REQUIRED (unless --example) deformed control positions, one per control node in file order: "
-                     ".node, .msh, .vtk or plain text (n lines of d numbers)");
+                     ".node, .msh, .vtk, .vtu or plain text (n lines of d numbers); or a whole trajectory: .pc2, .mdd, "
+                     ".pvd, numbered files x_%04d.vtk or a quoted glob 'x_*.vtk'");
       sub.add_option("--mesh", a->mesh, "REQUIRED (unless --example) dense model: .obj/.ply/.off/.stl, or points .txt/.xyz");
       sub.add_option("--out", a->out,
                      "REQUIRED (unless --example) output, format by extension: .obj/.ply/.off/.stl (keeping the input's "
-                     "attributes when the format is the same) or points .txt/.xyz");
+                     "attributes when the format is the same) or points .txt/.xyz; for a trajectory a point cache "
+                     ".pc2/.mdd or numbered files out_%04d.obj");
       sub.add_option("--method", a->method, "interpolation")
           ->check(CLI::IsMember(pipeline::kMethodNames.names()));
       sub.add_option_function<double>(
@@ -347,6 +385,11 @@ const Registrar reg{
           "weight of E_vibr (> 0; default 0.1 in 3D, 0.2 in 2D)");
       sub.add_flag("--pin-boundary", a->pin_boundary, "M = 0 on the control mesh boundary");
       sub.add_option("--stats", a->stats, "write statistics and timings as JSON");
+      sub.add_option("--max-outside", a->max_outside,
+                     "refuse dense points farther outside the control mesh than this times the model size")
+          ->check(CLI::NonNegativeNumber);
+      sub.add_option("--fps", a->fps, "frames per second where times meet frames (MDD times, PC2 frames; default 24)")
+          ->check(CLI::PositiveNumber);
       sub.add_flag("--force", a->force, "overwrite existing --out / --stats files");
       sub.add_option("--example", a->example, "built-in example instead of files: twist-bar");
       add_threads_option(sub);

@@ -1,6 +1,7 @@
 // mbi run SCENE [--out DIR] [--frames N] [--mesh FILE] [--method bi|modified-bi|phong]
 //         [--gpu auto|on|off] [--force] [--quiet] [--threads N]
 #include "commands.hpp"
+#include "signals.hpp"
 
 #include <mbi/scenes/output_folder.hpp>
 #include <mbi/scenes/report.hpp>
@@ -8,6 +9,7 @@
 
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <optional>
@@ -56,8 +58,16 @@ int run_run(const RunArgs& a) {
       last_pct = pct;
     };
   }
+  static std::atomic<int> stop{0};  // the signal that stops the run (signals.hpp)
+  o.stop = &stop;
+  handle_interrupts(&stop);
   const scenes::RunResult r = scenes::run_scene(sc, o);
-  if (tty && r.failed && !a.quiet) std::fprintf(stderr, "\n");
+  if (tty && (r.failed || r.interrupted) && !a.quiet) std::fprintf(stderr, "\n");
+  if (r.interrupted && r.frames < 0) {
+    std::fprintf(stderr, "mbi run: interrupted by %s while loading; nothing written\n",
+                 scenes::signal_name(r.interrupted).c_str());
+    return 128 + r.interrupted;
+  }
   std::printf("scene %s: %d frames, outputs in %s (evaluated on %s)\n", sc.name.c_str(), r.frames,
               r.out_dir.string().c_str(), r.evaluator.c_str());
   std::printf("face discontinuity at the last frame (%d interior faces):\n%s", r.last_table.faces,
@@ -66,6 +76,11 @@ int run_run(const RunArgs& a) {
     std::fprintf(stderr, "mbi run: error: %s (outputs up to frame %d kept)\n", r.message.c_str(),
                  r.frames);
     return 3;
+  }
+  if (r.interrupted) {
+    std::fprintf(stderr, "mbi run: interrupted by %s after frame %d; outputs up to frame %d finished\n",
+                 scenes::signal_name(r.interrupted).c_str(), r.frames, r.frames);
+    return 128 + r.interrupted;
   }
   return 0;
 }

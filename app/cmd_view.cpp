@@ -1,11 +1,14 @@
 // mbi view SCENE [--mesh FILE] [--method M] [--script FILE] [--record FILE] [--frames N]
-//               [--screenshot PATH] [--report FILE] [--size WxH] [--paused] [--no-split]
+//               [--screenshot PATH] [--report FILE] [--force] [--width W] [--height H]
+//               [--paused] [--no-split] [--wireframe] [--no-panel] [--gpu auto|on|off]
 #include "commands.hpp"
+#include "signals.hpp"
 
 #include <mbi/pipeline/method.hpp>
 #include <mbi/viewer/scene_view.hpp>
 
 #include <cstdio>
+#include <optional>
 
 namespace mbi::cli {
 namespace {
@@ -13,12 +16,14 @@ namespace {
 struct ViewArgs {
   std::string scene, mesh, method, script, record, screenshot, report;
   int frames = 0, width = 1280, height = 720;
-  bool paused = false, no_split = false, wireframe = false, no_panel = false;
+  std::optional<scenes::GpuUse> gpu;
+  bool paused = false, no_split = false, wireframe = false, no_panel = false, force = false;
 };
 
 int run_view(const ViewArgs& a) {
   scenes::Scene sc = scenes::load_scene(a.scene);
   if (!a.method.empty()) sc.interpolation.method = *pipeline::parse_method(a.method);
+  if (a.gpu) sc.interpolation.gpu = *a.gpu;
   viewer::ViewerOptions o;
   o.width = a.width;
   o.height = a.height;
@@ -31,6 +36,8 @@ int run_view(const ViewArgs& a) {
   o.split = !a.no_split;
   o.wireframe = a.wireframe;
   o.panel = !a.no_panel;
+  o.force = a.force;
+  handle_interrupts(nullptr);  // Ctrl-C ends the session at once, leaving no reserved temporaries
   viewer::view_scene(sc, a.mesh, o);
   return 0;
 }
@@ -49,11 +56,16 @@ const Registrar reg{
           ->check(CLI::Range(0, 100000000));
       sub.add_option("--screenshot", a->screenshot, "write the last frame as PNG when closing");
       sub.add_option("--report", a->report, "write per-frame state (pokes, handles, energies) as JSON");
+      sub.add_flag("--force", a->force,
+                   "overwrite existing outputs (--record, --screenshot, --report, p screenshots); inputs never");
       sub.add_option("--width", a->width, "window width")->check(CLI::Range(160, 8192));
       sub.add_option("--height", a->height, "window height")->check(CLI::Range(120, 8192));
       sub.add_flag("--paused", a->paused, "start paused");
       sub.add_flag("--no-split", a->no_split, "only the scene's method (no BI panel)");
       sub.add_flag("--wireframe", a->wireframe, "show the control mesh's edges");
+      add_choice(sub, "--gpu", a->gpu, scenes::kGpuUseNames,
+                 "evaluator: auto (the CPU kernel on a software OpenGL renderer such as llvmpipe, else "
+                 "the GPU), on (the GPU), off (the CPU); default: the scene's interpolation.gpu, auto");
       sub.add_flag("--no-panel", a->no_panel, "hide the control panel (clean screenshots)");
       add_threads_option(sub);
       return [a] { return run_view(*a); };

@@ -3,8 +3,8 @@
 #
 #   bash scripts/fuzz.sh [SECONDS] [TARGET...]
 #
-# SECONDS per target (default 30); TARGETs from: obj off ply stl points tetgen gmsh vtk pc2 png
-# scene (default: all). Configures and builds a separate clang build in build/fuzz
+# SECONDS per target (default 30); TARGETs from: obj off ply stl points tetgen gmsh vtk vtu pvd
+# pc2 mdd png scene script (default: all). Configures and builds a separate clang build in build/fuzz
 # (-DMBI_FUZZ=ON: the readers only, with -fsanitize=fuzzer,address,undefined), then runs the
 # targets one after another. Each starts from its seeds (tests/fuzz/<target>/, read only) and
 # the inputs found by earlier runs (build/fuzz/corpus/<target>/, kept between runs). A crash,
@@ -17,7 +17,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 secs=${1:-30}
 shift || true
-all=(obj off ply stl points tetgen gmsh vtk pc2 png scene)
+all=(obj off ply stl points tetgen gmsh vtk vtu pvd pc2 mdd png scene script)
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=("${all[@]}")
 for t in "${targets[@]}"; do

@@ -14,7 +14,8 @@ set -euo pipefail
 # GPU path runs on machines without a GPU), GLFW and Dear ImGui; SuiteSparse for CHOLMOD, the
 # faster factorization of the modified-BI precompute (optional: MBI_WITH_CHOLMOD), and OpenBLAS,
 # which CHOLMOD's supernodal factorization runs on (Debian's reference BLAS is several times
-# slower; the package takes over libblas.so.3 through update-alternatives).
+# slower; the package takes over libblas.so.3 through update-alternatives); pugixml and zlib
+# for VTK XML (.vtu, .pvd) control meshes and trajectories.
 run_packages=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libtet1.5-dev libopenmesh-dev
@@ -22,14 +23,19 @@ run_packages=(
   libepoxy-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libglx-mesa0
   libglfw3-dev libimgui-dev
   libsuitesparse-dev libopenblas0-pthread
+  libpugixml-dev zlib1g-dev
 )
 # Testing: Catch2 (the test suite), Xvfb with xauth (the viewer's tests run under xvfb-run),
 # Python (scripts/test.sh --sanitizers), Google Benchmark (mbi-bench), matplotlib and git (the
-# benchmark report's plots and commit), clang with its libFuzzer runtime (scripts/fuzz.sh).
+# benchmark report's plots and commit), clang with its libFuzzer runtime (scripts/fuzz.sh);
+# the Python package (python/: pybind11, the headers, numpy, pytest, PyTorch for its autograd
+# wrapper, venv for the install test); meshio (the VTK XML fixtures' writer, tests/data/vtu).
 test_packages=(
   catch2 xvfb xauth python3
   libbenchmark-dev python3-matplotlib git
   clang libclang-rt-14-dev
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-torch python3-venv python3-setuptools
+  python3-meshio
 )
 
 case "${1:-test}" in

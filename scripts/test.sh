@@ -12,7 +12,9 @@
 #       mbi run / view without --gpu off: Mesa's driver leaks
 #       small blocks and is unloaded before exit, so the reports cannot be attributed or
 #       suppressed); those run in a second ctest pass with detect_leaks=0. Leaks of the readers
-#       are also caught by the fuzz targets (scripts/fuzz.sh).
+#       are also caught by the fuzz targets (scripts/fuzz.sh). The Python tests (label python)
+#       run against the ASan-built module with the ASan runtime preloaded into the interpreter
+#       and detect_leaks=0 (set by python/CMakeLists.txt).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ "${1:-}" = "--sanitizers" ]; then

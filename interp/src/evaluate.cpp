@@ -76,8 +76,8 @@ inline void bezier_eval(const Scalar* P /* K x D row-major */, const Scalar* b, 
 
 template <int D, typename Scalar>
 void kernel(const MatX<Scalar>& Prow /* D x (m K), column per control point */, const Embedding& emb,
-            const MatX<Scalar>* grads /* D x (m (D+1)) */, const MatX<Scalar>* normals_rest,
-            MatX<Scalar>& pos, MatX<Scalar>* normals_out, int threads) {
+            const MatX<Scalar>* grads /* D x (m (D+1)) */, const ConstPointsRef<Scalar>* normals_rest,
+            PointsRef<Scalar>& pos, PointsRef<Scalar>* normals_out, int threads) {
   constexpr int K = (D + 1) * (D + 2) / 2;
   const long long np = emb.size();
   detail::parallel_blocks(np, 8192, detail::thread_count(np, 8192, threads), [&](long long begin, long long end) {
@@ -128,19 +128,12 @@ void kernel(const MatX<Scalar>& Prow /* D x (m K), column per control point */, 
   });
 }
 
+// Checks B and emb, and for normals (normals_rest given) the basis gradients and the rest
+// normals; returns d. Everything is checked before an output is touched.
 template <typename Scalar>
-void run(const BezierPoints& B, const Embedding& emb, const MatX<Scalar>* normals_rest,
-         MatX<Scalar>& positions, MatX<Scalar>* normals_out, int threads) {
-  // float positions in 3D: FastEvaluator's kernels, which check the elements as they go (the
-  // double path keeps the Bernstein form)
-  if constexpr (std::is_same_v<Scalar, float>) {
-    if (!normals_out && check_inputs(B, emb, false) == 3) return detail::evaluate_float3(B, emb, positions, threads);
-  }
+int check_all(const BezierPoints& B, const Embedding& emb, const ConstPointsRef<Scalar>* normals_rest) {
   const int d = check_inputs(B, emb);
-  // control points as D x (m K) so that each element's points are contiguous
-  const MatX<Scalar> Prow = B.transpose().template cast<Scalar>();
-  MatX<Scalar> grads;
-  if (normals_out) {
+  if (normals_rest) {
     const long long m = B.rows() / ((d + 1) * (d + 2) / 2);
     if (emb.gradients.rows() != m * (d + 1) || emb.gradients.cols() != d)
       throw Error("normals need the embedding's basis gradients (" + std::to_string(m * (d + 1)) +
@@ -150,10 +143,29 @@ void run(const BezierPoints& B, const Embedding& emb, const MatX<Scalar>* normal
       throw Error("rest normals must be " + std::to_string(emb.size()) + " x " +
                   std::to_string(d) + ", got " + std::to_string(normals_rest->rows()) + " x " +
                   std::to_string(normals_rest->cols()));
-    grads = emb.gradients.transpose().template cast<Scalar>();
-    normals_out->resize(emb.size(), d);
   }
-  positions.resize(emb.size(), d);
+  return d;
+}
+
+void check_output(const char* what, Eigen::Index rows, Eigen::Index cols, const Embedding& emb, int d) {
+  if (rows != emb.size() || cols != d)
+    throw Error(std::string(what) + " must be " + std::to_string(emb.size()) + " x " +
+                std::to_string(d) + ", got " + std::to_string(rows) + " x " + std::to_string(cols));
+}
+
+// Inputs checked by check_all, outputs p x d.
+template <typename Scalar>
+void run(const BezierPoints& B, const Embedding& emb, int d, const ConstPointsRef<Scalar>* normals_rest,
+         PointsRef<Scalar> positions, PointsRef<Scalar>* normals_out, int threads) {
+  // float positions in 3D with unit inner stride: FastEvaluator's kernels (the double path keeps
+  // the Bernstein form)
+  if constexpr (std::is_same_v<Scalar, float>) {
+    if (!normals_out && d == 3 && positions.innerStride() == 1) return detail::evaluate_float3(B, emb, positions, threads);
+  }
+  // control points as D x (m K) so that each element's points are contiguous
+  const MatX<Scalar> Prow = B.transpose().template cast<Scalar>();
+  MatX<Scalar> grads;
+  if (normals_out) grads = emb.gradients.transpose().template cast<Scalar>();
   if (d == 3) kernel<3, Scalar>(Prow, emb, normals_out ? &grads : nullptr, normals_rest, positions, normals_out, threads);
   else kernel<2, Scalar>(Prow, emb, normals_out ? &grads : nullptr, normals_rest, positions, normals_out, threads);
 }
@@ -163,7 +175,9 @@ void run(const BezierPoints& B, const Embedding& emb, const MatX<Scalar>* normal
 template <typename Scalar>
 void evaluate(const BezierPoints& B, const Embedding& emb,
               Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& positions, int threads) {
-  run<Scalar>(B, emb, nullptr, positions, nullptr, threads);
+  const int d = check_all<Scalar>(B, emb, nullptr);
+  positions.resize(emb.size(), d);
+  run<Scalar>(B, emb, d, nullptr, positions, nullptr, threads);
 }
 
 template <typename Scalar>
@@ -171,7 +185,29 @@ void evaluate(const BezierPoints& B, const Embedding& emb,
               const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& normals_rest,
               Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& positions,
               Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& normals_out, int threads) {
-  run<Scalar>(B, emb, &normals_rest, positions, &normals_out, threads);
+  const ConstPointsRef<Scalar> rest(normals_rest);
+  const int d = check_all<Scalar>(B, emb, &rest);
+  normals_out.resize(emb.size(), d);
+  positions.resize(emb.size(), d);
+  PointsRef<Scalar> normals(normals_out);
+  run<Scalar>(B, emb, d, &rest, positions, &normals, threads);
+}
+
+template <typename Scalar>
+void evaluate(const BezierPoints& B, const Embedding& emb, PointsRef<Scalar> positions, int threads) {
+  const int d = check_all<Scalar>(B, emb, nullptr);
+  check_output("positions", positions.rows(), positions.cols(), emb, d);
+  run<Scalar>(B, emb, d, nullptr, positions, nullptr, threads);
+}
+
+template <typename Scalar>
+void evaluate(const BezierPoints& B, const Embedding& emb,
+              const ConstPointsRef<Scalar>& normals_rest, PointsRef<Scalar> positions,
+              PointsRef<Scalar> normals_out, int threads) {
+  const int d = check_all<Scalar>(B, emb, &normals_rest);
+  check_output("positions", positions.rows(), positions.cols(), emb, d);
+  check_output("normals", normals_out.rows(), normals_out.cols(), emb, d);
+  run<Scalar>(B, emb, d, &normals_rest, positions, &normals_out, threads);
 }
 
 template void evaluate<float>(const BezierPoints&, const Embedding&, Eigen::MatrixXf&, int);
@@ -180,6 +216,12 @@ template void evaluate<float>(const BezierPoints&, const Embedding&, const Eigen
                               Eigen::MatrixXf&, Eigen::MatrixXf&, int);
 template void evaluate<double>(const BezierPoints&, const Embedding&, const Eigen::MatrixXd&,
                                Eigen::MatrixXd&, Eigen::MatrixXd&, int);
+template void evaluate<float>(const BezierPoints&, const Embedding&, PointsRef<float>, int);
+template void evaluate<double>(const BezierPoints&, const Embedding&, PointsRef<double>, int);
+template void evaluate<float>(const BezierPoints&, const Embedding&, const ConstPointsRef<float>&,
+                              PointsRef<float>, PointsRef<float>, int);
+template void evaluate<double>(const BezierPoints&, const Embedding&, const ConstPointsRef<double>&,
+                               PointsRef<double>, PointsRef<double>, int);
 
 Eigen::MatrixXd jacobian(const Eigen::Ref<const Eigen::MatrixXd>& U,
                          const Eigen::Ref<const Eigen::MatrixXi>& T, const BezierPoints& B, int e,

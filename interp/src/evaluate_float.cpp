@@ -128,10 +128,9 @@ Kernel kernel(bool prefetch) {
 
 }  // namespace
 
-void evaluate_float3(const Eigen::MatrixXd& B, const Embedding& emb, Eigen::MatrixXf& positions, int threads) {
+void evaluate_float3(const Eigen::MatrixXd& B, const Embedding& emb, PointsRef<float> positions, int threads) {
   const long long p = emb.size();
   const int m = static_cast<int>(B.rows() / 10);
-  positions.resize(p, 3);
   if (p == 0) return;
   // the element terms: scratch of the calling thread, kept between calls
   thread_local std::vector<float> terms;
@@ -142,9 +141,9 @@ void evaluate_float3(const Eigen::MatrixXd& B, const Embedding& emb, Eigen::Matr
   const double* b1 = emb.bary.data() + p;  // column-major: columns 1, 2, 3
   const double* b2 = b1 + p;
   const double* b3 = b2 + p;
-  float* px = positions.data();
-  float* py = px + p;
-  float* pz = py + p;
+  float* px = positions.data();  // columns outerStride() apart
+  float* py = px + positions.outerStride();
+  float* pz = py + positions.outerStride();
   // the x86 kernels come with AVX2 (and AVX-512 with both): pack and unpack with AVX2 then
   bool simd = false;
   auto pack_x86 = pack_plain;

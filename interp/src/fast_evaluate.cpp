@@ -55,7 +55,7 @@ std::int32_t as_word(float f) {
 // scale of the derivatives dx/db_k). Everything below is known at compile time but B: no scratch
 // to clear, no offset table to read per element.
 template <int D, const Layout& L>
-double prepare_terms(const BezierPoints& B, float* coef, int m, int threads) {
+double prepare_terms(const Eigen::Ref<const BezierPoints>& B, float* coef, int m, int threads) {
   constexpr int K = (D + 1) * (D + 2) / 2, NC = coef_stride(D);
   static constexpr TermIndex ix(D);
   constexpr auto unused = [] {
@@ -77,7 +77,7 @@ double prepare_terms(const BezierPoints& B, float* coef, int m, int threads) {
     edge_row[edges[s].first][edges[s].second] = edge_row[edges[s].second][edges[s].first] =
         D + 1 + static_cast<int>(s);
   const double* col[D];
-  for (int c = 0; c < D; ++c) col[c] = B.data() + c * B.rows();  // B is column-major
+  for (int c = 0; c < D; ++c) col[c] = B.data() + c * B.outerStride();  // B is column-major
   // blocks of elements on up to `threads` threads (more than 512 elements); the largest |c_k|
   // of each block joins the maximum
   std::atomic<double> dmax_all{0.0};
@@ -126,15 +126,7 @@ bool FastEvaluator::supported(Simd s) {
   return true;
 }
 
-const char* FastEvaluator::name(Simd s) {
-  switch (s) {
-    case Simd::Auto: return "auto";
-    case Simd::Avx512: return "avx512";
-    case Simd::Avx2: return "avx2";
-    case Simd::Portable: return "portable";
-  }
-  return "?";
-}
+const char* FastEvaluator::name(Simd s) { return kSimdNames.name(s); }
 
 FastEvaluator::FastEvaluator(const Embedding& emb, int threads, Simd simd) : threads_(threads) {
   d_ = emb.dim();
@@ -243,7 +235,7 @@ int FastEvaluator::threads() const {
   return detail::thread_count(p_, kBlock, threads_);
 }
 
-void FastEvaluator::prepare(const BezierPoints& B, bool normals) {
+void FastEvaluator::prepare(const Eigen::Ref<const BezierPoints>& B, bool normals) {
   const int d = d_;
   const int K = (d + 1) * (d + 2) / 2;
   if (B.cols() != d || B.rows() % K != 0 || B.rows() / K < m_)
@@ -296,18 +288,18 @@ const float* FastEvaluator::rest_normals_for(const float* positions, const float
   return normals_.data() + moff_;
 }
 
-void FastEvaluator::evaluate(const BezierPoints& B, RowMatrixXf& positions) {
+void FastEvaluator::evaluate(const Eigen::Ref<const BezierPoints>& B, RowMatrixXf& positions) {
   if (positions.rows() != p_ || positions.cols() != d_) positions.resize(p_, d_);
   evaluate(B, positions.data(), nullptr);
 }
 
-void FastEvaluator::evaluate(const BezierPoints& B, RowMatrixXf& positions, RowMatrixXf& normals) {
+void FastEvaluator::evaluate(const Eigen::Ref<const BezierPoints>& B, RowMatrixXf& positions, RowMatrixXf& normals) {
   if (positions.rows() != p_ || positions.cols() != d_) positions.resize(p_, d_);
   if (normals.rows() != p_ || normals.cols() != d_) normals.resize(p_, d_);
   evaluate(B, positions.data(), normals.data());
 }
 
-void FastEvaluator::evaluate(const BezierPoints& B, float* positions, float* normals) {
+void FastEvaluator::evaluate(const Eigen::Ref<const BezierPoints>& B, float* positions, float* normals) {
   const bool with_normals = normals != nullptr;
   prepare(B, with_normals);
   if (p_ == 0) return;

@@ -685,6 +685,31 @@ VertexMatrices ModifiedBI::solve(const Eigen::Ref<const Eigen::MatrixXd>& X) con
   return M;
 }
 
+Eigen::MatrixXd ModifiedBI::solve_transpose(const VertexMatrices& G) const {
+  const Impl& I = *impl_;
+  const int d = I.d, n = I.n;
+  if (G.rows() != static_cast<Eigen::Index>(n) * d || G.cols() != d)
+    throw Error("dL/dM must be " + std::to_string(n * d) + " x " + std::to_string(d) + ", got " +
+                std::to_string(G.rows()) + " x " + std::to_string(G.cols()));
+  detail::check_finite("dL/dM row", G);
+  Eigen::MatrixXd GX = Eigen::MatrixXd::Zero(n, d);
+  if (I.n_red == 0) return GX;
+  // solve() writes M(i d + c, r) = sol(a, c), a = reduced[i d + r]: gather G the same way
+  std::vector<double> y(static_cast<size_t>(I.n_red) * d, 0.0);
+  for (int i = 0; i < n; ++i)
+    for (int r = 0; r < d; ++r) {
+      const int a = I.reduced[i * d + r];
+      if (a < 0) continue;
+      for (int c = 0; c < d; ++c) y[static_cast<size_t>(a) * d + c] = G(i * d + c, r);
+    }
+  // sol = -beta A^-1 H_mx X with A symmetric: dL/dX = -beta H_mx^T A^-1 dL/dsol
+  I.F.solve(y.data(), d);
+  for (int j = 0; j < n; ++j)
+    for (SpMat::InnerIterator it(I.Hmx_red, j); it; ++it)
+      for (int c = 0; c < d; ++c) GX(j, c) -= I.beta * it.value() * y[static_cast<size_t>(it.row()) * d + c];
+  return GX;
+}
+
 BezierPoints ModifiedBI::bezier(const Eigen::Ref<const Eigen::MatrixXd>& X, const VertexMatrices& M) const {
   return bezier_points(impl_->U, impl_->T, X, M);
 }

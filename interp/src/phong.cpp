@@ -97,4 +97,33 @@ VertexMatrices Phong::M(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
   return 0.5 * vertex_gradients(X);
 }
 
+Eigen::MatrixXd Phong::M_transpose(const VertexMatrices& G) const {
+  const int d = dim(), n = vertices(), m = elements();
+  if (G.rows() != static_cast<Eigen::Index>(n) * d || G.cols() != d)
+    throw Error("dL/dM must be " + std::to_string(n * d) + " x " + std::to_string(d) + ", got " +
+                std::to_string(G.rows()) + " x " + std::to_string(G.cols()));
+  detail::check_finite("dL/dM row", G);
+  // M_i = sum_e w_e F_e / 2: dL/dF_e gathers w_e dL/dM_i / 2 from every vertex i of e
+  Eigen::MatrixXd GF = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(m) * d, d);
+  for (int i = 0; i < n; ++i) {
+    const std::vector<int>& es = elements_of_[static_cast<size_t>(i)];
+    const std::vector<double>& w = weights_[static_cast<size_t>(i)];
+    for (size_t a = 0; a < es.size(); ++a)
+      GF.middleRows(static_cast<Eigen::Index>(es[a]) * d, d) +=
+          0.5 * w[a] * G.middleRows(static_cast<Eigen::Index>(i) * d, d);
+  }
+  // F_e = D_s D_m^-1 with D_s's column k = x_{k+1} - x_0: dL/dD_s = dL/dF_e D_m^-T
+  Eigen::MatrixXd GX = Eigen::MatrixXd::Zero(n, d);
+  Eigen::MatrixXd GDs(d, d);
+  for (int e = 0; e < m; ++e) {
+    GDs.noalias() = GF.middleRows(static_cast<Eigen::Index>(e) * d, d) *
+                    Dm_inv_.middleRows(static_cast<Eigen::Index>(e) * d, d).transpose();
+    for (int k = 0; k < d; ++k) {
+      GX.row(T_(e, k + 1)) += GDs.col(k).transpose();
+      GX.row(T_(e, 0)) -= GDs.col(k).transpose();
+    }
+  }
+  return GX;
+}
+
 }  // namespace mbi::interp

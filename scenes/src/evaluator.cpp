@@ -4,9 +4,12 @@
 
 namespace mbi::scenes {
 
-Evaluation make_evaluator(GpuUse use, const std::function<void(const std::string&)>& warn) {
+Evaluation make_evaluator(GpuUse use, const std::function<void(const std::string&)>& warn,
+                          std::shared_ptr<gpu::Context> context) {
   Evaluation e;
-  if (use != GpuUse::Off) {
+  if (use != GpuUse::Off && context) {
+    e.context = std::move(context);
+  } else if (use != GpuUse::Off) {
     try {
       e.context = gpu::Context::headless();
     } catch (const gpu::GlError& err) {

@@ -4,20 +4,49 @@
 #include <mbi/io/atomic_file.hpp>
 #include <mbi/scenes/report.hpp>
 
+#include <unistd.h>
+
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <string>
+#include <vector>
 
 namespace mbi::scenes {
 namespace {
 
+// `text` with `spaces` more spaces before each line: a record as it sits in the frames array.
+std::string indented(const std::string& text, int spaces) {
+  const std::string pad(static_cast<std::size_t>(spaces), ' ');
+  std::string out = pad;
+  for (char c : text) {
+    out += c;
+    if (c == '\n') out += pad;
+  }
+  return out;
+}
+
 }  // namespace
 
+long resident_kb() {
+  std::FILE* f = std::fopen("/proc/self/statm", "r");
+  if (!f) return -1;
+  long size = 0, resident = -1;
+  if (std::fscanf(f, "%ld %ld", &size, &resident) != 2) resident = -1;
+  std::fclose(f);
+  const long page = ::sysconf(_SC_PAGESIZE);
+  return resident < 0 || page <= 0 ? -1 : resident * (page / 1024);
+}
+
 RunMetrics::RunMetrics(const Scene& sc, const SceneModels& m, pipeline::FramePipeline& pipe,
-                       std::size_t outside_points, const char* renderer, double load_ms, double embed_ms)
+                       std::size_t outside_points, const char* renderer, double load_ms, double embed_ms,
+                       const std::filesystem::path& dir)
     : pipe_(pipe),
       sim_(dynamic_cast<const pipeline::SimulatorDriver*>(&pipe.driver())),
-      roundoff_(disc_roundoff(m.U)) {
+      roundoff_(disc_roundoff(m.U)),
+      dir_(dir),
+      keep_records_(sc.output.metrics) {
   const interp::ModifiedBI& solver = pipe.solver();
   json_["scene"] = sc.name;
   json_["scene_file"] = sc.file.string();
@@ -37,7 +66,6 @@ RunMetrics::RunMetrics(const Scene& sc, const SceneModels& m, pipeline::FramePip
                          {"embed", embed_ms}, {"precompute", pipe.precompute_ms()}};
   if (pipe.method() == pipeline::Method::Phong)
     json_["timings_ms"]["phong_precompute"] = pipe.phong_precompute_ms();
-  json_["frames"] = nlohmann::json::array();
 }
 
 nlohmann::json RunMetrics::start_frame(int f) const {
@@ -87,19 +115,62 @@ interp::DiscontinuityTable RunMetrics::add_discontinuity(nlohmann::json& record)
   return t;
 }
 
+void RunMetrics::add_frame(nlohmann::json record) {
+  record["rss_kb"] = resident_kb();
+  if (keep_records_) {
+    if (!records_) records_ = std::make_unique<io::ScratchFile>(dir_, "metrics.json");
+    const std::string text = (frames_ > 0 ? ",\n" : "") + indented(record.dump(1), 2);
+    const long at = records_->size();
+    records_->append(text.data(), text.size());
+    last_at_ = at;
+  }
+  before_last_ = std::move(last_);
+  last_ = std::move(record);
+  ++frames_;
+}
+
+void RunMetrics::discard_last() {
+  if (frames_ == 0) return;
+  if (records_) records_->truncate(last_at_);
+  last_ = std::move(before_last_);
+  before_last_ = nullptr;
+  --frames_;
+}
+
 void RunMetrics::finish(const RunResult& res, double pictures_ms) {
   json_["timings_ms"]["pictures"] = pictures_ms;
   json_["frames_completed"] = res.frames;
   json_["failure"] = res.failed ? nlohmann::json(res.message) : nlohmann::json(nullptr);
-  const nlohmann::json& frames = json_["frames"];
-  const bool has_disc = !frames.empty() && frames.back().contains("disc");
-  json_["last_disc"] = has_disc          ? frames.back()["disc"]
-                       : frames.empty() ? nlohmann::json(nullptr)
-                                        : disc_json(res.last_table, roundoff_);
+  json_["interrupted"] = res.interrupted ? nlohmann::json(signal_name(res.interrupted)) : nlohmann::json(nullptr);
+  const bool has_disc = frames_ > 0 && last_.contains("disc");
+  json_["last_disc"] = has_disc      ? last_["disc"]
+                       : frames_ == 0 ? nlohmann::json(nullptr)
+                                      : disc_json(res.last_table, roundoff_);
 }
 
-void RunMetrics::write(const std::filesystem::path& dir) const {
-  io::write_text_atomic(dir / "metrics.json", json_.dump(1) + "\n");
+void RunMetrics::write() const {
+  // json_ dumped with an empty frames array, the records put in its place from the scratch file
+  nlohmann::json top = json_;
+  top["frames"] = nlohmann::json::array();
+  const std::string text = top.dump(1), empty = "\n \"frames\": []";
+  const std::size_t at = text.find(empty);
+  io::write_file_atomic(dir_ / "metrics.json", [&](io::AtomicFile& f) {
+    f.write(text.substr(0, at));
+    if (!records_ || records_->size() == 0) {
+      f.write(empty);
+    } else {
+      f.write("\n \"frames\": [\n");
+      std::vector<char> chunk(1 << 20);
+      for (long done = 0; done < records_->size();) {
+        const auto n = static_cast<std::size_t>(std::min<long>(records_->size() - done, static_cast<long>(chunk.size())));
+        records_->read(done, chunk.data(), n);
+        f.write(chunk.data(), n);
+        done += static_cast<long>(n);
+      }
+      f.write("\n ]");
+    }
+    f.write(text.substr(at + empty.size()) + "\n");
+  });
 }
 
 }  // namespace mbi::scenes

@@ -102,6 +102,24 @@ std::vector<fs::path> input_files(const Scene& sc, const fs::path& mesh_override
   return in;
 }
 
+namespace {
+// Makes `dir` and the parents it lacks; returns those made, outermost first.
+std::vector<fs::path> make_folders(const fs::path& dir) {
+  std::vector<fs::path> missing;
+  std::error_code ec;
+  for (fs::path p = dir; !p.empty() && !fs::exists(fs::symlink_status(p, ec)); p = p.parent_path()) {
+    missing.push_back(p);
+    if (p == p.parent_path()) break;
+  }
+  std::vector<fs::path> made;
+  for (auto it = missing.rbegin(); it != missing.rend(); ++it) {
+    if (fs::create_directory(*it, ec)) made.push_back(*it);
+    else if (ec) throw SceneError(dir.string() + ": cannot make this folder (" + ec.message() + ")");
+  }
+  return made;
+}
+}  // namespace
+
 OutputFolder::OutputFolder(const Scene& sc, const fs::path& out_dir, bool force,
                            const std::vector<fs::path>& inputs)
     : path_(output_folder(sc, out_dir)), force_(force) {
@@ -111,19 +129,40 @@ OutputFolder::OutputFolder(const Scene& sc, const fs::path& out_dir, bool force,
     throw SceneError(path_.string() +
                      ": is a symbolic link; a scene's default output folder is never reached "
                      "through one (give --out to choose a folder)");
-  if (!fs::exists(st) && !fs::is_symlink(st)) {
-    check_parent(path_);
-    return;
+  const bool exists = fs::exists(st) || fs::is_symlink(st);
+  if (exists && !fs::is_directory(path_, ec)) throw SceneError(path_.string() + ": exists and is not a folder");
+  if (!exists) check_parent(path_);
+  made_ = make_folders(path_);
+  // a folder made here by a run that then loses the lock belongs to the winner: left alone
+  lock_.emplace(path_);
+  try {
+    if (exists) check_existing(force, inputs);
+  } catch (...) {
+    remove_made();
+    throw;
   }
-  if (!fs::is_directory(path_, ec)) throw SceneError(path_.string() + ": exists and is not a folder");
+}
+
+OutputFolder::~OutputFolder() {
+  if (!used_) remove_made();
+}
+
+void OutputFolder::check_existing(bool force, const std::vector<fs::path>& inputs) const {
+  std::error_code ec;
   if (!fs::is_empty(path_, ec) && !force)
     throw SceneError(path_.string() + ": exists and is not empty (use --force to overwrite)");
   check_inputs_outside(inputs, path_);
 }
 
-void OutputFolder::make() const {
-  if (force_ && fs::exists(path_)) clear_outputs(path_);
-  fs::create_directories(path_);
+void OutputFolder::remove_made() noexcept {
+  std::error_code ec;  // only empty folders go (remove() does not empty one)
+  for (auto it = made_.rbegin(); it != made_.rend(); ++it) fs::remove(*it, ec);
+  made_.clear();
+}
+
+void OutputFolder::make() {
+  used_ = true;
+  if (force_) clear_outputs(path_);
 }
 
 }  // namespace mbi::scenes

@@ -13,38 +13,49 @@ Outputs::Outputs(const Scene& sc, const SceneModels& m, const fs::path& dir) : s
 void Outputs::frame(int f, const Eigen::MatrixXd& Xc, const Eigen::MatrixXd& dense,
                     const std::vector<const Eigen::MatrixXd*>& shown, bool write_now,
                     const Eigen::MatrixXd* normals) {
-  if (pc2_) {
-    if (dense.cols() == 2 && m_.flat_z) {  // a flat model keeps its plane's z, as in its meshes
-      flat_.resize(dense.rows(), 3);
-      flat_.leftCols(2) = dense;
-      flat_.col(2).setConstant(*m_.flat_z);
-      pc2_->append(flat_);
-    } else {
-      pc2_->append(dense);
+  std::vector<fs::path> written;  // this frame's files, removed again if a later write fails
+  try {
+    if (write_now) {
+      if (sc_.output.mesh_format != MeshFormat::None) written.push_back(write_mesh(f, dense, normals));
+      if (sc_.output.control_vtk) {
+        const Eigen::MatrixXd disp = Xc - m_.U;
+        written.push_back(io::frame_path(dir_ / "control", f, ".vtk"));
+        io::write_vtk(written.back(), Xc, m_.T, disp);
+      }
+      if (sc_.output.image && !shown.empty() && m_.image) written.push_back(write_picture_2d(f, shown));
     }
+    // last: a sample is appended whole or not at all
+    if (pc2_) append_pc2(dense);
+  } catch (...) {
+    std::error_code ec;
+    for (const fs::path& p : written) fs::remove(p, ec);
+    throw;
   }
-  if (!write_now) return;
-  if (sc_.output.mesh_format != MeshFormat::None) write_mesh(f, dense, normals);
-  if (sc_.output.control_vtk) {
-    const Eigen::MatrixXd disp = Xc - m_.U;
-    io::write_vtk(io::frame_path(dir_ / "control", f, ".vtk"), Xc, m_.T, disp);
-  }
-  if (sc_.output.image && !shown.empty() && m_.image) write_picture_2d(f, shown);
 }
 
-void Outputs::write_mesh(int f, const Eigen::MatrixXd& dense, const Eigen::MatrixXd* normals) {
+void Outputs::append_pc2(const Eigen::MatrixXd& dense) {
+  if (dense.cols() == 2 && m_.flat_z) {  // a flat model keeps its plane's z, as in its meshes
+    flat_.resize(dense.rows(), 3);
+    flat_.leftCols(2) = dense;
+    flat_.col(2).setConstant(*m_.flat_z);
+    pc2_->append(flat_);
+  } else {
+    pc2_->append(dense);
+  }
+}
+
+fs::path Outputs::write_mesh(int f, const Eigen::MatrixXd& dense, const Eigen::MatrixXd* normals) {
   const std::string ext = std::string(".") + format_name(sc_.output.mesh_format);
   const io::Encoding enc = sc_.output.mesh_format == MeshFormat::Ply ? io::Encoding::binary : io::Encoding::ascii;
-  if (dense.cols() == 3) {
-    io::write_frame(dir_ / "mesh", f, ext, m_.dense, dense, enc, normals ? *normals : Eigen::MatrixXd());
-  } else {  // 2D: z = 0, or the plane of a flat model
-    Eigen::MatrixXd V3 = Eigen::MatrixXd::Constant(dense.rows(), 3, m_.flat_z.value_or(0.0));
-    V3.leftCols(dense.cols()) = dense;
-    io::write_frame(dir_ / "mesh", f, ext, m_.dense, V3, enc);
-  }
+  if (dense.cols() == 3)
+    return io::write_frame(dir_ / "mesh", f, ext, m_.dense, dense, enc, normals ? *normals : Eigen::MatrixXd());
+  // 2D: z = 0, or the plane of a flat model
+  Eigen::MatrixXd V3 = Eigen::MatrixXd::Constant(dense.rows(), 3, m_.flat_z.value_or(0.0));
+  V3.leftCols(dense.cols()) = dense;
+  return io::write_frame(dir_ / "mesh", f, ext, m_.dense, V3, enc);
 }
 
-void Outputs::write_picture_2d(int f, const std::vector<const Eigen::MatrixXd*>& shown) {
+fs::path Outputs::write_picture_2d(int f, const std::vector<const Eigen::MatrixXd*>& shown) {
   std::vector<io::Image> panels;
   const int W = m_.image->width, H = m_.image->height;
   const int ow = W * 3 / 2, oh = H * 3 / 2;
@@ -53,7 +64,9 @@ void Outputs::write_picture_2d(int f, const std::vector<const Eigen::MatrixXd*>&
     const Eigen::MatrixXd Dp = p->rowwise() + off;
     panels.push_back(raster::warp_image(*m_.image, m_.dense.V, Dp, m_.dense.F, ow, oh));
   }
-  io::write_png(io::frame_path(dir_ / "frame", f, ".png"), raster::side_by_side(panels));
+  const fs::path p = io::frame_path(dir_ / "frame", f, ".png");
+  io::write_png(p, raster::side_by_side(panels));
+  return p;
 }
 
 void Outputs::finish() {

@@ -22,7 +22,8 @@ class Outputs {
 
   /// Every frame: the point cache of `dense` (the run's method). Written frames: mesh (with
   /// `normals` when given), control VTK of Xc, and in 2D the picture (`shown`: the panels'
-  /// positions, BI | the run's method | boundary-pinned).
+  /// positions, BI | the run's method | boundary-pinned). All of them or, when one cannot be
+  /// written (throws), none: the frame's files written before are removed again.
   void frame(int f, const Eigen::MatrixXd& Xc, const Eigen::MatrixXd& dense,
              const std::vector<const Eigen::MatrixXd*>& shown, bool write_now,
              const Eigen::MatrixXd* normals);
@@ -30,8 +31,10 @@ class Outputs {
   void finish();
 
  private:
-  void write_mesh(int f, const Eigen::MatrixXd& dense, const Eigen::MatrixXd* normals);
-  void write_picture_2d(int f, const std::vector<const Eigen::MatrixXd*>& shown);
+  void append_pc2(const Eigen::MatrixXd& dense);
+  /// These return the path written.
+  std::filesystem::path write_mesh(int f, const Eigen::MatrixXd& dense, const Eigen::MatrixXd* normals);
+  std::filesystem::path write_picture_2d(int f, const std::vector<const Eigen::MatrixXd*>& shown);
   const Scene& sc_;
   const SceneModels& m_;
   std::filesystem::path dir_;

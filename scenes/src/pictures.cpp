@@ -11,6 +11,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <cstdint>
 
 namespace fs = std::filesystem;
 
@@ -58,15 +59,56 @@ Pictures3D::~Pictures3D() = default;
 
 const char* Pictures3D::renderer() const { return renderer_ ? "gpu" : "cpu"; }
 
-void Pictures3D::add(int f, const Eigen::MatrixXd& X, std::vector<interp::BezierPoints> panels) {
+void Pictures3D::add(int f, const Eigen::MatrixXd& X, const std::vector<interp::BezierPoints>& panels) {
   if (X.cols() != 3) throw SceneError("3D pictures need 3D control positions");
+  if (!stored_) stored_ = std::make_unique<io::ScratchFile>(dir_, "pictures");
+  // one record: frame, panel count, then each panel's rows, columns and values
+  const long at = stored_->size();
+  try {
+    const std::int64_t head[2] = {f, static_cast<std::int64_t>(panels.size())};
+    stored_->append(head, sizeof head);
+    for (const interp::BezierPoints& B : panels) {
+      const std::int64_t shape[2] = {B.rows(), B.cols()};
+      stored_->append(shape, sizeof shape);
+      stored_->append(B.data(), static_cast<std::size_t>(B.size()) * sizeof(double));
+    }
+  } catch (...) {
+    stored_->truncate(at);
+    throw;
+  }
+  last_at_ = at;
+  lo_before_ = lo_;
+  hi_before_ = hi_;
   lo_ = lo_.cwiseMin(X.colwise().minCoeff().transpose());
   hi_ = hi_.cwiseMax(X.colwise().maxCoeff().transpose());
-  frames_.push_back({f, std::move(panels)});
+}
+
+void Pictures3D::discard_last() {
+  if (!stored_) return;
+  stored_->truncate(last_at_);
+  lo_ = lo_before_;
+  hi_ = hi_before_;
+}
+
+int Pictures3D::read_frame(long& at, std::vector<interp::BezierPoints>& panels) const {
+  std::int64_t head[2];
+  stored_->read(at, head, sizeof head);
+  at += sizeof head;
+  panels.resize(static_cast<std::size_t>(head[1]));
+  for (interp::BezierPoints& B : panels) {
+    std::int64_t shape[2];
+    stored_->read(at, shape, sizeof shape);
+    at += sizeof shape;
+    B.resize(shape[0], shape[1]);
+    const std::size_t bytes = static_cast<std::size_t>(B.size()) * sizeof(double);
+    stored_->read(at, B.data(), bytes);
+    at += static_cast<long>(bytes);
+  }
+  return static_cast<int>(head[0]);
 }
 
 void Pictures3D::write(pipeline::FramePipeline& pipe) {
-  if (frames_.empty()) return;
+  if (!stored_ || stored_->size() == 0) return;
   const Eigen::Vector3d up = sc_.output.up.normalized();
   Eigen::Vector3d side = up.cross(Eigen::Vector3d::UnitX());
   if (side.norm() < 0.5) side = up.cross(Eigen::Vector3d::UnitY());
@@ -83,9 +125,11 @@ void Pictures3D::write(pipeline::FramePipeline& pipe) {
   // the GPU renderer draws from the evaluator's buffers: the run's evaluator is the GPU's
   auto* gpu = renderer_ ? dynamic_cast<gpu::GpuEvaluator*>(&pipe.evaluator()) : nullptr;
   Eigen::MatrixXd V;
-  for (const Frame& fr : frames_) {
+  std::vector<interp::BezierPoints> frame;
+  for (long at = 0; at < stored_->size();) {
+    const int f = read_frame(at, frame);
     std::vector<io::Image> panels;
-    for (const interp::BezierPoints& B : fr.panels) {
+    for (const interp::BezierPoints& B : frame) {
       if (gpu) {
         gpu->evaluate(B, true);
         panels.push_back(renderer_->render(*gpu, view, w, h));
@@ -94,7 +138,7 @@ void Pictures3D::write(pipeline::FramePipeline& pipe) {
         panels.push_back(raster::render_mesh(V, m_.dense.F, view, w, h));
       }
     }
-    io::write_png(io::frame_path(dir_ / "frame", fr.f, ".png"), raster::side_by_side(panels));
+    io::write_png(io::frame_path(dir_ / "frame", f, ".png"), raster::side_by_side(panels));
   }
 }
 

@@ -4,6 +4,7 @@
 // image and are written with each frame (Outputs); 3D pictures are drawn at the end of the run
 // (Pictures3D), on the GPU when the run evaluates there, else by the CPU rasteriser.
 #include <mbi/interp/modified_bi.hpp>
+#include <mbi/io/scratch_file.hpp>
 #include <mbi/pipeline/frame_pipeline.hpp>
 #include <mbi/scenes/runner.hpp>
 
@@ -28,9 +29,10 @@ std::vector<pipeline::Method> picture_methods(pipeline::Method method);
 /// 16384. Throws SceneError.
 void check_picture_size(const Scene& sc, const SceneModels& m);
 
-/// The 3D pictures of a run: the Bezier points of each written frame's panels are kept (a few
-/// hundred kB), and the pictures are drawn at the end, all the same size, with one camera that
-/// frames the control mesh over the whole run.
+/// The 3D pictures of a run: the Bezier points of each written frame's panels wait in a scratch
+/// file in the output folder (io::ScratchFile: about 240 bytes a tetrahedron a panel, on disk,
+/// so memory stays the same however many frames run), and the pictures are drawn at the end,
+/// all the same size, with one camera that frames the control mesh over the whole run.
 class Pictures3D {
  public:
   /// `context`: the run's GPU evaluator's, whose buffers the pictures are drawn from; null: the
@@ -43,23 +45,26 @@ class Pictures3D {
 
   /// What draws them: "gpu" or "cpu".
   const char* renderer() const;
-  /// Frame f's panels (Bezier points) at control positions X (n x 3).
-  void add(int f, const Eigen::MatrixXd& X, std::vector<interp::BezierPoints> panels);
+  /// Frame f's panels (Bezier points) at control positions X (n x 3): stored whole, or not at
+  /// all (throws io::IoError when the disk is full).
+  void add(int f, const Eigen::MatrixXd& X, const std::vector<interp::BezierPoints>& panels);
+  /// Forgets the frame add() stored last (a later part of that frame failed).
+  void discard_last();
   /// Draws and writes every stored picture (the pipeline's evaluator and embedding evaluate them).
   void write(pipeline::FramePipeline& pipe);
 
  private:
-  struct Frame {
-    int f;
-    std::vector<interp::BezierPoints> panels;
-  };
+  /// The frame stored at byte `at` of the scratch file; `at` moves past it.
+  int read_frame(long& at, std::vector<interp::BezierPoints>& panels) const;
+
   const Scene& sc_;
   const SceneModels& m_;
   std::filesystem::path dir_;
   std::shared_ptr<gpu::Context> context_;
   std::unique_ptr<gpu::Renderer> renderer_;
-  Eigen::Vector3d lo_, hi_;
-  std::vector<Frame> frames_;
+  Eigen::Vector3d lo_, hi_, lo_before_, hi_before_;  // bounds, and before the last add()
+  std::unique_ptr<io::ScratchFile> stored_;          // made at the first add()
+  long last_at_ = 0;                                 // where the last frame stored starts
 };
 
 }  // namespace mbi::scenes

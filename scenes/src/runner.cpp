@@ -10,11 +10,13 @@
 
 #include <mbi/base/timer.hpp>
 #include <mbi/interp/embed.hpp>
+#include <mbi/interp/mesh.hpp>
 #include <mbi/scenes/evaluator.hpp>
 #include <mbi/scenes/output_folder.hpp>
 #include <mbi/scenes/runner.hpp>
 
 #include <chrono>
+#include <csignal>
 #include <optional>
 
 namespace mbi::scenes {
@@ -42,7 +44,7 @@ std::optional<pipeline::FramePipeline> pinned_pipeline(const Scene& sc, const Sc
 
 // After the frames: the point cache completed, the 3D pictures drawn (also after a failed step:
 // what was reached), metrics.json written. An error here fails the run too.
-void finish_run(const Scene& sc, const OutputFolder& folder, pipeline::FramePipeline& pipe,
+void finish_run(const Scene& sc, pipeline::FramePipeline& pipe,
                 Outputs& out, Pictures3D& pictures, RunMetrics& metrics, RunResult& res) {
   try {
     out.finish();
@@ -67,7 +69,7 @@ void finish_run(const Scene& sc, const OutputFolder& folder, pipeline::FramePipe
   metrics.finish(res, pictures_ms);
   if (sc.output.metrics) {
     try {
-      metrics.write(folder.path());
+      metrics.write();
     } catch (const std::exception& e) {
       record_failure(res, std::string("metrics.json: ") + e.what());
     }
@@ -87,7 +89,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
     else log(s);
   };
   RunResult res;
-  const OutputFolder folder(sc, opt.out_dir, opt.force, input_files(sc, opt.mesh));
+  OutputFolder folder(sc, opt.out_dir, opt.force, input_files(sc, opt.mesh));
   res.out_dir = folder.path();
 
   // ---------------------------------------------------------------- models, embedding, pipeline
@@ -95,6 +97,11 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   const SceneModels m = load_models(sc, opt.mesh, opt.force_3d);
   const double load_ms = ms_since(t0);
   check_picture_size(sc, m);
+  if (interp::interior_faces(m.T).rows() == 0)
+    throw SceneError(m.control_name + ": the control mesh has no interior face (one element); a run "
+                     "compares BI with modified-BI at every frame (metrics.json, pictures, and the "
+                     "handles' solve in drag scenes), which needs at least two face-adjacent elements "
+                     "(mbi deform --method bi or phong takes one element)");
   t0 = Clock::now();
   interp::Embedding emb = interp::embed(m.U, m.T, m.dense.V);
   const double embed_ms = ms_since(t0);
@@ -108,17 +115,28 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   pipeline::FramePipeline pipe = make_pipeline(sc, m, std::move(emb), std::move(evaluation.evaluator));
   res.evaluator = pipe.evaluator().name();
   Pictures3D pictures(sc, m, folder.path(), evaluation.context);
-  RunMetrics metrics(sc, m, pipe, outside, pictures.renderer(), load_ms, embed_ms);
+  RunMetrics metrics(sc, m, pipe, outside, pictures.renderer(), load_ms, embed_ms, folder.path());
   log("dense: " + m.dense_name + " (" + std::to_string(m.dense.V.rows()) + " vertices)");
   log("control: " + m.control_name + ": " + std::to_string(m.U.rows()) + " vertices, " +
       std::to_string(m.T.rows()) + (m.dim() == 3 ? " tetrahedra" : " triangles"));
 
   // ---------------------------------------------------------------- frames
+  if (opt.stop && opt.stop->load() != 0) {  // interrupted while loading: nothing written
+    res.interrupted = opt.stop->load();
+    res.frames = -1;
+    return res;
+  }
   folder.make();
   Outputs out(sc, m, folder.path());
-  FrameLoop(sc, pipe, pinned ? &*pinned : nullptr, out, pictures, metrics).run(res, opt.progress);
-  finish_run(sc, folder, pipe, out, pictures, metrics, res);
+  FrameLoop(sc, pipe, pinned ? &*pinned : nullptr, out, pictures, metrics).run(res, opt.progress, opt.stop);
+  finish_run(sc, pipe, out, pictures, metrics, res);
   return res;
+}
+
+std::string signal_name(int signal) {
+  if (signal == SIGINT) return "SIGINT";
+  if (signal == SIGTERM) return "SIGTERM";
+  return "signal " + std::to_string(signal);
 }
 
 }  // namespace mbi::scenes

@@ -446,7 +446,7 @@ ConstraintSpec parse_constraint(Table& t) {
 PokeSpec parse_poke(Table& t) {
   PokeSpec p;
   p.first = t.integer("first", 0, 0, 1 << 30);
-  p.last = t.integer("last", p.first, 0, 1 << 30);
+  p.last = t.integer("last", 1 << 30, 0, 1 << 30);  // default: to the end of the run
   if (p.last < p.first) t.fail("last", "last must be >= first");
   const bool has_point = t.has("point"), has_at = t.has("at");
   if (has_point == has_at)
@@ -573,6 +573,11 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& file) {
   if (sc.mode == Mode::Simulate && !sc.drags.empty())
     throw SceneError(fname + ":1: drags: only drag scenes (mode = \"" + mode_name(Mode::Drag) +
                      "\") take [[drags]]");
+  // the drag driver has no forces: pokes and constraints would be ignored
+  for (const std::string key : {"pokes", "constraints"})
+    if (sc.mode == Mode::Drag && top.has(key))
+      top.fail(key, "only simulate scenes (mode = \"" + std::string(mode_name(Mode::Simulate)) + "\") take [[" +
+                        key + "]]; a drag scene moves its control mesh by [[drags]] alone");
   return sc;
 }
 

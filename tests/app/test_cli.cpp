@@ -287,7 +287,7 @@ TEST_CASE("mbi run writes the outputs of a scene", "[cli]") {
   CHECK(fs::exists(dir / "o" / "frame_0002.png"));
 }
 
-TEST_CASE("mbi run --gpu: on without OpenGL exits 2 naming why; auto notes the fallback once", "[cli][gpu]") {
+TEST_CASE("mbi run --gpu: on without OpenGL exits 2 naming why, auto notes the fallback once", "[cli][gpu]") {
   TempDir dir("cli");
   const char* src = std::getenv("MBI_SOURCE_DIR");
   REQUIRE(src != nullptr);

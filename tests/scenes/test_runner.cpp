@@ -16,6 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -105,6 +106,9 @@ void check_run(const std::string& scene_name, int frames) {
   CHECK(m["frames"].size() == static_cast<size_t>(frames + 1));
   CHECK(m["frames_completed"] == frames);
   CHECK(m["failure"].is_null());
+  CHECK(m["interrupted"].is_null());
+  // the frames' records come from a scratch file: the text is nlohmann's own, as if dumped whole
+  CHECK(mbi::test::slurp(o.out_dir / "metrics.json") == m.dump(1) + "\n");
   CHECK(m["outside_points"] == 0);
   // Timings: finite and non-negative; nested phases not longer than the phase around them; the
   // disjoint phases (load, embed, precompute, and per frame drive, solve, interpolation, metrics)
@@ -425,6 +429,53 @@ frames = 2
   CHECK_THAT(msg, Catch::Contains("simulate") && Catch::Contains("3D"));
 }
 
+TEST_CASE("RunOptions::stop: the next frame is the last, before the first nothing is written",
+          "[runner][stop]") {
+  mbi::test::TempDir dir("run");
+  const fs::path file = dir / "s.toml";
+  std::ofstream(file) << paper_bar << "[output]\nevery = 100\nimage = false\n";
+  const Scene sc = load_scene(file);
+  std::atomic<int> stop{0};
+  RunOptions o;
+  o.frames = 50;
+  o.stop = &stop;
+  SECTION("asked during frame 3: frame 4 is the last, written whole") {
+    o.out_dir = dir / "o";
+    o.progress = [&](int f, int) {
+      if (f == 3) stop = 15;
+    };
+    const RunResult r = run_scene(sc, o);
+    CHECK(r.interrupted == 15);
+    CHECK_FALSE(r.failed);
+    CHECK(r.frames == 4);
+    const nlohmann::json m = read_json(o.out_dir / "metrics.json");
+    CHECK(m["interrupted"] == "SIGTERM");
+    CHECK(m["frames_completed"] == 4);
+    CHECK(m["frames"].size() == 5);
+    CHECK(read_pc2(o.out_dir / "dense.pc2").frames.size() == 5);
+    CHECK(fs::exists(frame_path(o.out_dir / "mesh", 4, ".obj")));
+    CHECK(fs::exists(frame_path(o.out_dir / "control", 4, ".vtk")));
+  }
+  SECTION("asked while loading: nothing written, the folder made for the run removed again") {
+    o.out_dir = dir / "new" / "deeper";
+    stop = 2;
+    const RunResult r = run_scene(sc, o);
+    CHECK(r.interrupted == 2);
+    CHECK(r.frames == -1);
+    CHECK_FALSE(fs::exists(dir / "new"));
+  }
+}
+
+TEST_CASE("a run that fails while loading leaves no folder it made", "[runner][errors]") {
+  mbi::test::TempDir dir("run");
+  const fs::path file = dir / "s.toml";
+  std::ofstream(file) << "[dense]\npath = \"missing.obj\"\n[control]\nbuiltin = \"box\"\n";
+  RunOptions o;
+  o.out_dir = dir / "a" / "b";
+  CHECK_THROWS_AS(run_scene(load_scene(file), o), mbi::Error);
+  CHECK_FALSE(fs::exists(dir / "a"));
+}
+
 TEST_CASE("an output folder that is not empty, or a file, is a SceneError naming it", "[runner][errors]") {
   mbi::test::TempDir dir("run");
   const fs::path file = dir / "s.toml";
@@ -548,7 +599,7 @@ TEST_CASE("gpu: a run on the GPU writes what the CPU writes, within float accura
   }
 }
 
-TEST_CASE("gpu: without OpenGL, auto falls back and says so once; on is an error", "[runner][gpu]") {
+TEST_CASE("gpu: without OpenGL, auto falls back and says so once, on is an error", "[runner][gpu]") {
   mbi::test::TempDir dir("nogl");
   const Scene sc = load_scene(source_dir() / "scenes" / "twist-bar.toml");
   ::setenv("MBI_GL", "none", 1);

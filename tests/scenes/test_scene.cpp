@@ -154,6 +154,24 @@ TEST_CASE("structural errors", "[scene]") {
   CHECK_THAT(error_of(write(dir, "mode = \"drag\"\n" + std::string(minimal))), Catch::Contains("at least one [[drags]]"));
 }
 
+TEST_CASE("a poke without first/last acts over the whole run, keys a drag scene would ignore are errors",
+          "[scene]") {
+  mbi::test::TempDir dir("scene");
+  const std::string poke = "[[pokes]]\nat = [0.5, 0.5, 0.5]\nforce = [1, 0, 0]\n";
+  const auto sc = load_scene(write(dir, std::string(minimal) + poke));
+  REQUIRE(sc.pokes.size() == 1);
+  CHECK(sc.pokes[0].first == 0);
+  CHECK(sc.pokes[0].last >= 1000000);  // any run's last frame
+  const auto from = load_scene(write(dir, std::string(minimal) + poke + "first = 5\n"));
+  CHECK(from.pokes[0].first == 5);
+  CHECK(from.pokes[0].last >= 1000000);
+  const std::string drag = "mode = \"drag\"\n" + std::string(minimal) + "[[drags]]\nvertex = 0\nkeys = [[0, 0, 0, 0]]\n";
+  CHECK_THAT(error_of(write(dir, drag + poke)),
+             Catch::Contains("scene.toml:10: pokes: only simulate scenes") && Catch::Contains("[[drags]] alone"));
+  CHECK_THAT(error_of(write(dir, drag + "[[constraints]]\ntype = \"fixed\"\nselect = { indices = [0] }\n")),
+             Catch::Contains("constraints: only simulate scenes"));
+}
+
 TEST_CASE("node selections", "[scene]") {
   Eigen::MatrixXd U(5, 3);
   U << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1;

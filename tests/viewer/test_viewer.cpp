@@ -5,18 +5,13 @@
 
 #include <mbi/io/image.hpp>
 #include <mbi/viewer/camera.hpp>
+#include <mbi/viewer/layout.hpp>
 
-#include "common/files.hpp"
 #include "common/grid_meshes.hpp"
-#include "common/temp_dir.hpp"
-
-#include <nlohmann/json.hpp>
-
-#include <sys/wait.h>
+#include "viewer_run.hpp"
 
 #include <cmath>
-#include <cstdlib>
-#include <fstream>
+#include <map>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -26,28 +21,11 @@ using namespace mbi::viewer;
 
 namespace {
 
-struct Run {
-  int code = -1;
-  std::string err;
-};
+using Run = mbi::test::ViewRun;
+using mbi::test::non_background;
+using mbi::test::view;
 
-// `mbi view` under a fresh Xvfb server; extra environment as "NAME=value ...".
-Run view(const std::string& args, const TempDir& dir, bool display = true) {
-  const fs::path err = dir / "stderr.txt";
-  const std::string cmd = std::string(display ? "xvfb-run -a -s '-screen 0 1400x900x24' " : "env -u DISPLAY ") +
-                          "\"" + MBI_EXE + "\" view " + args + " > /dev/null 2> \"" + err.string() + "\"";
-  const int status = std::system(cmd.c_str());
-  Run r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.err = mbi::test::slurp(err);
-  return r;
-}
-
-nlohmann::json report(const fs::path& file) {
-  std::ifstream in(file);
-  REQUIRE(in);
-  return nlohmann::json::parse(in);
-}
+nlohmann::json report(const fs::path& file) { return mbi::test::read_report(file); }
 
 Eigen::Vector3d vec(const nlohmann::json& j) { return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()}; }
 
@@ -64,13 +42,7 @@ double differing(const mbi::io::Image& a, const mbi::io::Image& b, int tol = 8) 
   return double(n) / (a.width * a.height);
 }
 
-double non_background(const mbi::io::Image& a) {
-  long long n = 0;
-  for (size_t i = 0; i < a.rgb.size(); i += 3) n += !(a.rgb[i] == 255 && a.rgb[i + 1] == 255 && a.rgb[i + 2] == 255);
-  return double(n) / (a.width * a.height);
-}
-
-std::string q(const fs::path& p) { return "\"" + p.string() + "\""; }
+std::string q(const fs::path& p) { return mbi::test::quoted(p); }
 
 }  // namespace
 
@@ -108,7 +80,7 @@ TEST_CASE("viewer picking: the ray under a pixel hits the expected point, also a
   CHECK_FALSE(cast(cam.ray(2, 2, w, h), V, F));
 }
 
-TEST_CASE("viewer pokes: the spring's response does not depend on mass or size; the target is bounded", "[viewer]") {
+TEST_CASE("viewer pokes: the spring's response does not depend on mass or size, and the target is bounded", "[viewer]") {
   // natural frequency sqrt(k / m) is the same for any mass
   for (double mass : {1e-3, 1.0, 1e4}) CHECK(std::sqrt(poke_stiffness(mass, 0.2) / mass) == Approx(2 * std::acos(-1.0) / 0.2));
   Ray r;
@@ -250,4 +222,75 @@ TEST_CASE("mbi view: the 2D image-warp scene draws the warped picture", "[viewer
   REQUIRE(r.code == 0);
   const mbi::io::Image img = mbi::io::read_png(dir / "warp.png");
   CHECK(non_background(img) > 0.2);
+}
+
+TEST_CASE("mbi view --gpu: auto picks the CPU kernel on llvmpipe, and both evaluators draw the same picture",
+          "[viewer][xvfb]") {
+  TempDir dir("view");
+  const std::string scene = q(fs::path(source_dir()) / "scenes" / "twist-bar.toml");
+  std::map<std::string, mbi::io::Image> shots;
+  for (const std::string gpu : {"auto", "on", "off"}) {
+    const fs::path rep = dir / (gpu + ".json"), shot = dir / (gpu + ".png");
+    const Run r = view(scene + " --frames 3 --paused --no-panel --gpu " + gpu + " --report " + q(rep) +
+                           " --screenshot " + q(shot),
+                       dir);
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    const nlohmann::json ev = report(rep).back()["evaluator"];
+    const std::string name = ev["name"];
+    INFO(gpu << ": " << name << " (" << ev["why"].get<std::string>() << ")");
+    CHECK(name.rfind(gpu == "on" ? "gpu" : "cpu", 0) == 0);  // Xvfb's OpenGL is llvmpipe
+    if (gpu == "auto") CHECK(ev["why"].get<std::string>().find("llvmpipe") != std::string::npos);
+    shots[gpu] = mbi::io::read_png(shot);
+  }
+  CHECK(non_background(shots["off"]) > 0.01);
+  CHECK(differing(shots["on"], shots["off"]) < 0.002);
+}
+
+TEST_CASE("viewer layout: the panel and the views never overlap, at framebuffer scale 1 and 2, open or folded",
+          "[viewer]") {
+  for (const double scale : {1.0, 2.0})
+    for (const int views : {1, 2})
+      for (const bool collapsed : {false, true})
+        for (const auto& [w, h] : {std::pair{1280, 720}, std::pair{640, 480}, std::pair{160, 120}, std::pair{3000, 900}}) {
+          const int fbw = static_cast<int>(w * scale), fbh = static_cast<int>(h * scale);
+          const Layout l = make_layout(w, h, fbw, fbh, views, true, collapsed);
+          INFO(w << " x " << h << " at scale " << scale << ", " << views << " views, folded " << collapsed);
+          REQUIRE(l.views.size() == static_cast<size_t>(views));
+          CHECK(l.panel.w > 0);
+          double covered = l.panel.w;
+          for (size_t k = 0; k < l.views.size(); ++k) {
+            const Rect& v = l.views[k];
+            const Rect& fb = l.view_viewports[k];
+            CHECK_FALSE(overlap(l.panel, v));
+            for (size_t j = 0; j < k; ++j) CHECK_FALSE(overlap(l.views[j], v));
+            CHECK(fb.x >= l.panel.w * scale - 1e-9);  // in framebuffer pixels too
+            CHECK(fb.x + fb.w <= fbw);
+            CHECK(fb.x == Approx(v.x * scale));
+            CHECK(v.w > 0);
+            covered += v.w;
+          }
+          CHECK(covered == Approx(w).margin(1.0));  // the views fill the rest of the window
+        }
+  const Layout none = make_layout(800, 600, 800, 600, 2, false, false);
+  CHECK(none.panel.w == 0);
+  CHECK(none.views[0].x == 0);
+}
+
+TEST_CASE("mbi view: the docked panel covers no view, each view is labelled with its method", "[viewer][xvfb]") {
+  TempDir dir("view");
+  const Run r = view(q(fs::path(source_dir()) / "scenes" / "twist-bar.toml") + " --frames 3 --method modified-bi --report " +
+                         q(dir / "layout.json"),
+                     dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const nlohmann::json l = report(dir / "layout.json").back()["layout"];
+  auto rect = [](const nlohmann::json& j) { return Rect{j[0], j[1], j[2], j[3]}; };
+  const Rect panel = rect(l["panel"]);
+  CHECK(panel.w > 100);
+  REQUIRE(l["views"].size() == 2);
+  CHECK(l["views"][0]["label"] == "bi");
+  CHECK(l["views"][1]["label"] == "modified-bi");
+  for (const auto& v : l["views"]) CHECK_FALSE(overlap(panel, rect(v["rect"])));
+  CHECK_FALSE(overlap(rect(l["views"][0]["rect"]), rect(l["views"][1]["rect"])));
 }

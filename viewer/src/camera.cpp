@@ -8,24 +8,36 @@
 namespace mbi::viewer {
 
 void Camera::frame(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const Eigen::Vector3d& up_dir) {
-  target = 0.5 * (lo + hi);
+  target = home = 0.5 * (lo + hi);
   const double r = 0.5 * (hi - lo).norm();
   radius = 1.15 * std::max(r, 1e-9);
   depth = 4 * std::max(r, 1e-9);
   world_up = up_dir.normalized();
 }
 
+// Mouse moves of any size, even past the largest double, leave the camera finite: a move is
+// clamped to kMaxMove pixels, yaw wraps, pitch, radius and the distance panned are bounded.
 void Camera::orbit(double dx, double dy) {
-  yaw += 0.01 * dx;
-  pitch = std::clamp(pitch + 0.01 * dy, -1.5, 1.5);
+  if (std::isnan(dx) || std::isnan(dy)) return;
+  const double pi = std::acos(-1.0);
+  yaw = std::remainder(yaw + 0.01 * std::clamp(dx, -kMaxMove, kMaxMove), 2 * pi);
+  pitch = std::clamp(pitch + 0.01 * std::clamp(dy, -kMaxMove, kMaxMove), -1.5, 1.5);
 }
 
 void Camera::pan(double dx, double dy, int window_height) {
+  if (std::isnan(dx) || std::isnan(dy)) return;
   const double per_pixel = 2 * radius / std::max(window_height, 1);
-  target += -dx * per_pixel * right() + dy * per_pixel * up();
+  const Eigen::Vector3d moved = target - std::clamp(dx, -kMaxMove, kMaxMove) * per_pixel * right() +
+                                std::clamp(dy, -kMaxMove, kMaxMove) * per_pixel * up();
+  const Eigen::Vector3d away = moved - home;
+  const double reach = kMaxPan * std::max(depth, 1e-9);
+  target = away.norm() > reach ? Eigen::Vector3d(home + away * (reach / away.norm())) : moved;
 }
 
-void Camera::zoom(double steps) { radius = std::clamp(radius * std::pow(0.9, steps), 1e-9, 1e12); }
+void Camera::zoom(double steps) {
+  if (std::isnan(steps)) return;
+  radius = std::clamp(radius * std::pow(0.9, std::clamp(steps, -1e4, 1e4)), 1e-9, 1e12);
+}
 
 Eigen::Vector3d Camera::direction() const {
   // world_up and a horizontal reference build the orbit frame

@@ -39,10 +39,11 @@ void draw_views(gpu::Renderer& renderer, Stage& stage, const Interaction& in, co
   const int n = static_cast<int>(stage.views.size());
   double gpu_ms = 0;
   for (int k = 0; k < n; ++k) {
-    const int x0 = fb_width * k / n, x1 = fb_width * (k + 1) / n;
+    const Rect& vp_rect = stage.layout.view_viewports[static_cast<size_t>(k)];
+    const int x0 = static_cast<int>(vp_rect.x), x1 = static_cast<int>(vp_rect.x + vp_rect.w);
     glViewport(x0, 0, x1 - x0, fb_height);
-    stage.gpu.evaluate(stage.pipe.bezier_with(stage.views[static_cast<size_t>(k)]), stage.d == 3);
-    gpu_ms += stage.gpu.timings().upload_ms + stage.gpu.timings().pass_ms;
+    stage.evaluator.evaluate(stage.pipe.bezier_with(stage.views[static_cast<size_t>(k)]), stage.d == 3);
+    gpu_ms += stage.evaluator.timings().upload_ms + stage.evaluator.timings().pass_ms;
     const Eigen::Matrix4d vp = camera.view_projection(static_cast<double>(x1 - x0) / std::max(fb_height, 1));
     if (stage.d == 3)
       renderer.draw(stage.gpu, vp, camera.direction(), color, options.wireframe ? &X3 : nullptr,

@@ -89,24 +89,21 @@ void Interaction::reset() {
   stage_.pipe.step(false);
 }
 
-int Interaction::view_at(double x, const WindowSize& window) const {
-  const int n = static_cast<int>(stage_.views.size());
-  return std::clamp(static_cast<int>(x / stage_.view_width(window)), 0, n - 1);
-}
+int Interaction::view_at(double x, const WindowSize&) const { return stage_.view_at(x); }
 
 Ray Interaction::ray_at(double x, double y, int view, const WindowSize& window) const {
-  const double vw = stage_.view_width(window);
-  return camera_.ray(x - view * vw, y, static_cast<int>(std::lround(vw)), window.height);
+  const Rect& r = stage_.layout.views[static_cast<size_t>(view)];
+  return camera_.ray(x - r.x, y, static_cast<int>(std::lround(r.w)), window.height);
 }
 
 int Interaction::nearest_control_vertex(double x, double y, int view, const WindowSize& window) const {
   const Eigen::MatrixXd X3 = stage_.control_positions_3d();
-  const double vw = stage_.view_width(window);
+  const Rect& r = stage_.layout.views[static_cast<size_t>(view)];
   int best = -1;
   double best_d = 12.0;  // pixels
   for (Eigen::Index i = 0; i < X3.rows(); ++i) {
-    const Eigen::Vector2d q = camera_.project(X3.row(i).transpose(), static_cast<int>(std::lround(vw)), window.height);
-    const double dist = (q - Eigen::Vector2d(x - view * vw, y)).norm();
+    const Eigen::Vector2d q = camera_.project(X3.row(i).transpose(), static_cast<int>(std::lround(r.w)), window.height);
+    const double dist = (q - Eigen::Vector2d(x - r.x, y)).norm();
     if (dist < best_d) best_d = dist, best = static_cast<int>(i);
   }
   return best;

@@ -21,7 +21,9 @@ const char* kHelp =
     "  d      direct mode on/off (drag handles, no physics)\n"
     "  m      next method       s  split view (BI | method)\n"
     "  w      control wireframe h  handle markers\n"
+    "  c      fold / unfold the panel\n"
     "  f      frame the model   p  screenshot (mbi-screenshot-NNNN.png)\n"
+    "  [ / ]  alpha / 2, alpha x 2 (0.001 to 1)\n"
     "  ?      this help         q / escape  quit";
 
 void statistics(const Stage& stage, const FrameTimes& times) {
@@ -29,8 +31,10 @@ void statistics(const Stage& stage, const FrameTimes& times) {
   ImGui::Text("%.1f fps   frame %d", times.fps, stage.pipe.frame());
   ImGui::Text("simulation %.2f ms  solve %.2f ms", tm.drive_ms, tm.solve_ms);
   ImGui::Text("interpolation %.2f ms  drawing %.2f ms", times.interpolation_ms, times.drawing_ms);
-  ImGui::TextDisabled("%s", stage.gpu.name().c_str());
-  ImGui::Text("%lld dense vertices, %lld control vertices, %lld elements",
+  ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyleColorVec4(ImGuiCol_TextDisabled));
+  ImGui::TextWrapped("%s (%s)", stage.evaluator.name().c_str(), stage.evaluator_why.c_str());
+  ImGui::PopStyleColor();
+  ImGui::TextWrapped("%lld dense vertices, %lld control vertices, %lld elements",
               static_cast<long long>(stage.pipe.embedding().size()), static_cast<long long>(stage.U.rows()),
               static_cast<long long>(stage.T.rows()));
 }
@@ -55,10 +59,9 @@ void view_switches(Stage& stage, ViewerOptions& options) {
   ImGui::Checkbox("control wireframe", &options.wireframe);
   ImGui::Checkbox("handle markers", &options.handles);
   float a = static_cast<float>(stage.alpha);
-  if (ImGui::SliderFloat("alpha", &a, 0.001f, 1.0f, "%.3f", ImGuiSliderFlags_Logarithmic) && a > 0) {
-    stage.alpha = a;
-    stage.pipe.set_alpha(stage.alpha);
-  }
+  if (ImGui::SliderFloat("alpha", &a, static_cast<float>(Stage::kMinAlpha), static_cast<float>(Stage::kMaxAlpha), "%.3f",
+                         ImGuiSliderFlags_Logarithmic))
+    stage.set_alpha(a);
 }
 
 // Time stepping, damping and gravity: the running simulation takes them at once.
@@ -105,21 +108,41 @@ void simulation(Stage& stage, Interaction& in, ViewerOptions& options, Controls&
   if (in.poke().handle >= 0) ImGui::Text("poke: stiffness %.3g N/m", in.poke().stiffness);
 }
 
+// Docked at the left edge, the layout's width and the window's height; its arrow folds it.
 void panel(Stage& stage, Interaction& in, ViewerOptions& options, Controls& controls, const FrameTimes& times) {
-  ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_Once);
-  ImGui::SetNextWindowBgAlpha(0.85f);
-  ImGui::Begin("mbi", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
+  const Rect& r = stage.layout.panel;
+  ImGui::SetNextWindowPos(ImVec2(static_cast<float>(r.x), static_cast<float>(r.y)), ImGuiCond_Always);
+  ImGui::SetNextWindowSize(ImVec2(static_cast<float>(r.w), static_cast<float>(r.h)), ImGuiCond_Always);
+  if (controls.toggle_collapse) ImGui::SetNextWindowCollapsed(!controls.collapsed, ImGuiCond_Always);
+  controls.toggle_collapse = false;
+  const bool open = ImGui::Begin("mbi", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize);
+  controls.collapsed = ImGui::IsWindowCollapsed();
+  in.panel_min = Eigen::Vector2d(r.x, r.y);
+  in.panel_max = Eigen::Vector2d(r.x + r.w, r.y + r.h);
+  if (!open) {
+    ImGui::End();
+    return;
+  }
+  ImGui::PushItemWidth(-ImGui::GetFontSize() * 11);  // room for the labels
   statistics(stage, times);
   ImGui::Separator();
   playback(in, options, controls);
   view_switches(stage, options);
   simulation(stage, in, options, controls);
   if (!controls.message.empty()) ImGui::TextWrapped("%s", controls.message.c_str());
-  ImGui::TextDisabled("? for help");
-  const ImVec2 pos = ImGui::GetWindowPos(), sz = ImGui::GetWindowSize();
-  in.panel_min = Eigen::Vector2d(pos.x, pos.y);
-  in.panel_max = Eigen::Vector2d(pos.x + sz.x, pos.y + sz.y);
+  ImGui::TextDisabled("? for help, c folds this panel");
+  ImGui::PopItemWidth();
   ImGui::End();
+}
+
+// Each view's method, at its top-left corner.
+void labels(const Stage& stage) {
+  ImDrawList* list = ImGui::GetForegroundDrawList();
+  for (size_t k = 0; k < stage.layout.views.size() && k < stage.views.size(); ++k) {
+    const Rect& r = stage.layout.views[k];
+    list->AddText(ImVec2(static_cast<float>(r.x + 10), static_cast<float>(r.y + 8)), IM_COL32(30, 30, 30, 255),
+                  pipeline::method_name(stage.views[k]));
+  }
 }
 
 void help(bool& open, const WindowSize& window) {
@@ -138,6 +161,7 @@ void draw_gui(Stage& stage, Interaction& in, ViewerOptions& options, Controls& c
   ImGui_ImplGlfw_NewFrame();
   ImGui::NewFrame();
   if (options.panel) panel(stage, in, options, controls, times);
+  labels(stage);
   if (controls.help) help(controls.help, window);
   ImGui::Render();
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());

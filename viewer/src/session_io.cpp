@@ -1,71 +1,145 @@
 #include "session_io.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
-#include <sstream>
+#include <cstring>
+#include <fstream>
 #include <utility>
 
 namespace mbi::viewer {
 namespace {
 
+namespace fs = std::filesystem;
+
 nlohmann::json xyz(const Eigen::Vector3d& p) { return {p.x(), p.y(), p.z()}; }
+
+// The process's resident memory (VmRSS of /proc/self/status) in kB; -1 where there is none.
+long long resident_kb() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("VmRSS:", 0) == 0) return std::atoll(line.c_str() + 6);
+  return -1;
+}
+
+// A writer's message about the reserved file, about the target instead (the user never named
+// the reserved file).
+std::string about(std::string what, const fs::path& staging, const std::string& target) {
+  const std::string s = staging.string();
+  for (std::size_t at = what.find(s); at != std::string::npos; at = what.find(s, at + target.size()))
+    what.replace(at, s.size(), target);
+  return what;
+}
+
+// The PNG at `staging`, errors naming `target`.
+void write_png_for(const fs::path& staging, const io::Image& image, const std::string& target) {
+  try {
+    io::write_png(staging, image);
+  } catch (const mbi::Error& e) {
+    throw ViewerError(about(e.what(), staging, target));
+  }
+}
 
 }  // namespace
 
-std::string format(const Event& e) {
-  std::ostringstream o;
-  o << e.frame << ' ';
-  switch (e.kind) {
-    case Event::Press: o << "press " << e.x << ' ' << e.y << ' ' << e.button; break;
-    case Event::Move: o << "move " << e.x << ' ' << e.y; break;
-    case Event::Release: o << "release " << e.x << ' ' << e.y << ' ' << e.button; break;
-    case Event::Scroll: o << "scroll " << e.dy; break;
-    case Event::Key: o << "key " << e.key; break;
+SessionFiles::SessionFiles(const ViewerOptions& o) : inputs_(o.inputs), force_(o.force) {
+  if (!o.script.empty()) inputs_.push_back(o.script);
+  outputs_ = std::make_unique<io::OutputSet>(inputs_, force_);
+  std::optional<std::size_t> record, report;
+  if (!o.record.empty()) record = outputs_->add(o.record, "--record");
+  if (!o.screenshot.empty()) screenshot_ = outputs_->add(o.screenshot, "--screenshot");
+  if (!o.report.empty()) report = outputs_->add(o.report, "--report");
+  for (const fs::path& p : {o.record, o.screenshot, o.report})
+    if (!p.empty()) targets_.push_back(p);
+  if (!o.script.empty()) {
+    try {
+      script_ = read_script(o.script);
+    } catch (const mbi::Error& e) {
+      throw ViewerError(std::string("--script ") + e.what());
+    }
   }
-  return o.str();
+  // a header line: a recording of no event is still written (and replays as nothing)
+  if (record) open(record_, "--record", *record, "# mbi view recording: FRAME EVENT ARGS\n");
+  if (report) open(report_, "--report", *report, "[");
 }
 
-std::deque<Event> read_script(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  if (!in) throw ViewerError(file.string() + ": cannot read the script");
-  std::deque<Event> events;
-  std::string line;
-  int number = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream s(line);
-    Event e;
-    std::string kind;
-    if (!(s >> e.frame >> kind) || e.frame < 0)
-      throw ViewerError(file.string() + ":" + std::to_string(number) + ": expected FRAME EVENT ...");
-    bool ok = true;
-    if (kind == "press") e.kind = Event::Press, ok = bool(s >> e.x >> e.y >> e.button);
-    else if (kind == "move") e.kind = Event::Move, ok = bool(s >> e.x >> e.y);
-    else if (kind == "release") e.kind = Event::Release, ok = bool(s >> e.x >> e.y >> e.button);
-    else if (kind == "scroll") e.kind = Event::Scroll, ok = bool(s >> e.dy);
-    else if (kind == "key") e.kind = Event::Key, ok = bool(s >> e.key);
-    else throw ViewerError(file.string() + ":" + std::to_string(number) + ": unknown event '" + kind + "'");
-    if (!ok || !std::isfinite(e.x) || !std::isfinite(e.y) || !std::isfinite(e.dy))
-      throw ViewerError(file.string() + ":" + std::to_string(number) + ": bad arguments for '" + kind + "'");
-    events.push_back(e);
-  }
-  std::stable_sort(events.begin(), events.end(), [](const Event& a, const Event& b) { return a.frame < b.frame; });
-  return events;
+SessionFiles::~SessionFiles() {
+  for (Stream* s : {&record_, &report_})
+    if (s->file) std::fclose(s->file);
+  // outputs_ then removes every reserved file: no output created or replaced
 }
 
-void Inputs::open(const std::filesystem::path& script, const std::filesystem::path& record) {
-  if (!script.empty()) script_ = read_script(script);
-  if (!record.empty()) {
-    record_.open(record);
-    if (!record_) throw ViewerError(record.string() + ": cannot write the recording");
-    record_.precision(10);
-  }
+void SessionFiles::open(Stream& s, const std::string& option, std::size_t output, const char* first) {
+  s.option = option;
+  s.target = outputs_->target(output);
+  s.file = std::fopen(outputs_->staging(output).c_str(), "wb");
+  if (!s.file)
+    throw ViewerError(option + " " + s.target.string() + ": cannot open for writing (" + std::strerror(errno) + ")");
+  write(s, first);
+}
+
+void SessionFiles::write(Stream& s, const std::string& text) {
+  if (!s.file || s.error) return;
+  if (std::fwrite(text.data(), 1, text.size(), s.file) != text.size()) s.error = errno ? errno : EIO;
+}
+
+void SessionFiles::fail(const Stream& s) const {
+  throw ViewerError(s.option + " " + s.target.string() + ": write error (" + std::strerror(s.error) + ")");
+}
+
+void SessionFiles::close(Stream& s) {
+  if (!s.file) return;
+  if ((std::fflush(s.file) != 0 || std::ferror(s.file)) && !s.error) s.error = errno ? errno : EIO;
+  if (std::fclose(s.file) != 0 && !s.error) s.error = errno ? errno : EIO;
+  s.file = nullptr;
+  if (s.error) fail(s);
+}
+
+void SessionFiles::record(const Event& e) { write(record_, format(e) + "\n"); }
+
+void SessionFiles::report(const nlohmann::json& frame) {
+  write(report_, (report_empty_ ? "\n" : ",\n") + frame.dump());
+  report_empty_ = false;
+}
+
+void SessionFiles::check() {
+  // the recording reaches the disk each frame (a full disk shows at once); the report when
+  // its buffer fills
+  if (record_.file && !record_.error && std::fflush(record_.file) != 0) record_.error = errno ? errno : EIO;
+  for (const Stream* s : {&record_, &report_})
+    if (s->error) fail(*s);
+}
+
+void SessionFiles::snapshot(const fs::path& name, const io::Image& image) const {
+  const fs::path here = fs::absolute(name).lexically_normal();
+  for (const fs::path& t : targets_)
+    if (fs::absolute(t).lexically_normal() == here)
+      throw ViewerError(name.string() + ": is also an output of this session (" + t.string() + ")");
+  io::OutputSet one(inputs_, force_);
+  const std::size_t i = one.add(name, "");
+  write_png_for(one.staging(i), image, name.string());
+  one.commit();
+}
+
+void SessionFiles::finish(const io::Image& last_shot) {
+  if (finished_) return;
+  write(report_, "\n]\n");
+  close(record_);
+  close(report_);
+  if (screenshot_) write_png_for(outputs_->staging(*screenshot_), last_shot, "--screenshot " + outputs_->target(*screenshot_).string());
+  outputs_->commit();
+  finished_ = true;
+}
+
+void Inputs::open(SessionFiles& files) {
+  files_ = &files;
+  script_ = files.take_script();
 }
 
 void Inputs::push(const Event& e) {
   queue_.push_back(e);
-  if (record_.is_open()) record_ << format(e) << "\n";
+  if (files_) files_->record(e);
 }
 
 std::deque<Event> Inputs::take(int frame) {
@@ -86,6 +160,15 @@ nlohmann::json frame_report(const Stage& stage, const Interaction& in, const Fra
   nlohmann::json fr;
   fr["frame"] = pipe.frame();
   fr["direct"] = in.direct();
+  fr["method"] = pipeline::method_name(pipe.method());
+  fr["alpha"] = stage.alpha;
+  auto rect = [](const Rect& r) { return nlohmann::json{r.x, r.y, r.w, r.h}; };
+  nlohmann::json views = nlohmann::json::array();
+  for (size_t k = 0; k < stage.layout.views.size(); ++k)
+    views.push_back({{"rect", rect(stage.layout.views[k])}, {"viewport", rect(stage.layout.view_viewports[k])},
+                     {"label", pipeline::method_name(stage.views[k])}});
+  fr["layout"] = {{"window", {window.width, window.height}}, {"panel", rect(stage.layout.panel)}, {"views", views}};
+  fr["evaluator"] = {{"name", stage.evaluator.name()}, {"why", stage.evaluator_why}};
   fr["finite"] = X.allFinite();
   fr["timings_ms"] = {{"simulation", pipe.timings().drive_ms}, {"solve", pipe.timings().solve_ms},
                       {"interpolation", times.interpolation_ms}, {"drawing", times.drawing_ms}};
@@ -107,13 +190,14 @@ nlohmann::json frame_report(const Stage& stage, const Interaction& in, const Fra
                   {"target", xyz(pad3(in.handle_targets().row(static_cast<Eigen::Index>(h))))}});
   }
   fr["handles"] = hs;
+  fr["camera"] = {{"target", xyz(camera.target)}, {"radius", camera.radius}, {"yaw", camera.yaw}, {"pitch", camera.pitch}};
+  if (const long long kb = resident_kb(); kb >= 0) fr["resident_kb"] = kb;
   if (controls_on_screen) {
-    const int last = static_cast<int>(stage.views.size()) - 1;
-    const double vw = stage.view_width(window);
+    const Rect& r = stage.layout.views.back();
     nlohmann::json cs = nlohmann::json::array();
     for (Eigen::Index i = 0; i < X3.rows(); ++i) {
-      const Eigen::Vector2d q = camera.project(X3.row(i).transpose(), static_cast<int>(std::lround(vw)), window.height);
-      cs.push_back({q.x() + last * vw, q.y()});
+      const Eigen::Vector2d q = camera.project(X3.row(i).transpose(), static_cast<int>(std::lround(r.w)), window.height);
+      cs.push_back({q.x() + r.x, q.y()});
     }
     fr["control_window"] = cs;
   }

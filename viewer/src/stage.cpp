@@ -1,7 +1,10 @@
 #include "stage.hpp"
 
+#include "evaluation.hpp"
+
 #include <mbi/interp/embed.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 namespace mbi::viewer {
@@ -9,6 +12,7 @@ namespace {
 
 gpu::GpuEvaluator& gpu_evaluator(pipeline::FramePipeline& pipe) {
   auto* gpu = dynamic_cast<gpu::GpuEvaluator*>(&pipe.evaluator());
+  if (auto* drawn = dynamic_cast<DrawnEvaluator*>(&pipe.evaluator())) gpu = &drawn->buffers();
   if (!gpu) throw ViewerError("the viewer shows pipelines built with Viewer::evaluator()");
   return *gpu;
 }
@@ -22,6 +26,7 @@ const io::Image* checked_image(const Shown& shown) {
 
 Stage::Stage(const Shown& shown)
     : pipe(shown.pipe),
+      evaluator(shown.pipe.evaluator()),
       gpu(gpu_evaluator(shown.pipe)),
       F(shown.faces),
       image(checked_image(shown)),
@@ -49,6 +54,12 @@ void Stage::set_method(pipeline::Method method, bool split) {
   set_views(split);
 }
 
+void Stage::set_alpha(double a) {
+  if (!std::isfinite(a)) return;
+  alpha = std::clamp(a, kMinAlpha, kMaxAlpha);
+  pipe.set_alpha(alpha);
+}
+
 void Stage::frame(Camera& camera, const Eigen::Vector3d& up) const {
   if (d == 2) {
     camera.frame(lo, hi, Eigen::Vector3d(0, -1, 0));
@@ -71,8 +82,11 @@ Eigen::MatrixXd Stage::control_positions_3d() const {
   return X3;
 }
 
-double Stage::view_width(const WindowSize& window) const {
-  return static_cast<double>(window.width) / static_cast<int>(views.size());
+int Stage::view_at(double x) const {
+  const int n = static_cast<int>(layout.views.size());
+  int k = 0;
+  while (k + 1 < n && x >= layout.views[static_cast<size_t>(k + 1)].x) ++k;
+  return k;
 }
 
 }  // namespace mbi::viewer

@@ -3,6 +3,7 @@
 // the pipeline's method), the model's bounds for the camera; and the small state the parts of
 // the viewer share (window size, run flags, frame times).
 #include <mbi/viewer/camera.hpp>
+#include <mbi/viewer/layout.hpp>
 #include <mbi/viewer/viewer.hpp>
 
 #include <chrono>
@@ -19,6 +20,8 @@ struct WindowSize {
 /// What keys and the panel ask of the frame loop, and the line the panel shows.
 struct Controls {
   bool step_once = false, help = false, close = false;
+  bool collapsed = false;        ///< the panel folded to a strip (c key, its title bar's arrow)
+  bool toggle_collapse = false;  ///< the c key, for the panel's next frame
   std::string message;  ///< shown in the panel (errors, screenshots)
 };
 
@@ -40,7 +43,9 @@ struct Stage {
   explicit Stage(const Shown& shown);
 
   pipeline::FramePipeline& pipe;
-  gpu::GpuEvaluator& gpu;
+  pipeline::Evaluator& evaluator;  ///< the pipeline's: the GPU pass or a DrawnEvaluator
+  gpu::GpuEvaluator& gpu;          ///< the buffers drawn
+  std::string evaluator_why;       ///< why this evaluator (the HUD)
   const Eigen::MatrixXi& F;
   const io::Image* image;
   const int d;                     ///< 2 or 3
@@ -56,14 +61,18 @@ struct Stage {
 
   void set_views(bool split);
   void set_method(pipeline::Method method, bool split);
+  /// The interpolation weight, kept within [kMinAlpha, kMaxAlpha] (the panel slider's range).
+  void set_alpha(double a);
+  static constexpr double kMinAlpha = 0.001, kMaxAlpha = 1.0;
   /// The camera framing the control mesh; 2D looks at the picture from the front (y down).
   void frame(Camera& camera, const Eigen::Vector3d& up) const;
   /// The pipeline's driver when it is a simulation, else nullptr.
   pipeline::SimulatorDriver* simulation() const;
   /// The current control positions, n x 3 (z = 0 in 2D).
   Eigen::MatrixXd control_positions_3d() const;
-  /// Width (logical pixels) of one view in a window of `window`.
-  double view_width(const WindowSize& window) const;
+  Layout layout;  ///< this frame's: the panel and the views (the Viewer sets it)
+  /// The view under window column x (logical pixels), clamped to the views.
+  int view_at(double x) const;
 };
 
 }  // namespace mbi::viewer

@@ -1,7 +1,7 @@
-#include <mbi/io/atomic_file.hpp>
 #include <mbi/viewer/viewer.hpp>
 
 #include "draw.hpp"
+#include "evaluation.hpp"
 #include "interaction.hpp"
 #include "panel.hpp"
 #include "session_io.hpp"
@@ -12,6 +12,8 @@
 #include <backends/imgui_impl_glfw.h>
 #include <backends/imgui_impl_opengl3.h>
 #include <imgui.h>
+
+#include <mbi/scenes/evaluator.hpp>
 
 #include <algorithm>
 #include <cstdio>
@@ -24,6 +26,8 @@ const char* key_name(int key) {
     case GLFW_KEY_SPACE: return "space";
     case GLFW_KEY_ESCAPE: return "escape";
     case GLFW_KEY_SLASH: return "?";
+    case GLFW_KEY_LEFT_BRACKET: return "[";
+    case GLFW_KEY_RIGHT_BRACKET: return "]";
     default: break;
   }
   static char buf[2] = {0, 0};
@@ -68,12 +72,13 @@ GLFWwindow* open_window(const ViewerOptions& options) {
 struct Viewer::Impl {
   ViewerOptions opt;
   GLFWwindow* window = nullptr;
-  std::unique_ptr<gpu::Context> context;
+  std::shared_ptr<gpu::Context> context;
+  std::string evaluator_why;  ///< why options.gpu chose the evaluator (the HUD)
   std::unique_ptr<gpu::Renderer> renderer;
   Camera camera;
   int frame = 0;
+  std::unique_ptr<SessionFiles> files;
   Inputs inputs;
-  nlohmann::json report = nlohmann::json::array();
   Controls controls;
   FrameTimes times;
   io::Image last_shot;
@@ -121,15 +126,28 @@ struct Viewer::Impl {
     return {std::max(w, 1), std::max(h, 1)};
   }
 
+  // The panel and the views for this window size and the views shown
+  void lay_out(Stage& stage) const {
+    const WindowSize w = window_size();
+    int fbw, fbh;
+    glfwGetFramebufferSize(window, &fbw, &fbh);
+    stage.layout = make_layout(w.width, w.height, std::max(fbw, 1), std::max(fbh, 1), static_cast<int>(stage.views.size()),
+                               opt.panel, controls.collapsed);
+  }
   void handle(const Event& e, Stage& stage, Interaction& in);
   void key(const std::string& k, Stage& stage, Interaction& in);
+  void snapshot();
   void advance(Stage& stage, Interaction& in);
   Eigen::MatrixXd draw(Stage& stage, Interaction& in);
   void finish();
 };
 
-Viewer::Viewer(const ViewerOptions& options) : impl_(std::make_unique<Impl>()) {
+Viewer::Viewer(const ViewerOptions& options) : Viewer(options, std::make_unique<SessionFiles>(options)) {}
+
+Viewer::Viewer(const ViewerOptions& options, std::unique_ptr<SessionFiles> files) : impl_(std::make_unique<Impl>()) {
   impl_->opt = options;
+  impl_->files = std::move(files);
+  impl_->inputs.open(*impl_->files);
   impl_->window = open_window(options);
   impl_->context = gpu::Context::adopt_current();
   impl_->renderer = std::make_unique<gpu::Renderer>(*impl_->context);
@@ -143,7 +161,6 @@ Viewer::Viewer(const ViewerOptions& options) : impl_(std::make_unique<Impl>()) {
   ImGui::GetIO().IniFilename = nullptr;
   ImGui_ImplGlfw_InitForOpenGL(impl_->window, true);  // chains to the callbacks above
   ImGui_ImplOpenGL3_Init("#version 330 core");
-  impl_->inputs.open(options.script, options.record);
 }
 
 Viewer::~Viewer() {
@@ -156,10 +173,12 @@ Viewer::~Viewer() {
   glfwTerminate();
 }
 
-std::unique_ptr<gpu::GpuEvaluator> Viewer::evaluator() {
-  gpu::GpuOptions o;
-  o.measure = true;
-  return std::make_unique<gpu::GpuEvaluator>(*impl_->context, o);
+std::unique_ptr<pipeline::Evaluator> Viewer::evaluator() {
+  const EvaluatorChoice choice = choose_evaluator(impl_->opt.gpu, impl_->context->renderer());
+  impl_->evaluator_why = choice.why;
+  scenes::Evaluation e = scenes::make_evaluator(choice.use, [](const std::string&) {}, impl_->context);
+  if (e.context) return std::move(e.evaluator);
+  return std::make_unique<DrawnEvaluator>(std::move(e.evaluator), std::make_unique<gpu::GpuEvaluator>(*impl_->context));
 }
 
 int Viewer::frame() const { return impl_->frame; }
@@ -189,16 +208,28 @@ void Viewer::Impl::key(const std::string& k, Stage& stage, Interaction& in) {
   } else if (k == "s") {
     opt.split = !opt.split;
     stage.set_views(opt.split);
-  } else if (k == "w") opt.wireframe = !opt.wireframe;
+  } else if (k == "c") controls.toggle_collapse = true;
+  else if (k == "w") opt.wireframe = !opt.wireframe;
   else if (k == "h") opt.handles = !opt.handles;
   else if (k == "f" || k == "v") stage.frame(camera, opt.up);
-  else if (k == "p") {
-    char name[64];
-    std::snprintf(name, sizeof name, "mbi-screenshot-%04d.png", frame);
-    controls.message = std::string("screenshot: ") + name;
-    io::write_png(name, last_shot.width > 0 ? last_shot : io::Image(1, 1));
-  } else if (k == "?") controls.help = !controls.help;
+  else if (k == "[" || k == "]") stage.set_alpha(stage.alpha * (k == "[" ? 0.5 : 2.0));
+  else if (k == "p") snapshot();
+  else if (k == "?") controls.help = !controls.help;
   else if (k == "q" || k == "escape") controls.close = true;
+}
+
+// The p key: a screenshot now; one that cannot be written is said (panel, stderr, report), and
+// the session goes on.
+void Viewer::Impl::snapshot() {
+  char name[64];
+  std::snprintf(name, sizeof name, "mbi-screenshot-%04d.png", frame);
+  try {
+    files->snapshot(name, last_shot.width > 0 ? last_shot : io::Image(1, 1));
+    controls.message = std::string("screenshot: ") + name;
+  } catch (const std::exception& e) {
+    controls.message = std::string("screenshot not written: ") + e.what();
+    std::fprintf(stderr, "mbi view: %s\n", controls.message.c_str());
+  }
 }
 
 // One step when playing or asked to; direct mode has no time: it follows the handles every frame.
@@ -218,20 +249,19 @@ Eigen::MatrixXd Viewer::Impl::draw(Stage& stage, Interaction& in) {
   int fbw, fbh;
   glfwGetFramebufferSize(window, &fbw, &fbh);
   Eigen::MatrixXd X3 = stage.control_positions_3d();
+  lay_out(stage);
   draw_views(*renderer, stage, in, camera, opt, X3, fbw, fbh, times);
   draw_gui(stage, in, opt, controls, times, window_size());
   last_shot = read_framebuffer(fbw, fbh);
   return X3;
 }
 
-void Viewer::Impl::finish() {
-  if (!opt.screenshot.empty()) io::write_png(opt.screenshot, last_shot);
-  if (!opt.report.empty()) io::write_text_atomic(opt.report, report.dump(1) + "\n");
-}
+void Viewer::Impl::finish() { files->finish(last_shot); }
 
 void Viewer::show(const Shown& shown) {
   Impl& s = *impl_;
   Stage stage(shown);
+  stage.evaluator_why = s.evaluator_why;
   s.renderer->set_faces(shown.faces);
   stage.frame(s.camera, s.opt.up);
   stage.set_views(s.opt.split);
@@ -244,12 +274,17 @@ void Viewer::show(const Shown& shown) {
   stage.pipe.step(false);  // frame 0
   while (!glfwWindowShouldClose(s.window) && !s.controls.close) {
     glfwPollEvents();
+    s.lay_out(stage);
     for (const Event& e : s.inputs.take(s.frame)) s.handle(e, stage, in);
     if (shown.per_frame) shown.per_frame(*this);
     s.advance(stage, in);
     const Eigen::MatrixXd X3 = s.draw(stage, in);
-    if (!s.opt.report.empty())
-      s.report.push_back(frame_report(stage, in, s.times, X3, s.camera, s.window_size(), s.report.empty()));
+    if (s.files->reporting()) {
+      nlohmann::json fr = frame_report(stage, in, s.times, X3, s.camera, s.window_size(), s.frame == 0);
+      if (!s.controls.message.empty()) fr["message"] = s.controls.message;
+      s.files->report(fr);
+    }
+    s.files->check();
     glfwSwapBuffers(s.window);
     ++s.frame;
     if (s.opt.frames > 0 && s.frame >= s.opt.frames) break;

@@ -222,6 +222,36 @@ void GpuEvaluator::evaluate(const interp::BezierPoints& B, bool normals) {
   read_ = false;
 }
 
+void GpuEvaluator::set_results(const Eigen::MatrixXd& positions, const Eigen::MatrixXd& normals) {
+  if (positions.rows() != points_ || positions.cols() != dim_ ||
+      (normals.size() > 0 && (normals.rows() != points_ || normals.cols() != dim_)))
+    throw GlError("GpuEvaluator: results must be " + std::to_string(points_) + " x " + std::to_string(dim_));
+  const size_t p = static_cast<size_t>(points_);
+  std::vector<float> buf(p * 3, 0.0f);
+  auto upload = [&](unsigned buffer) {
+    glBindBuffer(GL_ARRAY_BUFFER, buffer);
+    glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(buf.size() * sizeof(float)), buf.data());
+  };
+  for (size_t i = 0; i < p; ++i)
+    for (int c = 0; c < dim_; ++c) {
+      const auto ii = static_cast<Eigen::Index>(i);
+      buf[3 * i + static_cast<size_t>(c)] = static_cast<float>(positions(ii, c) - rest_positions_(ii, c));
+    }
+  if (p > 0) upload(out_disp_);
+  have_normals_ = normals.size() > 0;
+  if (have_normals_ && p > 0) {
+    for (size_t i = 0; i < p; ++i)
+      for (int c = 0; c < dim_; ++c)
+        buf[3 * i + static_cast<size_t>(c)] = static_cast<float>(normals(static_cast<Eigen::Index>(i), c));
+    upload(out_normal_);
+  }
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  detail::check("GpuEvaluator::set_results");
+  positions_ = positions;
+  normals_ = normals;
+  evaluated_ = read_ = true;
+}
+
 const Eigen::MatrixXd& GpuEvaluator::positions() {
   if (!evaluated_) throw GlError("GpuEvaluator: positions() before evaluate()");
   if (!read_) {

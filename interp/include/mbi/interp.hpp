@@ -1,5 +1,6 @@
 #pragma once
 // Umbrella header of mbi::interp.
+#include <mbi/interp/adjoint.hpp>
 #include <mbi/interp/control.hpp>
 #include <mbi/interp/embed.hpp>
 #include <mbi/interp/evaluate.hpp>

@@ -28,16 +28,23 @@ void loop_subdivide(io::SurfaceMesh& m, int steps) {
   if (skipped)
     throw mbi::Error("dense.subdivide: the mesh has " + std::to_string(skipped) +
                      " non-manifold faces; Loop subdivision needs a manifold surface");
+  // OpenMesh's Loop step leaves a vertex no face uses uninitialised (it averages no
+  // neighbours): such vertices keep their position, exactly.
+  std::vector<Eigen::Index> unused;
+  for (const auto v : mesh.vertices())
+    if (mesh.is_isolated(v)) unused.push_back(v.idx());
   OpenMesh::Subdivider::Uniform::LoopT<Mesh> loop;
   loop.attach(mesh);
   loop(static_cast<size_t>(steps));
   loop.detach();
   mesh.garbage_collection();
+  const Eigen::MatrixXd rest = m.V;
   m.V.resize(static_cast<Eigen::Index>(mesh.n_vertices()), 3);
   for (const auto v : mesh.vertices()) {
     const auto p = mesh.point(v);
     m.V.row(v.idx()) << p[0], p[1], p[2];
   }
+  for (const Eigen::Index i : unused) m.V.row(i) = rest.row(i);  // the first vertices keep their index
   m.F.resize(static_cast<Eigen::Index>(mesh.n_faces()), 3);
   for (const auto f : mesh.faces()) {
     int k = 0;

@@ -1,12 +1,18 @@
 #include <mbi/io/atomic_file.hpp>
+#include <mbi/io/folder_lock.hpp>
 
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <stdio_ext.h>
+
+#include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cerrno>
+#include <climits>
 #include <cstring>
 #include <random>
 
@@ -19,9 +25,39 @@ namespace {
 
 std::atomic<unsigned> counter{0};
 
-// "<dir>/.mbi-tmp.<pid>.<n>-<random>.<name>", created exclusively (O_EXCL: never an existing
+// The temporaries this process holds, for remove_temporaries_now(): fixed storage that a signal
+// handler reads without allocating or locking. A slot is free (0), being filled (1) or holds a
+// path (2). More temporaries at once than slots are not listed (a handler leaves those behind,
+// as SIGKILL would: under their temporary names).
+constexpr int kSlots = 64;
+struct Slot {
+  std::atomic<int> state{0};
+  char path[PATH_MAX];
+};
+Slot slots[kSlots];
+
+int list_temporary(const std::filesystem::path& p) {
+  std::error_code ec;
+  const std::string abs = std::filesystem::absolute(p, ec).string();
+  if (ec || abs.size() >= PATH_MAX) return -1;
+  for (int i = 0; i < kSlots; ++i) {
+    int free = 0;
+    if (!slots[i].state.compare_exchange_strong(free, 1)) continue;
+    std::memcpy(slots[i].path, abs.c_str(), abs.size() + 1);
+    slots[i].state.store(2);
+    return i;
+  }
+  return -1;
+}
+
+void unlist_temporary(int& slot) {
+  if (slot >= 0) slots[slot].state.store(0);
+  slot = -1;
+}
+
+// "<dir>/.mbi-tmp.<pid>.<n>-<random><suffix>", created exclusively (O_EXCL: never an existing
 // file, never through a symbolic link). Returns the open descriptor; throws naming `target`.
-int create_temporary(const std::filesystem::path& target, const std::string& name,
+int create_temporary(const std::filesystem::path& target, const std::string& suffix,
                      std::filesystem::path& made) {
   if (target.filename().empty()) fail(target, "no file name to write");
   std::filesystem::path dir = target.parent_path();
@@ -35,7 +71,7 @@ int create_temporary(const std::filesystem::path& target, const std::string& nam
   std::random_device rd;
   for (int attempt = 0; attempt < 16; ++attempt) {
     made = dir / (std::string(kTemporaryPrefix) + std::to_string(::getpid()) + "." +
-                  std::to_string(counter++) + "-" + std::to_string(rd() % 1000000) + "." + name);
+                  std::to_string(counter++) + "-" + std::to_string(rd() % 1000000) + suffix);
     const int fd = ::open(made.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
     if (fd >= 0) return fd;
     if (errno == EEXIST) continue;
@@ -45,16 +81,33 @@ int create_temporary(const std::filesystem::path& target, const std::string& nam
   fail(target, "cannot find a free temporary file name in its folder");
 }
 
+// The target's extension when it is a plain short one (writers pick the format by it), else "".
+std::string staging_suffix(const std::filesystem::path& target) {
+  const std::string ext = target.extension().string();
+  if (ext.size() < 2 || ext.size() > 16) return "";
+  for (char c : ext.substr(1))
+    if (!std::isalnum(static_cast<unsigned char>(c))) return "";
+  return ext;
+}
+
+// How long OutputSet waits for a folder another process holds: a commit holds it for
+// milliseconds, a run for its whole length.
+constexpr std::chrono::seconds kCommitWait(5);
+
+std::string errno_text() { return errno != 0 ? std::strerror(errno) : "an I/O error"; }
+
 }  // namespace
 
 AtomicFile::AtomicFile(const std::filesystem::path& target) : target_(target) {
-  // ".mbi-tmp.<pid>.<n>-<random>.<name>.tmp": unique per process, call and attempt
-  const int fd = create_temporary(target, target.filename().string() + ".tmp", temporary_);
+  // ".mbi-tmp.<pid>.<n>-<random>.tmp": unique per process, call and attempt
+  const int fd = create_temporary(target, ".tmp", temporary_);
+  slot_ = list_temporary(temporary_);
   file_ = ::fdopen(fd, "wb");
   if (!file_) {
     ::close(fd);
     std::error_code ec;
     std::filesystem::remove(temporary_, ec);
+    unlist_temporary(slot_);
     fail(target, "cannot open a temporary file in its folder");
   }
 }
@@ -65,11 +118,13 @@ AtomicFile::~AtomicFile() {
     std::error_code ec;
     std::filesystem::remove(temporary_, ec);
   }
+  unlist_temporary(slot_);
 }
 
 void AtomicFile::write(const void* data, std::size_t bytes) {
   if (!file_) fail(target_, "write after commit");
-  if (bytes > 0 && std::fwrite(data, 1, bytes, file_) != bytes) fail(target_, "write error");
+  if (bytes > 0 && std::fwrite(data, 1, bytes, file_) != bytes)
+    fail(target_, "write error (" + errno_text() + ")");
 }
 
 void AtomicFile::write(const std::string& text) { write(text.data(), text.size()); }
@@ -78,16 +133,31 @@ void AtomicFile::seek(long offset) {
   if (!file_ || std::fseek(file_, offset, SEEK_SET) != 0) fail(target_, "seek error");
 }
 
+void AtomicFile::flush() {
+  if (!file_) fail(target_, "flush after commit");
+  if (std::fflush(file_) != 0) fail(target_, "write error (" + errno_text() + ")");
+}
+
+void AtomicFile::truncate(long size) {
+  if (!file_) fail(target_, "truncate after commit");
+  __fpurge(file_);  // bytes a failed write left in the buffer are dropped, not retried
+  std::clearerr(file_);
+  if (::ftruncate(::fileno(file_), size) != 0 || std::fseek(file_, size, SEEK_SET) != 0)
+    fail(target_, "cannot drop a partly written record (" + errno_text() + ")");
+}
+
 void AtomicFile::commit() {
   if (!file_) fail(target_, "commit called twice");
   const bool bad = std::fflush(file_) != 0 || std::ferror(file_);
+  const std::string why = bad ? errno_text() : "";
   const int rc = std::fclose(file_);
   file_ = nullptr;
-  if (bad || rc != 0) fail(target_, "write error");
+  if (bad || rc != 0) fail(target_, "write error (" + (bad ? why : errno_text()) + ")");
   std::error_code ec;
   std::filesystem::rename(temporary_, target_, ec);
   if (ec) fail(target_, "cannot move the finished file into place: " + ec.message());
   committed_ = true;
+  unlist_temporary(slot_);
 }
 
 void write_file_atomic(const std::filesystem::path& target,
@@ -99,6 +169,19 @@ void write_file_atomic(const std::filesystem::path& target,
 
 void write_text_atomic(const std::filesystem::path& target, const std::string& text) {
   write_file_atomic(target, [&](AtomicFile& f) { f.write(text); });
+}
+
+void remove_temporaries_now() noexcept {
+  for (Slot& s : slots)
+    if (s.state.load() == 2) ::unlink(s.path);
+}
+
+void check_file_name(const std::filesystem::path& target, const std::string& what) {
+  const std::string named = what.empty() ? target.string() : what + " " + target.string();
+  const std::filesystem::path name = target.filename();
+  if (name.empty() || name == "." || name == "..")
+    throw IoError(named + ": names a folder, not a file (give a file name, e.g. " +
+                  (target / "out").string() + ")");
 }
 
 int remove_stale_temporaries(const std::filesystem::path& dir) {
@@ -142,19 +225,38 @@ std::optional<std::pair<FileId, std::string>> where(const std::filesystem::path&
   if (!id) return std::nullopt;
   return std::pair{*id, p.filename().string()};
 }
+const char* kind_of(std::filesystem::file_type t) {
+  using T = std::filesystem::file_type;
+  return t == T::fifo ? "a FIFO (named pipe)" : t == T::socket ? "a socket"
+         : t == T::block ? "a block device" : t == T::character ? "a character device"
+                                                                : "of another kind";
+}
+
+// A folder another process holds (a run) is refused now, not after the work.
+void refuse_held_folder(const std::filesystem::path& target, const std::string& named) {
+  const std::filesystem::path dir = target.parent_path().empty() ? "." : target.parent_path();
+  std::error_code ec;
+  try {
+    if (std::filesystem::is_directory(dir, ec)) FolderLock probe(dir, kCommitWait);
+  } catch (const IoError& err) {
+    throw IoError(named + ": " + err.what());
+  }
+}
+
 }  // namespace
 
 OutputSet::~OutputSet() {
-  if (committed_) return;
   std::error_code ec;
-  for (const Entry& e : entries_) std::filesystem::remove(e.staging, ec);
+  for (Entry& e : entries_) {
+    if (!committed_) std::filesystem::remove(e.staging, ec);
+    unlist_temporary(e.slot);
+  }
 }
 
 std::size_t OutputSet::add(const std::filesystem::path& target, const std::string& what,
                            std::optional<std::size_t> stem_of) {
   const std::string named = what.empty() ? target.string() : what + " " + target.string();
-  if (target.filename().empty() || target.filename() == "." || target.filename() == "..")
-    throw IoError(named + ": not a file name");
+  check_file_name(target, what);
   std::error_code ec;
   const auto st = std::filesystem::symlink_status(target, ec);
   const bool present = !ec && std::filesystem::exists(st);
@@ -174,21 +276,18 @@ std::size_t OutputSet::add(const std::filesystem::path& target, const std::strin
   if (present) {
     if (std::filesystem::is_directory(target, ec)) throw IoError(named + ": is a folder");
     // a FIFO, socket or device is refused as such: --force would not change that
-    if (!std::filesystem::is_regular_file(st) && !std::filesystem::is_symlink(st)) {
-      using T = std::filesystem::file_type;
-      const T t = st.type();
-      const char* kind = t == T::fifo ? "a FIFO (named pipe)" : t == T::socket ? "a socket"
-                         : t == T::block ? "a block device" : t == T::character ? "a character device"
-                                                                                : "of another kind";
-      throw IoError(named + ": exists and is not a regular file (" + kind + ")");
-    }
+    if (!std::filesystem::is_regular_file(st) && !std::filesystem::is_symlink(st))
+      throw IoError(named + ": exists and is not a regular file (" + kind_of(st.type()) + ")");
     if (!force_) throw IoError(named + ": exists (use --force to overwrite)");
   }
+  refuse_held_folder(target, named);
   Entry e;
   e.target = target;
-  if (stem_of) {
-    e.staging = entries_.at(*stem_of).staging;
-    e.staging.replace_extension(target.extension());
+  if (stem_of) {  // the stem's staging name with this target's extension
+    const Entry& stem = entries_.at(*stem_of);
+    std::string name = stem.staging.string();
+    name.resize(name.size() - staging_suffix(stem.target).size());
+    e.staging = name + staging_suffix(target);
     const int fd = ::open(e.staging.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
     if (fd < 0)
       fail(target, std::string("cannot create a temporary file in its folder (") +
@@ -196,7 +295,7 @@ std::size_t OutputSet::add(const std::filesystem::path& target, const std::strin
     ::close(fd);
   } else {
     try {
-      const int fd = create_temporary(target, target.filename().string(), e.staging);
+      const int fd = create_temporary(target, staging_suffix(target), e.staging);
       ::close(fd);
     } catch (const IoError& err) {
       if (what.empty()) throw;
@@ -204,8 +303,22 @@ std::size_t OutputSet::add(const std::filesystem::path& target, const std::strin
     }
   }
   e.reserved = file_id(e.staging);  // a writer replaces the file (a new inode) or fills it
+  e.slot = list_temporary(e.staging);
   entries_.push_back(std::move(e));
   return entries_.size() - 1;
+}
+
+void OutputSet::write(std::size_t i, const std::function<void(const std::filesystem::path&)>& body) const {
+  const Entry& e = entries_.at(i);
+  try {
+    body(e.staging);
+  } catch (const IoError& err) {
+    std::string what = err.what();
+    const std::string from = e.staging.string(), to = e.target.string();
+    for (std::size_t at = what.find(from); at != std::string::npos; at = what.find(from, at + to.size()))
+      what.replace(at, from.size(), to);
+    throw IoError(what);
+  }
 }
 
 void OutputSet::commit() {
@@ -218,6 +331,21 @@ void OutputSet::commit() {
     const bool untouched = file && file_id(e.staging) == e.reserved && std::filesystem::file_size(e.staging, ec) == 0;
     if (!file || untouched) throw IoError(e.target.string() + ": was not written");
   }
+  // The folders' locks while the files move into place: two commands writing the same outputs
+  // leave one's complete set, never a mix (another command's commit takes milliseconds; a run
+  // holding a folder holds it for long: then this fails, naming it).
+  // Locked in one order (by identity), so that two commits cannot wait on each other.
+  std::vector<std::pair<FileId, std::filesystem::path>> dirs;
+  for (const Entry& e : entries_) {
+    const std::filesystem::path dir = e.target.parent_path().empty() ? "." : e.target.parent_path();
+    if (const auto id = file_id(dir)) dirs.emplace_back(*id, dir);
+  }
+  std::sort(dirs.begin(), dirs.end(), [](const auto& a, const auto& b) {
+    return std::pair(a.first.dev, a.first.ino) < std::pair(b.first.dev, b.first.ino);
+  });
+  std::vector<FolderLock> locks;
+  for (std::size_t k = 0; k < dirs.size(); ++k)
+    if (k == 0 || !(dirs[k].first == dirs[k - 1].first)) locks.emplace_back(dirs[k].second, kCommitWait);
   // Every output is complete before the first rename. Renames within one folder do not fail
   // for a checked target (the folder was writable at add()); they run one after another, so only
   // a change of the folders under our feet between two of them could leave some done. The

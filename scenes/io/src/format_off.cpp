@@ -1,5 +1,7 @@
 // OFF: "OFF" (or a prefixed variant such as "NOFF"), the counts on the header line or the next,
-// then "x y z" per vertex and "k i0 .. ik-1" per face. ASCII only.
+// then "x y z" per vertex and "k i0 .. ik-1" per face. ASCII only. The prefix "4" (4OFF, C4OFF,
+// ...) gives each vertex a homogeneous w after z: the point is (x, y, z) / w. The prefix "n"
+// (a dimension other than 3 on its own line) is refused.
 #include "surface.hpp"
 
 #include <array>
@@ -7,6 +9,26 @@
 namespace mbi::io::detail {
 
 using std::filesystem::path;
+
+namespace {
+// One vertex line: x y z, or x y z w of a homogeneous 4OFF, the point being (x, y, z) / w.
+std::array<double, 3> read_vertex(const Line& l, const std::string& field, bool homogeneous, const path& file) {
+  const std::size_t want = homogeneous ? 4 : 3;
+  if (l.tok.size() < want)
+    fail(file, l.number, field + (homogeneous ? ": expected 4 coordinates (x y z w: 4OFF)" : ": expected 3 coordinates"));
+  std::array<double, 3> p{};
+  for (int c = 0; c < 3; ++c)
+    p[c] = to_coordinate(l.tok[c], file, l.number, field + " coordinate " + std::to_string(c));
+  if (!homogeneous) return p;
+  const double w = to_coordinate(l.tok[3], file, l.number, field + " w");
+  if (w == 0) fail(file, l.number, field + ": w = 0 (a point at infinity)");
+  for (int c = 0; c < 3; ++c) {
+    p[c] /= w;  // a tiny w can make it overflow: checked as any coordinate
+    check_coordinate(p[c], file, l.number, field + " coordinate " + std::to_string(c) + " / w");
+  }
+  return p;
+}
+}  // namespace
 
 SurfaceMesh parse_off(std::string_view data, const path& file) {
   const auto lines = tokenize(skip_bom(data));
@@ -17,6 +39,10 @@ SurfaceMesh parse_off(std::string_view data, const path& file) {
     fail(file, h.number, "header: expected 'OFF', found '" + std::string(magic) + "'");
   if (h.tok.size() > 1 && h.tok[1] == "BINARY")
     fail(file, h.number, "header: binary OFF is not supported (use ASCII OFF or PLY)");
+  const std::string_view prefix = magic.substr(0, magic.size() - 3);
+  if (prefix.find('n') != std::string_view::npos)
+    fail(file, h.number, "header: '" + std::string(magic) + "' (a dimension other than 3) is not supported");
+  const bool homogeneous = prefix.find('4') != std::string_view::npos;
   // Counts may be on the header line or on the next one.
   std::size_t li = 0;
   std::vector<std::string_view> counts(h.tok.begin() + 1, h.tok.end());
@@ -38,14 +64,8 @@ SurfaceMesh parse_off(std::string_view data, const path& file) {
   SurfaceMesh m;
   std::vector<std::array<double, 3>> v(static_cast<std::size_t>(nv));
   std::size_t at = li + 1;
-  for (long long i = 0; i < nv; ++i, ++at) {
-    const auto& l = lines[at];
-    const std::string field = "vertex " + std::to_string(i);
-    if (l.tok.size() < 3) fail(file, l.number, field + ": expected 3 coordinates");
-    for (int c = 0; c < 3; ++c)
-      v[static_cast<std::size_t>(i)][c] =
-          to_coordinate(l.tok[c], file, l.number, field + " coordinate " + std::to_string(c));
-  }
+  for (long long i = 0; i < nv; ++i, ++at)
+    v[static_cast<std::size_t>(i)] = read_vertex(lines[at], "vertex " + std::to_string(i), homogeneous, file);
   m.polygons.reserve(static_cast<std::size_t>(nf));
   for (long long f = 0; f < nf; ++f, ++at) {
     const auto& l = lines[at];

@@ -1,5 +1,5 @@
 // PC2 point caches (Blender "Mesh Cache" modifier): read and written (see Pc2Writer).
-#include "io_common.hpp"
+#include "cache.hpp"
 
 #include <mbi/io/atomic_file.hpp>
 
@@ -58,10 +58,33 @@ void Pc2Writer::append(const Eigen::Ref<const Eigen::MatrixXd>& P) {
   for (Eigen::Index i = 0; i < P.rows(); ++i)
     for (Eigen::Index c = 0; c < P.cols(); ++c)
       buf[static_cast<std::size_t>(3 * i + c)] = static_cast<float>(P(i, c));
+  // All of the sample or none: flushed now, so that a full disk fails this sample, which is
+  // then cut off; the file holds exactly the samples counted.
+  const long end = 32 + 12 * static_cast<long>(num_points_) * samples_;
+  try {
+    if constexpr (std::endian::native == std::endian::big) {
+      for (float x : buf) put_le<float>(*out_, x);
+    } else {
+      out_->write(buf.data(), buf.size() * sizeof(float));
+    }
+    out_->flush();
+  } catch (const IoError&) {
+    out_->truncate(end);
+    throw;
+  }
+  ++samples_;
+}
+
+void Pc2Writer::append(const float* xyz) {
+  if (!out_) fail(file_, 0, "append after finish()");
+  const std::size_t n = 3 * static_cast<std::size_t>(num_points_);
+  const std::size_t bad = detail::first_non_finite(xyz, n);
+  if (bad < n)
+    fail(file_, 0, "sample " + std::to_string(samples_) + " point " + std::to_string(bad / 3) + ": non-finite coordinate");
   if constexpr (std::endian::native == std::endian::big) {
-    for (float x : buf) put_le<float>(*out_, x);
+    for (std::size_t i = 0; i < n; ++i) put_le<float>(*out_, xyz[i]);
   } else {
-    out_->write(buf.data(), buf.size() * sizeof(float));
+    out_->write(xyz, n * sizeof(float));
   }
   ++samples_;
 }
@@ -77,32 +100,36 @@ void Pc2Writer::finish() {
 PointCache read_pc2(const path& file) { return parse_pc2(detail::slurp(file), file); }
 
 PointCache parse_pc2(std::string_view data, const path& file) {
-  if (data.size() < 32) fail(file, 0, "too short for a PC2 header (32 bytes)");
-  if (std::memcmp(data.data(), kMagic, 12) != 0) fail(file, 0, "not a PC2 file (magic)");
-  const auto version = get_le<std::int32_t>(data, 12);
+  const detail::HeadReader head = [&](std::size_t n) { return std::string(data.substr(0, n)); };
+  return detail::parse_cache(data, detail::pc2_layout(head, data.size(), file), file);
+}
+
+detail::CacheLayout detail::pc2_layout(const HeadReader& head, unsigned long long size, const path& file) {
+  const std::string h = head(32);
+  if (h.size() < 32) fail(file, 0, "too short for a PC2 header (32 bytes)");
+  if (std::memcmp(h.data(), kMagic, 12) != 0) fail(file, 0, "not a PC2 file (magic)");
+  const auto version = get_le<std::int32_t>(h, 12);
   if (version != 1) fail(file, 0, "version " + std::to_string(version) + " (expected 1)");
-  const auto np = get_le<std::int32_t>(data, 16);
-  const auto ns = get_le<std::int32_t>(data, 28);
+  const auto np = get_le<std::int32_t>(h, 16);
+  const auto ns = get_le<std::int32_t>(h, 28);
   if (np < 0 || ns < 0) fail(file, 0, "negative numPoints or numSamples");
   if (np == 0 && ns > 0)  // would loop over samples that take no bytes
     fail(file, 0, "header says " + std::to_string(ns) + " samples of 0 points");
   const unsigned long long need = 32ull + 12ull * static_cast<unsigned long long>(np) *
                                               static_cast<unsigned long long>(ns);
-  if (need != data.size())
+  if (need != size)
     fail(file, 0, "header says " + std::to_string(np) + " points x " + std::to_string(ns) +
                       " samples (" + std::to_string(need) + " bytes) but the file has " +
-                      std::to_string(data.size()));
-  PointCache pc;
-  pc.start_frame = get_le<float>(data, 20);
-  pc.sample_rate = get_le<float>(data, 24);
-  std::size_t at = 32;
-  for (int s = 0; s < ns; ++s) {
-    Eigen::MatrixXd P(np, 3);
-    for (int i = 0; i < np; ++i)
-      for (int c = 0; c < 3; ++c, at += 4) P(i, c) = static_cast<double>(get_le<float>(data, at));
-    pc.frames.push_back(std::move(P));
-  }
-  return pc;
+                      std::to_string(size) + (need > size ? " (truncated?)" : ""));
+  CacheLayout L;
+  L.points = np;
+  L.frames = ns;
+  L.data_offset = 32;
+  L.start_frame = get_le<float>(h, 20);
+  L.sample_rate = get_le<float>(h, 24);
+  if (!std::isfinite(L.start_frame) || !std::isfinite(L.sample_rate))
+    fail(file, 0, "start frame and sample rate must be finite");
+  return L;
 }
 
 }  // namespace mbi::io

@@ -113,6 +113,7 @@ PlyProp read_property(const std::vector<std::string_view>& t, int number, const 
   } else {
     fail(file, number, "property: malformed");
   }
+  p.line = number;
   return p;
 }
 
@@ -168,8 +169,11 @@ struct PlyLayout {
 PlyLayout layout_of(const PlyHeader& h, const path& file) {
   PlyLayout lay;
   for (const auto& e : h.elements) {
-    if (e.name == "vertex") lay.ve = &e;
-    if (e.name == "face") lay.fe = &e;
+    for (auto [name, at] : {std::pair{"vertex", &lay.ve}, {"face", &lay.fe}})
+      if (e.name == name) {
+        if (*at) fail(file, e.line, "element " + e.name + " given twice (also line " + std::to_string((*at)->line) + ")");
+        *at = &e;
+      }
   }
   if (!lay.ve) fail(file, 0, "header: no 'vertex' element");
   for (std::size_t k = 0; k < lay.ve->props.size(); ++k) {
@@ -177,16 +181,26 @@ PlyLayout layout_of(const PlyHeader& h, const path& file) {
     if (p.list) continue;
     for (auto [name, at] : {std::pair{"x", &lay.x}, {"y", &lay.y}, {"z", &lay.z},
                             {"nx", &lay.nx}, {"ny", &lay.ny}, {"nz", &lay.nz}})
-      if (p.name == name) *at = static_cast<int>(k);
+      if (p.name == name) {
+        // a second one would be read over the first and written into both
+        if (*at >= 0)
+          fail(file, p.line, "element vertex: property '" + p.name + "' given twice (also line " +
+                                 std::to_string(lay.ve->props[static_cast<std::size_t>(*at)].line) + ")");
+        *at = static_cast<int>(k);
+      }
   }
   lay.normals = lay.nx >= 0 && lay.ny >= 0 && lay.nz >= 0;
   if (lay.x < 0 || lay.y < 0 || lay.z < 0)
     fail(file, lay.ve->line, "element vertex: needs properties x, y, z");
   if (lay.fe) {
-    for (std::size_t k = 0; k < lay.fe->props.size(); ++k)
-      if (lay.fe->props[k].list &&
-          (lay.fe->props[k].name == "vertex_indices" || lay.fe->props[k].name == "vertex_index"))
-        lay.indices = static_cast<int>(k);
+    for (std::size_t k = 0; k < lay.fe->props.size(); ++k) {
+      const auto& p = lay.fe->props[k];
+      if (!p.list || (p.name != "vertex_indices" && p.name != "vertex_index")) continue;
+      if (lay.indices >= 0)
+        fail(file, p.line, "element face: a second vertex index list '" + p.name + "' (also line " +
+                               std::to_string(lay.fe->props[static_cast<std::size_t>(lay.indices)].line) + ")");
+      lay.indices = static_cast<int>(k);
+    }
     if (lay.indices < 0) fail(file, lay.fe->line, "element face: needs a list property 'vertex_indices'");
   }
   return lay;
@@ -437,13 +451,33 @@ PlyTarget target_of(const PlyAttributes& a, bool has_n) {
   return t;
 }
 
-std::string kept_header(const PlyAttributes& a, const PlyTarget& t, bool binary, bool big) {
+bool is_integer(PlyType t) { return t != PlyType::f32 && t != PlyType::f64; }
+
+// The file's elements as written: positions (and the normals written) of an integer type become
+// float64, in ASCII and binary alike. Deformed positions are real numbers: rounding them (or
+// clamping them to 0..255 for uchar) would move the model silently, and real numbers under an
+// integer header would make an invalid file.
+std::vector<PlyElement> written_elements(const PlyAttributes& a, const PlyTarget& t, bool has_n) {
+  std::vector<PlyElement> out = a.elements;
+  if (t.ve < 0) return out;
+  auto& props = out[static_cast<std::size_t>(t.ve)].props;
+  for (int c = 0; c < 3; ++c)
+    for (int k : {t.pos[c], has_n ? t.nrm[c] : -1})
+      if (k >= 0 && is_integer(props[static_cast<std::size_t>(k)].type)) {
+        props[static_cast<std::size_t>(k)].type = PlyType::f64;
+        props[static_cast<std::size_t>(k)].type_name = "double";
+      }
+  return out;
+}
+
+std::string kept_header(const PlyAttributes& a, const std::vector<PlyElement>& elements,
+                        const PlyTarget& t, bool binary, bool big) {
   std::string h = std::string("ply\nformat ") +
                   (binary ? (big ? "binary_big_endian" : "binary_little_endian") : "ascii") +
                   " 1.0\n";
   for (const auto& c : a.comments) h += c + "\n";
-  for (std::size_t i = 0; i < a.elements.size(); ++i) {
-    const auto& e = a.elements[i];
+  for (std::size_t i = 0; i < elements.size(); ++i) {
+    const auto& e = elements[i];
     h += "element " + e.name + " " + std::to_string(e.count) + "\n";
     for (const auto& p : e.props)
       h += p.list ? "property list " + p.count_type_name + " " + p.type_name + " " + p.name + "\n"
@@ -460,10 +494,11 @@ void write_ply_kept(std::FILE* f, const SurfaceOutput& out) {
   const PlyAttributes& a = out.attributes->ply;
   const bool has_n = out.has_normals(), binary = out.binary, big = out.big_endian;
   const PlyTarget tg = target_of(a, has_n);
-  put(f, kept_header(a, tg, binary, big), out.file);
+  const std::vector<PlyElement> elements = written_elements(a, tg, has_n);
+  put(f, kept_header(a, elements, tg, binary, big), out.file);
   std::string buf;
-  for (std::size_t ei = 0; ei < a.elements.size(); ++ei) {
-    const auto& e = a.elements[ei];
+  for (std::size_t ei = 0; ei < elements.size(); ++ei) {
+    const auto& e = elements[ei];
     const auto& vals = a.values[ei];
     const bool is_v = static_cast<int>(ei) == tg.ve, is_f = static_cast<int>(ei) == tg.fe;
     std::size_t at = 0;

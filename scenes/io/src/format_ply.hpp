@@ -19,6 +19,7 @@ struct PlyProp {
   PlyType type = PlyType::f32;
   bool list = false;
   PlyType count_type = PlyType::u8;
+  int line = 0;  // in the header
 };
 
 struct PlyElement {

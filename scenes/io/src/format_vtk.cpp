@@ -15,11 +15,7 @@ using std::filesystem::path;
 
 struct VtkData {
   Eigen::MatrixXd P;  // n x 3
-  struct Cell {
-    int type;
-    std::vector<long long> nodes;
-  };
-  std::vector<Cell> cells;
+  std::vector<detail::VtkCell> cells;
 };
 
 // One value of a legacy VTK data type (binary: big endian).
@@ -168,7 +164,7 @@ class VtkReader {
     if (static_cast<long long>(types_.size()) != cells)
       fail(file_, 0, "CELLS has " + std::to_string(cells) + " cells but CELL_TYPES " + std::to_string(types_.size()));
     for (long long e = 0; e < cells; ++e) {
-      VtkData::Cell cell{types_[static_cast<std::size_t>(e)], {}};
+      detail::VtkCell cell{types_[static_cast<std::size_t>(e)], {}};
       const long long b = offsets_[static_cast<std::size_t>(e)], en = offsets_[static_cast<std::size_t>(e + 1)];
       if (b < 0 || en < b || en > static_cast<long long>(connectivity_.size()))
         fail(file_, 0, "cell " + std::to_string(e) + ": bad offsets");
@@ -202,10 +198,14 @@ ControlMesh read_vtk_mesh(const path& file) { return parse_vtk_mesh(detail::slur
 
 ControlMesh parse_vtk_mesh(std::string_view data, const path& file) {
   const VtkData v = parse_vtk(data, file);
+  return detail::vtk_control_mesh(v.P, v.cells, file);
+}
+
+ControlMesh detail::vtk_control_mesh(const Eigen::MatrixXd& P, const std::vector<VtkCell>& cells, const path& file) {
   // tetrahedra (10; quadratic 24 by its corners), else triangles (5; quadratic 22)
   long long tets = 0, tris = 0, higher = 0;
   std::map<int, long long> other;
-  for (const auto& c : v.cells) {
+  for (const auto& c : cells) {
     if (c.type == 10 || c.type == 24) ++tets;
     else if (c.type == 5 || c.type == 22) ++tris;
     else ++other[c.type];
@@ -217,12 +217,12 @@ ControlMesh parse_vtk_mesh(std::string_view data, const path& file) {
   }
   const int d = tets > 0 ? 3 : 2;
   ControlMesh m;
-  m.U = v.P.leftCols(d);
-  if (d == 2 && v.P.rows() > 0 && (v.P.col(2).array() != v.P(0, 2)).any())
+  m.U = P.leftCols(d);
+  if (d == 2 && P.rows() > 0 && (P.col(2).array() != P(0, 2)).any())
     fail(file, 0, "no tetrahedra, and the triangles are not in one plane z = const (a surface mesh of a 3D model?)");
   m.T.resize(d == 3 ? tets : tris, d + 1);
   Eigen::Index r = 0;
-  for (const auto& c : v.cells) {
+  for (const auto& c : cells) {
     const bool use = d == 3 ? (c.type == 10 || c.type == 24) : (c.type == 5 || c.type == 22);
     if (!use) continue;
     const std::size_t need = static_cast<std::size_t>(c.type == 24 ? 10 : c.type == 22 ? 6 : d + 1);

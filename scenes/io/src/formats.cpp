@@ -61,9 +61,14 @@ constexpr FormatRow kFormats[] = {
     {.format = {".vtk", "legacy VTK", FileKind::control},
      .read_control = read_vtk_mesh,
      .read_positions = read_vtk_points},
+    {.format = {".vtu", "VTK XML unstructured grid", FileKind::control},
+     .read_control = read_vtu_mesh,
+     .read_positions = read_vtu_points},
     {.format = {".txt", "point list", FileKind::points}, .read_positions = read_points},
     {.format = {".xyz", "point list", FileKind::points}, .read_positions = read_points},
     {.format = {".pc2", "PC2 point cache", FileKind::cache}},
+    {.format = {".mdd", "MDD point cache", FileKind::cache}},
+    {.format = {".pvd", "ParaView collection", FileKind::collection}},
 };
 // A control mesh of any other name is a TetGen base name ("box", "box.1").
 constexpr const FormatRow& kTetgen = kFormats[4];

@@ -205,7 +205,8 @@ void write_atomic(const std::filesystem::path& target,
 }
 
 void put(std::FILE* f, const void* data, std::size_t bytes, const std::filesystem::path& file) {
-  if (bytes > 0 && std::fwrite(data, 1, bytes, f) != bytes) fail(file, 0, "write error");
+  if (bytes > 0 && std::fwrite(data, 1, bytes, f) != bytes)
+    fail(file, 0, std::string("write error (") + (errno != 0 ? std::strerror(errno) : "an I/O error") + ")");
 }
 
 void put(std::FILE* f, const std::string& s, const std::filesystem::path& file) {

@@ -70,6 +70,13 @@ w("off-face-index.off", "OFF\n4 1 0\n" + "".join("%g %g %g\n" % v for v in DENSE
 w("off-nan.off", "OFF\n4 4 0\n" + OFF_BODY.replace("0.3 0.1 0.1", "0.3 nan 0.1"))
 w("off-binary.off", "OFF BINARY\n4 4 0\n")
 w("off-face-size.off", "OFF\n4 1 0\n" + "".join("%g %g %g\n" % v for v in DENSE) + "5 0 1 2\n")
+# homogeneous 4OFF: x y z w per vertex, the point is (x, y, z) / w
+OFF4_FACES = "".join("3 %d %d %d\n" % tuple(i - 1 for i in t) for t in TRIS)
+w("off4-half.off", "4OFF\n4 4 0\n" + "".join("%g %g %g 0.5\n" % tuple(c / 2 for c in v) for v in DENSE) + OFF4_FACES)
+w("off4-w-zero.off", "4OFF\n4 4 0\n" + "".join("%g %g %g %g\n" % (*v, 0 if i == 2 else 1) for i, v in enumerate(DENSE)) + OFF4_FACES)
+w("off4-w-nan.off", "4OFF\n4 4 0\n" + "".join("%g %g %g %s\n" % (*v, "nan" if i == 1 else "1") for i, v in enumerate(DENSE)) + OFF4_FACES)
+w("off4-missing-w.off", "4OFF\n4 4 0\n" + OFF_BODY)
+w("off-n-dimensional.off", "nOFF\n4\n4 4 0\n" + "".join("%g %g %g 0\n" % v for v in DENSE) + OFF4_FACES)
 
 
 # --- PLY
@@ -98,6 +105,23 @@ w("ply-count-overflow.ply", ply_header("ascii", [("vertex", 4294967296, VXYZ)]))
 w("ply-negative-count.ply", ply_header("ascii", [("vertex", -1, VXYZ)]))
 w("ply-ascii-huge-count.ply", ply_header("ascii", [("vertex", 2000000000, VXYZ)]) + b"0 0 0\n")
 full = ply_header("binary_little_endian", [("vertex", 4, VXYZ), ("face", 4, FACE)]) + ply_bin(DENSE, TRIS)
+# one name, two properties: the reader would keep the last, the writer fill the first
+PLY_ASCII_BODY = "".join("%g %g %g\n" % v for v in DENSE) + "".join("3 %d %d %d\n" % tuple(i - 1 for i in t) for t in TRIS)
+w("ply-two-x.ply", ply_header("ascii", [("vertex", 4, ["float x", "float y", "float z", "float x"]), ("face", 4, FACE)]) +
+  ("".join("%g %g %g %g\n" % (*v, v[0]) for v in DENSE) + PLY_ASCII_BODY.split("\n", 4)[4]).encode())
+w("ply-two-vertex-elements.ply", ply_header("ascii", [("vertex", 4, VXYZ), ("vertex", 0, VXYZ), ("face", 4, FACE)]) +
+  PLY_ASCII_BODY.encode())
+w("ply-two-index-lists.ply", ply_header("ascii", [("vertex", 4, VXYZ), ("face", 4, FACE + ["list uchar int vertex_index"])]) +
+  ("".join("%g %g %g\n" % v for v in DENSE) + "".join("3 %d %d %d 3 0 1 2\n" % tuple(i - 1 for i in t) for t in TRIS)).encode())
+# integer positions (a 10-unit model in int, uchar): deformed positions are written as double
+INT_DENSE = [(1, 1, 1), (3, 1, 1), (1, 3, 1), (1, 1, 3)]
+w("ply-int-positions.ply", ply_header("ascii", [("vertex", 4, ["int x", "int y", "int z"]), ("face", 4, FACE)]) +
+  ("".join("%d %d %d\n" % v for v in INT_DENSE) + PLY_ASCII_BODY.split("\n", 4)[4]).encode())
+w("ply-uchar-positions.ply", ply_header("binary_little_endian", [("vertex", 4, ["uchar x", "uchar y", "uchar z"]), ("face", 4, FACE)]) +
+  b"".join(struct.pack("<3B", *v) for v in INT_DENSE) + b"".join(struct.pack("<B3i", 3, *[i - 1 for i in f]) for f in TRIS))
+w("int-x10.txt", "0 0 0\n11 0 0\n0 10 0\n0 0 12\n")
+w("int.node", "4 3 0 0\n" + "".join("%d %g %g %g\n" % (i, *(10 * c for c in p)) for i, p in enumerate(TET)))
+w("int.ele", ELE)
 w("ply-truncated.ply", full[:-7])
 w("ply-missing-end-header.ply", b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\n")
 w("ply-unknown-format.ply", ply_header("binary_middle_endian", [("vertex", 4, VXYZ)]))
@@ -208,4 +232,15 @@ w("scene-unknown-table.toml", SCENE + "[renderer]\nx = 1\n")
 w("scene-binary.toml", bytes(range(256)))
 w("scene-dense-bad-obj.toml", 'name = "corpus"\n[dense]\npath = "obj-nan.obj"\n[control]\nbuiltin = "box"\n')
 w("scene-dense-missing.toml", 'name = "corpus"\n[dense]\npath = "no-such-model.obj"\n[control]\nbuiltin = "box"\n')
+# keys that would do nothing: refused
+DRAG = ('name = "corpus"\nmode = "drag"\n[dense]\nbuiltin = "paper-bar"\n[control]\nbuiltin = "box"\n'
+        '[[drags]]\nvertex = 0\nkeys = [[0, 0, 0, 0]]\n')
+w("scene-drag-pokes.toml", DRAG + "[[pokes]]\nat = [0.5, 0.5, 0.5]\nforce = [1, 0, 0]\n")
+w("scene-drag-constraints.toml", DRAG + '[[constraints]]\ntype = "fixed"\nselect = { indices = [0] }\n')
+# a single tetrahedron as control mesh: no interior face
+w("scene-one-tet.toml", 'name = "corpus"\n[dense]\npath = "ok.obj"\n[control]\npath = "ok.node"\n[simulation]\nframes = 2\n')
+# a dense model with a vertex no face uses, Loop-subdivided
+w("unused-vertex.obj", obj(DENSE + [(0.2, 0.2, 0.2)], TRIS))
+w("scene-subdivide-unused.toml", 'name = "corpus"\nmode = "drag"\n[dense]\npath = "unused-vertex.obj"\nsubdivide = 1\n'
+  '[control]\nbuiltin = "box"\ncells = [2, 2, 2]\n[[drags]]\nvertex = 0\nkeys = [[0, 0, 0, 0]]\n')
 print("wrote", len(os.listdir(here)), "files to", here)

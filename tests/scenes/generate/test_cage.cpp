@@ -291,7 +291,7 @@ TEST_CASE("cage of a U shape keeps the legs apart", "[cage]") {
   }
 }
 
-TEST_CASE("planar input gives a 2D triangle cage; force_3d gives tetrahedra", "[cage]") {
+TEST_CASE("planar input gives a 2D triangle cage, force_3d gives tetrahedra", "[cage]") {
   // An annulus in the plane z = 0.5.
   const int nu = 40, nr = 4;
   Surf s;

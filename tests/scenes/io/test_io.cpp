@@ -99,7 +99,7 @@ TEST_CASE("surface formats round-trip exactly, keeping vertex order and odd topo
   REQUIRE(tmp.entries() == 3);  // no temporary files left
 }
 
-TEST_CASE("STL round-trips float32 triangles; duplicates corners merged", "[io]") {
+TEST_CASE("STL round-trips float32 triangles, duplicates corners merged", "[io]") {
   TempDir tmp("stl");
   SurfaceMesh m = awkward_mesh(true);
   // STL stores triangles only and no indices: use a mesh whose vertices are all distinct and
@@ -129,7 +129,7 @@ TEST_CASE("OBJ reader: texture/normal indices, negative indices, comments", "[io
   REQUIRE(r.F.row(1) == Eigen::RowVector3i(3, 1, 2));
 }
 
-TEST_CASE("point lists round-trip with %.17g; comments and blank lines", "[io]") {
+TEST_CASE("point lists round-trip with %.17g, comments and blank lines", "[io]") {
   TempDir tmp("points");
   std::mt19937_64 rng(3);
   for (int d : {2, 3}) {
@@ -420,7 +420,7 @@ TEST_CASE("malformed text files: IoError naming file, line and field", "[io][rob
   require_io_error([&] { read_surface(tmp / "x.abc"); }, tmp / "x.abc", 0, "unknown surface");
 }
 
-TEST_CASE("malformed TetGen element files; .face files are not read", "[io][robustness]") {
+TEST_CASE("malformed TetGen element files, .face files are not read", "[io][robustness]") {
   TempDir tmp("badele");
   write_text(tmp / "m.node", "5 3 0 0\n0 0 0 0\n1 1 0 0\n2 0 1 0\n3 0 0 1\n4 1 1 0\n");
   struct Case {

@@ -22,6 +22,23 @@ void evaluate(const BezierPoints& B, const Embedding& emb,
               Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& positions,
               Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& normals_out, int threads = 0);
 
+/// p x d values in caller memory with any strides (a numpy array, one frame of a batch), to
+/// write (PointsRef) or to read (ConstPointsRef).
+template <typename Scalar>
+using PointsRef = Eigen::Ref<Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>, 0,
+                             Eigen::Stride<Eigen::Dynamic, Eigen::Dynamic>>;
+template <typename Scalar>
+using ConstPointsRef = Eigen::Ref<const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>, 0,
+                                  Eigen::Stride<Eigen::Dynamic, Eigen::Dynamic>>;
+
+/// The same two in caller memory: positions (and normals_out) must be p x d already (Error
+/// otherwise); nothing of the points' size is allocated.
+template <typename Scalar>
+void evaluate(const BezierPoints& B, const Embedding& emb, PointsRef<Scalar> positions, int threads = 0);
+template <typename Scalar>
+void evaluate(const BezierPoints& B, const Embedding& emb, const ConstPointsRef<Scalar>& normals_rest,
+              PointsRef<Scalar> positions, PointsRef<Scalar> normals_out, int threads = 0);
+
 /// Jacobian dx/du (d x d) at one embedded point (element e, barycentric b), needs rest U/T for
 /// the basis gradients.
 Eigen::MatrixXd jacobian(const Eigen::Ref<const Eigen::MatrixXd>& U,

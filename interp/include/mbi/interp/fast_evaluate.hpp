@@ -17,6 +17,7 @@
 // Results agree with interp::evaluate<double> to float round-off (a few ulp of the coordinate
 // magnitudes: tests/interp/test_fast_evaluate.cpp states the bound). interp::evaluate<double>
 // stays the exact path (files, tests).
+#include <mbi/base/names.hpp>
 #include <mbi/interp/embed.hpp>
 #include <mbi/interp/modified_bi.hpp>
 
@@ -40,6 +41,8 @@ enum class Simd {
   Avx2,      ///< AVX2 and FMA: one point (positions) or two (with normals) to a 256-bit vector
   Portable,  ///< plain C++, any CPU
 };
+inline constexpr auto kSimdNames = name_table<Simd>(
+    {{Simd::Auto, "auto"}, {Simd::Avx512, "avx512"}, {Simd::Avx2, "avx2"}, {Simd::Portable, "portable"}});
 
 class FastEvaluator {
  public:
@@ -73,18 +76,19 @@ class FastEvaluator {
   /// normals.
   int bytes_per_point(bool normals) const { return 4 * (d_ + 1) + 4 * d_ + (normals ? 8 * d_ : 0); }
 
-  /// Positions from B ((m K) x d, interp::BezierPoints layout). `positions` is resized to p x d
+  /// Positions from B ((m K) x d, interp::BezierPoints layout; read where it is, e.g. a numpy
+  /// array). `positions` is resized to p x d
   /// when its shape differs (no allocation when the same matrix is passed every frame).
-  void evaluate(const BezierPoints& B, RowMatrixXf& positions);
+  void evaluate(const Eigen::Ref<const BezierPoints>& B, RowMatrixXf& positions);
   /// Positions and mapped normals (cof(J) n, renormalised; 0 where J is singular), as
   /// interp::evaluate does. Needs set_rest_normals().
-  void evaluate(const BezierPoints& B, RowMatrixXf& positions, RowMatrixXf& normals);
+  void evaluate(const Eigen::Ref<const BezierPoints>& B, RowMatrixXf& positions, RowMatrixXf& normals);
   /// Same into caller memory (e.g. a mapped GPU buffer): positions and normals (nullptr: no
   /// normals) each hold size() * dim() floats, 16-byte aligned for the fastest (streaming) stores.
-  void evaluate(const BezierPoints& B, float* positions, float* normals);
+  void evaluate(const Eigen::Ref<const BezierPoints>& B, float* positions, float* normals);
 
  private:
-  void prepare(const BezierPoints& B, bool normals);
+  void prepare(const Eigen::Ref<const BezierPoints>& B, bool normals);
   const float* rest_normals_for(const float* positions, const float* normals);
   static constexpr std::size_t kSlack = 1024;  // floats (4 KiB) to move the rest-normal block in
 

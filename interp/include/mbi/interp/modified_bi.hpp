@@ -7,6 +7,7 @@
 // E_disc on the per-component unknowns m (d n of them, method.md fact 1), choose beta (fact 7),
 // remove the gauge null space (fact 4) and factor. Per frame: solve() gives all M_i for the
 // deformed positions X, bezier() the element control points that evaluate() consumes.
+#include <mbi/base/names.hpp>
 #include <mbi/interp/mesh.hpp>
 
 #include <Eigen/SparseCore>
@@ -22,12 +23,16 @@ namespace mbi::interp {
 /// Automatic picks the dense operator for small meshes (see modified_bi.cpp for the measured
 /// threshold) and the sparse path otherwise.
 enum class SolvePath { Automatic, Sparse, Dense };
+inline constexpr auto kSolvePathNames = name_table<SolvePath>(
+    {{SolvePath::Automatic, "automatic"}, {SolvePath::Sparse, "sparse"}, {SolvePath::Dense, "dense"}});
 
 /// Which sparse Cholesky factorization the precompute runs (the result is the same up to
 /// round-off): Eigen's SimplicialLLT with AMD (always built), or CHOLMOD's supernodal
 /// factorization with the better of AMD and METIS orderings (when the build has CHOLMOD:
 /// cholmod_available()). Automatic = CHOLMOD when available.
 enum class Factorization { Automatic, Eigen, Cholmod };
+inline constexpr auto kFactorizationNames = name_table<Factorization>(
+    {{Factorization::Automatic, "automatic"}, {Factorization::Eigen, "eigen"}, {Factorization::Cholmod, "cholmod"}});
 
 /// True when this build of interp has CHOLMOD (CMake MBI_WITH_CHOLMOD, libsuitesparse-dev).
 bool cholmod_available();
@@ -97,6 +102,11 @@ class ModifiedBI {
 
   /// M for deformed control positions X (n x d). Throws Error on a size mismatch or NaN.
   VertexMatrices solve(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
+
+  /// The transpose of solve(), which is linear in X (fact 11): dL/dX (n x d) from
+  /// G = dL/dM ((n d) x d). One solve with the cached factor (the system is symmetric) and one
+  /// product with H_mx^T. Throws Error on a size mismatch or NaN.
+  Eigen::MatrixXd solve_transpose(const VertexMatrices& G) const;
 
   /// Bezier control points for positions X and matrices M (M = 0 gives BI).
   BezierPoints bezier(const Eigen::Ref<const Eigen::MatrixXd>& X, const VertexMatrices& M) const;

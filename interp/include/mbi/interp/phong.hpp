@@ -44,6 +44,10 @@ class Phong {
   /// Phong's M: M_i = F_i / 2, (n d) x d as in ModifiedBI::solve().
   VertexMatrices M(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
 
+  /// The transpose of M(), which is linear in X: dL/dX (n x d) from G = dL/dM ((n d) x d).
+  /// Throws Error on a size mismatch or NaN.
+  Eigen::MatrixXd M_transpose(const VertexMatrices& G) const;
+
   /// Weight w_e of element e at vertex i, for the incidences of vertex i in order:
   /// incident_elements(i)[k] has weight weights(i)[k]. The weights of a vertex sum to 1.
   const std::vector<int>& incident_elements(int i) const { return elements_of_[static_cast<size_t>(i)]; }

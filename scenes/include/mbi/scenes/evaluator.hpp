@@ -25,7 +25,9 @@ struct Evaluation {
 
 /// The evaluator `use` asks for. Off: the CPU. On: the GPU, or SceneError "gpu = on, but <why
 /// no OpenGL context>". Auto: the GPU when a headless OpenGL context can be made, else the CPU,
-/// after warn("note: <why>; evaluating and drawing on the CPU").
-Evaluation make_evaluator(GpuUse use, const std::function<void(const std::string&)>& warn);
+/// after warn("note: <why>; evaluating and drawing on the CPU"). With `context` (a window's, the
+/// viewer's), On and Auto evaluate in it instead of a headless one.
+Evaluation make_evaluator(GpuUse use, const std::function<void(const std::string&)>& warn,
+                          std::shared_ptr<gpu::Context> context = nullptr);
 
 }  // namespace mbi::scenes

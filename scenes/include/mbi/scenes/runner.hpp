@@ -18,6 +18,7 @@
 #include <mbi/pipeline/frame_pipeline.hpp>
 #include <mbi/scenes/scene.hpp>
 
+#include <atomic>
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -74,6 +75,10 @@ struct RunOptions {
   /// Notes the user must see even when quiet (outside points, no OpenGL under gpu = auto); may be
   /// empty (then they go to `log`).
   std::function<void(const std::string&)> warn;
+  /// When it becomes non-zero (a signal number, set by a signal handler), the run stops after
+  /// the frame in progress and finishes its outputs up to that frame; before the first frame,
+  /// it ends with nothing written. May be null.
+  const std::atomic<int>* stop = nullptr;
 };
 
 struct RunResult {
@@ -81,6 +86,7 @@ struct RunResult {
   int frames = 0;         ///< frames completed
   bool failed = false;    ///< a simulation step failed; outputs up to the last good frame kept
   std::string message;    ///< the failure
+  int interrupted = 0;    ///< the signal that stopped the run (RunOptions::stop), or 0
   mbi::interp::DiscontinuityTable last_table;  ///< of the last completed frame
   int outside_points = 0;
   std::string evaluator;  ///< what evaluated the dense points, e.g. "gpu (llvmpipe ...)"
@@ -89,7 +95,15 @@ struct RunResult {
 
 /// Runs a scene headless. Throws on bad input before anything is written (mbi::Error: SceneError,
 /// io::IoError, interp::Error, sim::Error). A failing simulation step ends the run with
-/// RunResult::failed and keeps what was written.
+/// RunResult::failed and keeps what was written; RunOptions::stop ends it with
+/// RunResult::interrupted.
+///
+/// Memory stays bounded however many frames run: the per-frame records of metrics.json and the
+/// Bezier points of the 3D pictures wait in unnamed scratch files in the output folder (on its
+/// disk, gone when the process ends), not in memory.
 RunResult run_scene(const Scene& scene, const RunOptions& options);
+
+/// "SIGINT", "SIGTERM", or "signal N".
+std::string signal_name(int signal);
 
 }  // namespace mbi::scenes

@@ -22,8 +22,12 @@ class Camera {
   void frame(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
              const Eigen::Vector3d& up = Eigen::Vector3d::UnitY());
   void orbit(double dx_pixels, double dy_pixels);           ///< drag: rotate about the target
-  void pan(double dx_pixels, double dy_pixels, int window_height);  ///< drag: move the target
+  /// drag: move the target, at most kMaxPan times the framed depth from where frame() put it
+  void pan(double dx_pixels, double dy_pixels, int window_height);
   void zoom(double steps);                                  ///< wheel / pinch: > 0 zooms in
+  // Any input leaves the camera finite (a NaN move is ignored): one move counts at most
+  // kMaxMove pixels, yaw stays in [-pi, pi], pitch in [-1.5, 1.5], radius in [1e-9, 1e12].
+  static constexpr double kMaxMove = 1e5, kMaxPan = 1e3;
 
   Eigen::Vector3d direction() const;  ///< from the eye into the scene (unit)
   Eigen::Vector3d up() const;         ///< unit, orthogonal to direction()
@@ -36,6 +40,7 @@ class Camera {
   Eigen::Vector2d project(const Eigen::Vector3d& p, int window_w, int window_h) const;
 
   Eigen::Vector3d target = Eigen::Vector3d::Zero();
+  Eigen::Vector3d home = Eigen::Vector3d::Zero();  ///< the target frame() chose
   double radius = 1.0;  ///< half the visible height (world units)
   double depth = 10.0;  ///< half the depth range around the target
   double yaw = 0.6, pitch = 0.35;

@@ -1,7 +1,8 @@
 #pragma once
 // mbi::viewer -- the interactive viewer (`mbi view SCENE`): a GLFW window with OpenGL core, a
-// Dear ImGui panel, the dense mesh drawn from the GPU evaluator's buffers, driven by one frame
-// pipeline. Pokes (grab the surface, a bounded spring pulls it), direct mode (click control
+// Dear ImGui panel docked at the left, the views labelled with their method beside it (layout.hpp),
+// the dense mesh drawn from GL buffers that the GPU pass or the CPU kernel fills (options.gpu),
+// driven by one frame pipeline. Pokes (grab the surface, a bounded spring pulls it), direct mode (click control
 // vertices to make them handles and drag them: paper Eq. 10/11), BI | modified-BI split view.
 //
 // A few lines open a viewer on any pipeline (in the spirit of polyscope):
@@ -12,29 +13,29 @@
 //   viewer.show({.pipe = pipe, .faces = F,
 //                .per_frame = [&](mbi::viewer::Viewer&) { given.set(next_positions()); }});
 //
-// Input replay: `script` lines "FRAME EVENT ARGS" (window coordinates, y down):
-//   FRAME press X Y BUTTON | FRAME move X Y | FRAME release X Y BUTTON | FRAME scroll DY |
-//   FRAME key NAME
-// `record` writes the same lines for what the user did, so a session can be replayed.
-#include <mbi/error.hpp>
+// Input replay: `script` lines "FRAME EVENT ARGS" (mbi/viewer/script.hpp); `record` writes the
+// same lines for what the user did, so a session can be replayed.
+//
+// Files: the options' outputs (record, screenshot, report) follow the rules of every mbi command
+// (docs/hardening.md): checked and reserved when the Viewer is made, before any work; never one
+// of `inputs` or the script, never two at one file, only regular files (a FIFO or a device is
+// refused), an existing file only with `force`; all moved into place when show() returns, none
+// on an error. A write error is an error.
 #include <mbi/gpu/evaluator.hpp>
 #include <mbi/io/image.hpp>
 #include <mbi/pipeline/frame_pipeline.hpp>
+#include <mbi/scenes/scene.hpp>
 #include <mbi/sim/corotational.hpp>
+#include <mbi/viewer/error.hpp>
 
 #include <filesystem>
 #include <functional>
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace mbi::viewer {
-
-/// No display, no OpenGL 3.3 window, or a bad script: the message says which.
-class ViewerError : public mbi::Error {
- public:
-  using mbi::Error::Error;
-};
 
 struct ViewerOptions {
   int width = 1280, height = 720;        ///< window size (logical pixels)
@@ -44,16 +45,21 @@ struct ViewerOptions {
   bool handles = true;                   ///< handle markers (direct mode)
   bool playing = true;
   bool panel = true;                     ///< the ImGui panel
+  /// Evaluator: Auto picks the CPU kernel on a software OpenGL renderer, else the GPU pass.
+  scenes::GpuUse gpu = scenes::GpuUse::Auto;
   int frames = 0;                        ///< > 0: close after this many frames
   std::filesystem::path screenshot;      ///< written when the viewer closes (PNG)
   std::filesystem::path script;          ///< input events to replay
   std::filesystem::path record;          ///< input events to record
   std::filesystem::path report;          ///< JSON per frame: pokes, handles, energies (tests)
+  std::vector<std::filesystem::path> inputs;  ///< the files shown (scene, models): never outputs
+  bool force = false;                    ///< replace existing output files (never an input)
   Eigen::Vector3d up = Eigen::Vector3d::UnitY();
   double poke_response = 0.15;           ///< s, natural period of a poke spring
 };
 
 class Viewer;
+class SessionFiles;
 
 /// What Viewer::show displays: a frame pipeline and the surface it deforms; in 2D the picture
 /// drawn on it; the simulation's material, editable in the panel when `rebuild` is given.
@@ -70,18 +76,20 @@ struct Shown {
 
 class Viewer {
  public:
-  /// Opens the window and its OpenGL context. Throws ViewerError (no display: one line).
+  /// Checks the options' files (mbi::Error naming the option), then opens the window and its
+  /// OpenGL context. Throws ViewerError (no display: one line).
   explicit Viewer(const ViewerOptions& options = {});
   ~Viewer();
   Viewer(const Viewer&) = delete;
   Viewer& operator=(const Viewer&) = delete;
 
-  /// A GPU evaluator in the viewer's context, for the pipeline to show.
-  std::unique_ptr<gpu::GpuEvaluator> evaluator();
+  /// The evaluator options.gpu asks for, for the pipeline to show: the GPU pass in the viewer's
+  /// context, or the CPU kernel uploading its results into the buffers the renderer draws.
+  std::unique_ptr<pipeline::Evaluator> evaluator();
 
-  /// Shows `shown` until the window closes or options.frames pass, then writes the screenshot
-  /// and report the options ask for. Throws ViewerError (a pipeline not built with
-  /// Viewer::evaluator(), 2D without an image).
+  /// Shows `shown` until the window closes or options.frames pass, then writes the files the
+  /// options ask for (the first show() only). Throws ViewerError (a pipeline not built with
+  /// Viewer::evaluator(), 2D without an image, a write error), io::IoError.
   void show(const Shown& shown);
 
   /// The last frame's picture of the window (RGB).
@@ -90,6 +98,10 @@ class Viewer {
   ViewerOptions& options();
 
  private:
+  // view_scene checks the files before it loads the models, then opens the window
+  Viewer(const ViewerOptions& options, std::unique_ptr<SessionFiles> files);
+  friend void view_scene(const scenes::Scene&, const std::filesystem::path&, ViewerOptions);
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -59,6 +59,9 @@ class GpuEvaluator final : public pipeline::Evaluator {
   unsigned displacement_buffer() const { return out_disp_; }
   unsigned normal_buffer() const { return out_normal_; }
   bool has_normals() const { return have_normals_; }
+  /// Fills the output buffers from results evaluated elsewhere (the CPU kernel), p x d each
+  /// (normals empty: none), so the renderer draws them as a pass's; after set_points.
+  void set_results(const Eigen::MatrixXd& positions, const Eigen::MatrixXd& normals);
 
  private:
   void release();

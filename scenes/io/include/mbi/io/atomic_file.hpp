@@ -6,10 +6,12 @@
 // check), it removes the temporary file, so a failed write leaves neither a half-written target
 // nor a stray temporary behind.
 //
-// Temporary names start with kTemporaryPrefix (".mbi-tmp.") and carry the writer's process id:
-// "<folder>/.mbi-tmp.<pid>.<n>-<random>.<target name>". A process killed with SIGKILL can leave
-// one behind (never a partial file under a final name); remove_stale_temporaries() removes those
-// whose process is gone (mbi run --force does so in its folder).
+// Temporary names start with kTemporaryPrefix (".mbi-tmp.") and carry the writer's process id,
+// never the target's name (so any name a folder takes can be written, up to 255 bytes):
+// "<folder>/.mbi-tmp.<pid>.<n>-<random>.tmp". A process killed with SIGKILL can leave one behind
+// (never a partial file under a final name); remove_stale_temporaries() removes those whose
+// process is gone (mbi run --force does so in its folder), and remove_temporaries_now() those of
+// this process, from a signal handler.
 #include <mbi/io/io.hpp>
 
 #include <cstdio>
@@ -35,6 +37,10 @@ class AtomicFile {
   void write(const std::string& text);
   /// Moves to an absolute byte offset (to patch a header before commit()).
   void seek(long offset);
+  /// Drops everything from byte `size` on (what a failed write() left) and continues there.
+  void truncate(long size);
+  /// Writes the buffered bytes to the file: a full disk is reported here, not later.
+  void flush();
   /// Flushes, closes and renames the temporary file over the target.
   void commit();
   /// The open stream (valid until commit()).
@@ -46,6 +52,7 @@ class AtomicFile {
   std::filesystem::path target_, temporary_;
   std::FILE* file_ = nullptr;
   bool committed_ = false;
+  int slot_ = -1;  // in the table remove_temporaries_now() reads
 };
 
 /// Writes `target` atomically: `body` fills an AtomicFile, which is committed when it returns.
@@ -56,6 +63,15 @@ void write_text_atomic(const std::filesystem::path& target, const std::string& t
 
 /// The prefix of every temporary file name of mbi.
 inline constexpr const char* kTemporaryPrefix = ".mbi-tmp.";
+
+/// Removes every temporary file this process holds open now (AtomicFile temporaries and
+/// OutputSet staging files), without allocating or locking: async-signal-safe, for a handler
+/// that then ends the process (_exit).
+void remove_temporaries_now() noexcept;
+
+/// Throws IoError ("<what> <target>: ...") unless `target` names a file: an empty last part
+/// ("dir/"), "." or ".." name a folder.
+void check_file_name(const std::filesystem::path& target, const std::string& what);
 
 /// Removes the temporary files ("<dir>/.mbi-tmp.<pid>.*") whose writing process no longer runs
 /// (left by a killed process); returns how many were removed. Symbolic links are never followed.
@@ -75,6 +91,10 @@ std::optional<FileId> file_id(const std::filesystem::path& p);
 /// renames every staging file over its target at the end. Destroyed without commit() (an error
 /// on the way), it removes every staging file, and no target has been created or replaced.
 ///
+/// Two commands never mix their outputs: add() and commit() take the lock of each target's
+/// folder (FolderLock, folder_lock.hpp), waiting up to 5 s while another process holds it (a
+/// commit holds it for milliseconds; a run holds its folder to the end, and is then named).
+///
 /// The overwrite rule of every mbi command: an existing target is refused unless `force`; a
 /// target that is one of the command's inputs (by file identity: other spellings, hard links and
 /// symbolic links included) or another output of the same command is refused even with `force`.
@@ -92,8 +112,11 @@ class OutputSet {
   /// files written together from one base name, e.g. BASE.node and BASE.ele by write_tetgen).
   std::size_t add(const std::filesystem::path& target, const std::string& what,
                   std::optional<std::size_t> stem_of = std::nullopt);
-  /// Where to write output i (beside its target, same extension).
+  /// Where to write output i (beside its target, same extension, a short name).
   const std::filesystem::path& staging(std::size_t i) const { return entries_.at(i).staging; }
+  /// Runs body(staging(i)); an IoError it throws names target(i) instead of the staging file
+  /// (a full disk names the user's file, not an internal one).
+  void write(std::size_t i, const std::function<void(const std::filesystem::path&)>& body) const;
   const std::filesystem::path& target(std::size_t i) const { return entries_.at(i).target; }
   /// Renames every staging file over its target. Throws IoError if one is missing (not written).
   void commit();
@@ -102,6 +125,7 @@ class OutputSet {
   struct Entry {
     std::filesystem::path target, staging;
     std::optional<FileId> reserved;  // the staging file as add() created it
+    int slot = -1;                   // in the table remove_temporaries_now() reads
   };
   std::vector<std::filesystem::path> inputs_;
   bool force_;

@@ -6,8 +6,9 @@
 //   point lists     .txt, .xyz: read and written
 //   control meshes  TetGen .node/.ele: read and written, .face: written; Gmsh .msh 2.2, 4.0 and
 //                   4.1, ASCII or binary: read; legacy VTK .vtk 2.0-5.1, ASCII or BINARY: read,
-//                   ASCII: written
-//   animation       OBJ/PLY frame sequences: written; PC2 point caches: read and written
+//                   ASCII: written; VTK XML .vtu (ASCII, base64, raw appended, zlib): read
+//   animation       OBJ/PLY frame sequences: written; PC2 and MDD point caches: read and
+//                   written; ParaView .pvd collections: read; control trajectories (Trajectory)
 // PNG images are read and written by image.hpp.
 //
 // Conventions: positions are n x d Eigen::MatrixXd (d = 2 or 3), elements m x (d+1) 0-based
@@ -28,6 +29,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -51,7 +53,8 @@ enum class FileKind {
   surface,  ///< a dense surface: read_surface, write_surface
   control,  ///< a control mesh, or positions of its nodes: read_control_mesh, read_positions
   points,   ///< a point list: read_points, write_points
-  cache,    ///< an animation cache: read_pc2, Pc2Writer
+  cache,    ///< an animation cache: read_pc2, Pc2Writer, read_mdd, MddWriter
+  collection,  ///< a list of files over time: read_pvd
 };
 
 /// One format of the table.
@@ -158,15 +161,16 @@ struct ControlMesh {
   int dim() const { return static_cast<int>(U.cols()); }
 };
 
-/// Reads a control mesh from TetGen files, a Gmsh or a legacy VTK file, chosen by extension:
-/// ".msh" -> Gmsh, ".vtk" -> VTK, anything else (".node", ".ele", ".face", none, "box.1") ->
+/// Reads a control mesh from TetGen files, a Gmsh, a legacy VTK or a VTK XML file, chosen by
+/// extension: ".msh" -> Gmsh, ".vtk" -> VTK, ".vtu" -> VTK XML, anything else (".node", ".ele", ".face", none, "box.1") ->
 /// TetGen base name (.face itself is not read).
 ControlMesh read_control_mesh(const std::filesystem::path& file);
 /// The files read_control_mesh(file) reads: BASE.node and BASE.ele for TetGen, else `file`.
 std::vector<std::filesystem::path> control_mesh_files(const std::filesystem::path& file);
 /// Positions of every node of a control mesh file, in file order, as deformed positions for the
 /// mesh read_control_mesh reads: ".node" -> read_node (n x d), ".msh" -> read_gmsh_nodes,
-/// ".vtk" -> read_vtk_points (n x 3); any other file is a point list (read_points).
+/// ".vtk" -> read_vtk_points, ".vtu" -> read_vtu_points (n x 3); any other file is a point list
+/// (read_points).
 Eigen::MatrixXd read_positions(const std::filesystem::path& file);
 
 /// TetGen: `path` is the base name or any of BASE.node / BASE.ele / BASE.face. Reads BASE.node
@@ -207,6 +211,16 @@ ControlMesh read_vtk_mesh(const std::filesystem::path& file);
 /// The POINTS of a legacy VTK file, n x 3 (deformed positions for a mesh read by read_vtk_mesh).
 Eigen::MatrixXd read_vtk_points(const std::filesystem::path& file);
 
+/// VTK XML unstructured grid (.vtu), as written by VTK, ParaView, meshio, FEniCS or deal.II: one
+/// Piece; DataArrays in any of the format's encodings (format="ascii", "binary" (inline base64),
+/// "appended" with AppendedData encoding="raw" or "base64"), either byte_order, header_type
+/// UInt32 or UInt64, uncompressed or compressor="vtkZLibDataCompressor" (other compressors are
+/// named and refused). Cells as read_vtk_mesh (connectivity, offsets, types); PointData and
+/// CellData are skipped. Messages name the line of the XML element at fault.
+ControlMesh read_vtu_mesh(const std::filesystem::path& file);
+/// The Points of a .vtu file, n x 3 (deformed positions for a mesh read by read_vtu_mesh).
+Eigen::MatrixXd read_vtu_points(const std::filesystem::path& file);
+
 /// Legacy VTK unstructured grid (ASCII, for ParaView): tetrahedra (cell type 10) or triangles
 /// (type 5, z = 0). Optional per-point vectors (n x d, e.g. displacements) named `point_data`.
 void write_vtk(const std::filesystem::path& file, const Eigen::Ref<const Eigen::MatrixXd>& U,
@@ -245,8 +259,11 @@ class Pc2Writer {
   Pc2Writer(const Pc2Writer&) = delete;
   Pc2Writer& operator=(const Pc2Writer&) = delete;
 
-  /// Appends one sample: P is numPoints x 3 (or x 2: z = 0), finite.
+  /// Appends one sample: P is numPoints x 3 (or x 2: z = 0), finite. All of it or, on a write
+  /// error (IoError: a full disk), none: the file keeps exactly samples() samples.
   void append(const Eigen::Ref<const Eigen::MatrixXd>& P);
+  /// The same from numPoints x 3 finite floats, row after row (interleaved x y z).
+  void append(const float* xyz);
   /// Writes numSamples into the header, flushes, and moves the file into place.
   void finish();
   int samples() const { return samples_; }
@@ -258,12 +275,135 @@ class Pc2Writer {
   int samples_ = 0;
 };
 
-/// A PC2 file read back (float32 values widened to double).
+/// A PC2 or MDD file read back (float32 values widened to double; non-finite values refused).
 struct PointCache {
-  float start_frame = 0.0f;
-  float sample_rate = 1.0f;
+  float start_frame = 0.0f;  ///< PC2
+  float sample_rate = 1.0f;  ///< PC2
+  std::vector<float> times;  ///< MDD: each frame's time (s); empty for PC2
   std::vector<Eigen::MatrixXd> frames;  ///< numSamples matrices of numPoints x 3
 };
 PointCache read_pc2(const std::filesystem::path& file);
+
+/// MDD point cache (Blender's MDD import/export and Mesh Cache modifier, Houdini, 3ds Max,
+/// LightWave): int32 numFrames, int32 numPoints, float32 time (s) of each frame, then float32
+/// x,y,z per point per frame, all big endian. Frames are appended to a temporary file as they
+/// come; finish() moves it into place. Destroyed before finish(), it removes the temporary.
+class MddWriter {
+ public:
+  /// `times`: the time of each frame to come (their count is the most frames append() takes).
+  MddWriter(const std::filesystem::path& file, int num_points, std::vector<float> times);
+  ~MddWriter();
+  MddWriter(const MddWriter&) = delete;
+  MddWriter& operator=(const MddWriter&) = delete;
+
+  /// Appends one frame: P is numPoints x 3 (or x 2: z = 0), finite as float32.
+  void append(const Eigen::Ref<const Eigen::MatrixXd>& P);
+  /// The same from numPoints x 3 floats, row after row (interleaved x y z, host byte order).
+  void append(const float* xyz);
+  /// Writes a file of the frames appended so far (fewer than announced: the header and times
+  /// say so) and moves it into place.
+  void finish();
+  int samples() const { return samples_; }
+
+ private:
+  std::filesystem::path file_;
+  std::unique_ptr<AtomicFile> out_;
+  int num_points_ = 0;
+  int samples_ = 0;
+  std::vector<float> times_;
+  std::vector<char> buffer_;  // one frame, big endian
+};
+
+/// Reads an MDD file. A file holding one frame more than its header counts (Blender's exporter
+/// writes the rest pose first) has that first frame skipped.
+PointCache read_mdd(const std::filesystem::path& file);
+
+/// A PC2 or MDD point cache (by extension) read one frame at a time, so that memory holds one
+/// frame whatever the length. The header is checked against the file's size when opened.
+class PointCacheReader {
+ public:
+  explicit PointCacheReader(const std::filesystem::path& file);
+  ~PointCacheReader();
+  PointCacheReader(const PointCacheReader&) = delete;
+  PointCacheReader& operator=(const PointCacheReader&) = delete;
+
+  int points() const { return points_; }
+  int frames() const { return frames_; }
+  const std::filesystem::path& file() const { return file_; }
+  /// PC2: the header's start frame and sample rate; MDD: 0 and 1.
+  float start_frame() const { return start_frame_; }
+  float sample_rate() const { return sample_rate_; }
+  /// MDD: each frame's time (s); PC2: empty.
+  const std::vector<float>& times() const { return times_; }
+  /// Frame k (0-based), points() x 3. Throws IoError "<file>: frame k: point i: ..." on a
+  /// non-finite coordinate or a file that changed under us.
+  Eigen::MatrixXd frame(int k);
+
+ private:
+  std::filesystem::path file_;
+  std::FILE* in_ = nullptr;
+  int points_ = 0, frames_ = 0;
+  bool big_endian_ = false;
+  unsigned long long data_offset_ = 0;
+  float start_frame_ = 0.0f, sample_rate_ = 1.0f;
+  std::vector<float> times_;
+  std::string buffer_;
+};
+
+/// One dataset of a ParaView collection.
+struct PvdEntry {
+  double time = 0;             ///< its timestep
+  std::filesystem::path file;  ///< relative names resolved against the .pvd's folder
+  int line = 0;                ///< its line in the .pvd
+};
+/// ParaView collection (.pvd: VTKFile type="Collection", DataSet elements with timestep and
+/// file), sorted by timestep (stably). Several parts or datasets with one timestep are refused.
+/// The files are not opened.
+std::vector<PvdEntry> read_pvd(const std::filesystem::path& file);
+
+// ----------------------------------------------------------------------------------------------
+// Control trajectories
+// ----------------------------------------------------------------------------------------------
+
+/// The file of number k of a printf pattern ("out/m_%04d.obj" -> "out/m_0007.obj"): one %d or
+/// %0Nd (N <= 12) in the file name, %% for a percent sign. Throws IoError on any other pattern.
+std::filesystem::path numbered_file(const std::string& pattern, int k);
+
+/// The positions of a control mesh's nodes over time, read one frame at a time, from
+///  - a PC2 or MDD point cache (one row per node),
+///  - a ParaView collection (.pvd) of .vtu or .vtk files,
+///  - numbered files read by read_positions (.node, .vtk, .vtu, .msh, plain text) named by a
+///    printf pattern, "x_%04d.vtk" (%d or %0Nd once, %% for a percent sign; numbering starts at
+///    0, or at 1 when there is no 0, and goes on up to the first number missing), or by a glob,
+///    "x_*.vtk" (* ? [...] in the file name; sorted by name with runs of digits compared as
+///    numbers: x_2 before x_10).
+/// The list of frames is made when opened; every file named is checked to exist then, so that a
+/// missing one is reported before any work.
+class Trajectory {
+ public:
+  explicit Trajectory(const std::string& spec);
+  ~Trajectory();
+  Trajectory(Trajectory&&) noexcept;
+  Trajectory& operator=(Trajectory&&) noexcept;
+
+  /// Whether `spec` names a trajectory rather than one file of positions: a .pc2, .mdd or .pvd
+  /// extension, a printf pattern or glob characters.
+  static bool names_trajectory(const std::string& spec);
+  int frames() const;
+  /// Frame k's positions as the file holds them (n x 3, or n x d for .node and text).
+  Eigen::MatrixXd read(int k);
+  /// Where frame k comes from, for messages: "x_0007.vtk" or "traj.pc2: frame 7".
+  std::string where(int k) const;
+  /// Frame times (s) from an MDD or a .pvd; empty otherwise.
+  const std::vector<double>& times() const;
+  /// A PC2's start frame and sample rate (frames), when read from one.
+  std::optional<std::pair<float, float>> pc2_timing() const;
+  /// Every file it reads (to keep them from being outputs).
+  std::vector<std::filesystem::path> files() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace mbi::io

@@ -57,8 +57,14 @@ Eigen::MatrixXd parse_gmsh_nodes(std::string_view data, const std::filesystem::p
 /// read_vtk_mesh / read_vtk_points on bytes.
 ControlMesh parse_vtk_mesh(std::string_view data, const std::filesystem::path& name);
 Eigen::MatrixXd parse_vtk_points(std::string_view data, const std::filesystem::path& name);
-/// read_pc2 on bytes.
+/// read_vtu_mesh / read_vtu_points on bytes.
+ControlMesh parse_vtu_mesh(std::string_view data, const std::filesystem::path& name);
+Eigen::MatrixXd parse_vtu_points(std::string_view data, const std::filesystem::path& name);
+/// read_pc2 / read_mdd on bytes.
 PointCache parse_pc2(std::string_view data, const std::filesystem::path& name);
+PointCache parse_mdd(std::string_view data, const std::filesystem::path& name);
+/// read_pvd on bytes (relative file names resolved against `name`'s folder).
+std::vector<PvdEntry> parse_pvd(std::string_view data, const std::filesystem::path& name);
 /// read_png on bytes: PNG only (the 8-byte signature is checked before the decoder runs), at
 /// most kMaxImageSide wide and high (checked from the header, before decoding).
 Image parse_png(std::string_view data, const std::filesystem::path& name);

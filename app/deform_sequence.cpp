@@ -1,0 +1,399 @@
+// mbi deform --deformed TRAJECTORY --out CACHE|NUMBERED: a whole animation (deform_sequence.hpp).
+#include "deform_sequence.hpp"
+#include "signals.hpp"
+
+#include "commands.hpp"
+#include "deform_outside.hpp"
+
+#include <mbi/base/timer.hpp>
+#include <mbi/error.hpp>
+#include <mbi/io/atomic_file.hpp>
+#include <mbi/io/io.hpp>
+#include <mbi/pipeline/deformer.hpp>
+#include <mbi/scenes/limits.hpp>
+
+#include <unistd.h>
+
+#include <atomic>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace mbi::cli {
+namespace {
+
+enum class OutKind { pc2, mdd, numbered };
+
+OutKind out_kind(const std::string& out) {
+  const std::string ext = io::lower_extension(out);
+  if (ext == ".pc2") return OutKind::pc2;
+  if (ext == ".mdd") return OutKind::mdd;
+  if (out.find('%') == std::string::npos)
+    throw std::runtime_error("--out " + out + ": a sequence goes into a point cache (.pc2, .mdd) or numbered files "
+                             "(a printf pattern: out_%04d.obj)");
+  const io::FileFormat* f = io::file_format(out);
+  if (!f || (f->kind != io::FileKind::surface && f->kind != io::FileKind::points))
+    throw std::runtime_error("--out " + out + ": numbered files are .obj, .ply, .off, .stl, .txt or .xyz");
+  io::numbered_file(out, 0);  // the pattern is checked here
+  return OutKind::numbered;
+}
+
+// The rest control mesh and the dense model.
+struct Model {
+  io::ControlMesh control;
+  Eigen::MatrixXd P, P_extra;  // dense rest points p x d, and columns beyond d (kept as they are)
+  std::optional<io::SurfaceMesh> surface;
+  int dim() const { return control.dim(); }
+};
+
+Model load_model(const SequenceArgs& a) {
+  Model m;
+  m.control = io::read_control_mesh(a.control);
+  for (const std::string& note : m.control.notes) std::fprintf(stderr, "mbi deform: note: %s\n", note.c_str());
+  const io::FileFormat* f = io::file_format(a.mesh);
+  Eigen::MatrixXd P;
+  if (f && f->kind == io::FileKind::points) {
+    P = io::read_points(a.mesh);
+  } else {
+    m.surface = io::read_surface(a.mesh);
+    P = m.surface->V;
+  }
+  const int d = m.dim();
+  if (P.rows() == 0) throw std::runtime_error(a.mesh + ": no points");
+  if (P.cols() < d)
+    throw std::runtime_error(a.mesh + ": points have " + std::to_string(P.cols()) + " coordinates, the control mesh is " +
+                             std::to_string(d) + "D");
+  m.P = P.leftCols(d);
+  m.P_extra = P.rightCols(P.cols() - d);
+  if (d + m.P_extra.cols() > 3 && m.surface)
+    throw std::runtime_error(a.mesh + ": more than 3 coordinates a point");
+  return m;
+}
+
+// A frame's positions as the deformer takes them (n x d), or an error naming the frame.
+Eigen::MatrixXd to_pose(Eigen::MatrixXd X, const Model& m, const std::string& where, const std::string& control) {
+  const int d = m.dim();
+  if (d == 2 && X.cols() == 3) {  // 2D positions stored with z: one plane, dropped
+    if (X.rows() > 0 && (X.col(2).array() != X(0, 2)).any())
+      throw std::runtime_error(where + ": the control mesh is 2D but these positions are not in one plane z = const");
+    X.conservativeResize(Eigen::NoChange, 2);
+  }
+  if (X.rows() != m.control.U.rows())
+    throw std::runtime_error(where + ": " + std::to_string(X.rows()) + " positions, but the control mesh " + control +
+                             " has " + std::to_string(m.control.U.rows()) + " vertices");
+  if (X.cols() != d)
+    throw std::runtime_error(where + ": positions have " + std::to_string(X.cols()) + " coordinates, but the control mesh " +
+                             control + " is " + std::to_string(d) + "D");
+  return X;
+}
+
+// The output's timing: PC2 start frame and sample rate (frames), MDD times (s).
+struct Timing {
+  float pc2_start = 0.0f, pc2_rate = 1.0f;
+  std::vector<float> mdd_times;
+};
+
+Timing output_timing(const io::Trajectory& t, double fps) {
+  Timing o;
+  const int F = t.frames();
+  const std::vector<double>& times = t.times();
+  if (const auto pc2 = t.pc2_timing()) {
+    o.pc2_start = pc2->first;
+    o.pc2_rate = pc2->second;
+    for (int k = 0; k < F; ++k) o.mdd_times.push_back(static_cast<float>((pc2->first + k * pc2->second) / fps));
+    return o;
+  }
+  if (times.empty()) {
+    for (int k = 0; k < F; ++k) o.mdd_times.push_back(static_cast<float>(k / fps));
+    return o;
+  }
+  for (double x : times) o.mdd_times.push_back(static_cast<float>(x));
+  // evenly spaced times become a PC2's start and rate in frames at fps; others: frame numbers
+  const double dt = F > 1 ? (times.back() - times.front()) / (F - 1) : 1.0 / fps;
+  bool even = dt > 0;
+  for (int k = 0; k < F && even; ++k)
+    even = std::abs(times[static_cast<std::size_t>(k)] - (times.front() + k * dt)) <= 1e-6 * std::max(1.0, std::abs(dt * F));
+  if (even) {
+    o.pc2_start = static_cast<float>(times.front() * fps);
+    o.pc2_rate = static_cast<float>(dt * fps);
+  }
+  return o;
+}
+
+// SIGINT and SIGTERM while the frames run: the loop stops after the frame in progress (the one
+// signal policy of every command, signals.hpp); a second signal ends the process at once.
+class StopOnSignal {
+ public:
+  StopOnSignal() { handle_interrupts(&stop_); }
+  ~StopOnSignal() { handle_interrupts(nullptr); }
+  StopOnSignal(const StopOnSignal&) = delete;
+  StopOnSignal& operator=(const StopOnSignal&) = delete;
+  int signal() const { return stop_.load(); }
+
+ private:
+  std::atomic<int> stop_{0};
+};
+
+// Writes the dense frames as they come: into a point cache (finished at the end, or at the last
+// good frame) or one numbered file a frame (each complete when it appears).
+class FrameWriter {
+ public:
+  FrameWriter(OutKind kind, const fs::path& file, const std::string& pattern, const Model& m, const Timing& timing)
+      : kind_(kind), pattern_(pattern), model_(m) {
+    const int p = static_cast<int>(m.P.rows());
+    if (kind == OutKind::pc2) pc2_ = std::make_unique<io::Pc2Writer>(file, p, timing.pc2_start, timing.pc2_rate);
+    if (kind == OutKind::mdd) mdd_ = std::make_unique<io::MddWriter>(file, p, timing.mdd_times);
+    if (m.surface) surface_ = *m.surface;
+  }
+
+  // positions p x d (double), normals p x 3 or empty
+  void write(int k, const Eigen::MatrixXd& positions, const Eigen::MatrixXd& normals) {
+    full_.resize(positions.rows(), positions.cols() + model_.P_extra.cols());
+    full_ << positions, model_.P_extra;
+    if (kind_ == OutKind::pc2) return pc2_->append(full_);
+    if (kind_ == OutKind::mdd) return mdd_->append(full_);
+    const fs::path file = io::numbered_file(pattern_, k);
+    const io::FileFormat* f = io::file_format(file);
+    if (f->kind == io::FileKind::points) return io::write_points(file, full_);
+    surface_.V = Eigen::MatrixXd::Zero(full_.rows(), 3);
+    surface_.V.leftCols(full_.cols()) = full_;
+    surface_.N = normals;
+    io::write_surface(file, surface_);
+  }
+  // positions p x 3 floats, interleaved (the float kernel's output, a cache's layout)
+  void write(const interp::RowMatrixXf& xyz) {
+    if (pc2_) pc2_->append(xyz.data());
+    else mdd_->append(xyz.data());
+  }
+  void finish() {
+    if (pc2_) pc2_->finish();
+    if (mdd_) mdd_->finish();
+  }
+
+ private:
+  OutKind kind_;
+  std::string pattern_;
+  const Model& model_;
+  std::unique_ptr<io::Pc2Writer> pc2_;
+  std::unique_ptr<io::MddWriter> mdd_;
+  io::SurfaceMesh surface_;
+  Eigen::MatrixXd full_;
+};
+
+// Every numbered output follows the overwrite rule before any work: each is checked as an
+// output of its own (and never the --stats file).
+void check_numbered(const SequenceArgs& a, const std::vector<fs::path>& inputs, int frames) {
+  std::error_code ec;
+  const fs::path stats = a.stats.empty() ? fs::path() : fs::weakly_canonical(a.stats, ec);
+  for (int k = 0; k < frames; ++k) {
+    const fs::path f = io::numbered_file(a.out, k);
+    io::OutputSet one(inputs, a.force);
+    one.add(f, "--out");
+    if (!stats.empty() && fs::weakly_canonical(f, ec) == stats)
+      throw std::runtime_error("--stats " + a.stats + ": is also another output of this command (" + f.string() + ")");
+  }
+}
+
+class Progress {
+ public:
+  explicit Progress(int total) : total_(total), tty_(isatty(fileno(stderr)) != 0) {}
+  void show(int done) {
+    if (!tty_) return;
+    const int w = 30, filled = total_ > 0 ? w * done / total_ : w;
+    std::fprintf(stderr, "\r[%s%s] %3d%%  frame %d/%d  %.1f s", std::string(filled, '#').c_str(),
+                 std::string(w - filled, ' ').c_str(), total_ > 0 ? 100 * done / total_ : 100, done, total_,
+                 ms_since(t0_) / 1000);
+    if (done == total_) std::fprintf(stderr, "\n");
+  }
+  void end(int done) {
+    if (tty_ && done != total_) std::fprintf(stderr, "\n");
+  }
+
+ private:
+  int total_;
+  bool tty_;
+  Clock::time_point t0_ = Clock::now();
+};
+
+// How the frames went.
+struct Run {
+  int done = 0, signal = 0;
+  std::string failure;
+  double embed_ms = 0, precompute_ms = 0, read_ms = 0, deform_ms = 0, write_ms = 0;
+};
+
+void run_frames(const SequenceArgs& a, io::Trajectory& traj, const Model& m, pipeline::Deformer& deformer,
+                FrameWriter& out, bool use_float, Run& run) {
+  const StopOnSignal stop;
+  Progress progress(traj.frames());
+  Eigen::MatrixXd positions(m.P.rows(), m.dim()), normals;
+  if (deformer.has_rest_normals()) normals.resize(m.P.rows(), 3);
+  interp::RowMatrixXf xyz(use_float ? m.P.rows() : 0, 3);
+  for (int k = 0; k < traj.frames() && !(run.signal = stop.signal()); ++k) {
+    try {
+      auto t0 = Clock::now();
+      const Eigen::MatrixXd X = to_pose(traj.read(k), m, traj.where(k), a.control);
+      run.read_ms += ms_since(t0);
+      t0 = Clock::now();
+      if (use_float) deformer.deform_float(X, xyz);
+      else if (normals.size() > 0) deformer.deform(X, positions, normals);
+      else deformer.deform(X, positions);
+      run.deform_ms += ms_since(t0);
+      t0 = Clock::now();
+      if (use_float) out.write(xyz);
+      else out.write(k, positions, normals);
+      run.write_ms += ms_since(t0);
+    } catch (const std::exception& e) {
+      const std::string what = e.what();
+      run.failure = what.find("frame " + std::to_string(k)) == std::string::npos ? "frame " + std::to_string(k) + ": " + what : what;
+      break;
+    }
+    run.done = k + 1;
+    progress.show(run.done);
+  }
+  progress.end(run.done);
+}
+
+nlohmann::json stats_json(const SequenceArgs& a, const Model& m, const pipeline::Deformer& deformer, int frames,
+                          const Run& run) {
+  nlohmann::json j;
+  j["method"] = pipeline::method_name(a.method);
+  j["dim"] = m.dim();
+  if (pipeline::needs_solve(a.method)) {
+    j["alpha"] = deformer.solver().alpha();
+    j["beta"] = deformer.solver().beta();
+  }
+  j["pin_boundary"] = a.pin_boundary;
+  j["control_vertices"] = m.control.U.rows();
+  j["elements"] = m.control.T.rows();
+  j["points"] = m.P.rows();
+  j["outside_points"] = deformer.embedding().outside.size();
+  j["max_outside_distance"] = deformer.embedding().max_outside_distance;
+  j["frames"] = run.done;
+  j["frames_in_trajectory"] = frames;
+  if (!run.failure.empty()) j["failure"] = run.failure;
+  if (run.signal) j["interrupted_by_signal"] = run.signal;
+  const double n = std::max(run.done, 1);
+  j["timings_ms"] = {{"embed", run.embed_ms},         {"precompute", run.precompute_ms},
+                     {"read", run.read_ms},           {"deform", run.deform_ms},
+                     {"write", run.write_ms},         {"read_per_frame", run.read_ms / n},
+                     {"deform_per_frame", run.deform_ms / n}, {"write_per_frame", run.write_ms / n}};
+  return j;
+}
+
+void print_summary(const SequenceArgs& a, const Model& m, const pipeline::Deformer& deformer, int frames, const Run& run) {
+  const int d = m.dim();
+  std::printf("control: %s: %d vertices, %d %s (%dD)\n", a.control.c_str(), static_cast<int>(m.control.U.rows()),
+              static_cast<int>(m.control.T.rows()), d == 3 ? "tetrahedra" : "triangles", d);
+  std::printf("dense:   %s: %d points (%zu outside)\n", a.mesh.c_str(), static_cast<int>(m.P.rows()),
+              deformer.embedding().outside.size());
+  std::printf("method:  %s", pipeline::method_name(a.method));
+  if (pipeline::needs_solve(a.method))
+    std::printf(", alpha %.4g, beta %.4g", deformer.solver().alpha(), deformer.solver().beta());
+  std::printf("%s\nframes:  %d of %d from %s into %s\n", a.pin_boundary ? ", boundary pinned" : "", run.done, frames,
+              a.deformed.c_str(), a.out.c_str());
+  const double n = std::max(run.done, 1);
+  std::printf("times (ms): embed %.2f  precompute %.2f  per frame: read %.3f  deform %.3f  write %.3f\n", run.embed_ms,
+              run.precompute_ms, run.read_ms / n, run.deform_ms / n, run.write_ms / n);
+}
+
+// Everything from the models to the last frame; `outputs` holds the --out cache and --stats.
+int run_sequence_frames(const SequenceArgs& a, OutKind kind, io::Trajectory& traj, io::OutputSet& outputs,
+                        std::size_t i_out, std::size_t i_stats) {
+  const Model m = load_model(a);
+  const int d = m.dim();
+  scenes::check_run_size(a.control, m.P.rows(), m.control.U.rows(), m.control.T.rows(), d);
+  if (traj.frames() == 0) throw std::runtime_error(a.deformed + ": no frames");
+  to_pose(traj.read(0), m, traj.where(0), a.control);  // a wrong node count fails before any work
+  Run run;
+  auto t0 = Clock::now();
+  interp::Embedding emb;
+  try {
+    emb = interp::embed(m.control.U, m.control.T, m.P);
+  } catch (const mbi::Error& e) {
+    throw std::runtime_error(a.mesh + ": " + e.what());
+  }
+  run.embed_ms = ms_since(t0);
+  if (!emb.outside.empty())
+    std::fprintf(stderr, "mbi deform: warning: %zu of %d points lie outside the control mesh (farthest %.3g); they follow "
+                 "the nearest element by extrapolation\n", emb.outside.size(), emb.size(), emb.max_outside_distance);
+  if (a.max_outside) refuse_far_points(emb, m.control.U, m.control.T, m.P, *a.max_outside, a.mesh, a.control);
+  pipeline::DeformerOptions opt{.method = a.method, .interp = {}};
+  opt.interp.alpha = a.alpha.value_or(0.0);
+  opt.interp.pin_boundary = a.pin_boundary;
+  // numbered surfaces with normals get deformed normals; caches hold positions only
+  const bool normals = kind == OutKind::numbered && m.surface && d == 3 && m.surface->N.rows() == m.P.rows() &&
+                       io::is_surface_file(a.out);
+  t0 = Clock::now();
+  std::optional<pipeline::Deformer> deformer;
+  try {
+    deformer.emplace(m.control.U, m.control.T, std::move(emb), opt, normals ? m.surface->N : Eigen::MatrixXd());
+  } catch (const mbi::Error& e) {
+    throw std::runtime_error(a.control + ": " + e.what());
+  }
+  run.precompute_ms = ms_since(t0);
+  {
+    // a cache of a 3D model: the float kernel, whose output is the cache's layout
+    const bool use_float = kind != OutKind::numbered && d == 3 && m.P_extra.cols() == 0;
+    FrameWriter out(kind, kind == OutKind::numbered ? fs::path() : outputs.staging(i_out), a.out, m,
+                    output_timing(traj, a.fps));
+    run_frames(a, traj, m, *deformer, out, use_float, run);
+    if (run.done == 0 && run.signal) {
+      std::fprintf(stderr, "mbi deform: interrupted by signal %d before the first frame: nothing written\n", run.signal);
+      return 128 + run.signal;
+    }
+    if (run.done == 0) throw std::runtime_error(run.failure);
+    out.finish();
+  }
+  if (!a.stats.empty()) {
+    const nlohmann::json j = stats_json(a, m, *deformer, traj.frames(), run);
+    check_finite(j, a.stats);
+    io::write_text_atomic(outputs.staging(i_stats), j.dump(2) + "\n");
+  }
+  outputs.commit();
+  print_summary(a, m, *deformer, traj.frames(), run);
+  if (!run.failure.empty()) {
+    std::fprintf(stderr, "mbi deform: error: %s (outputs up to frame %d kept)\n", run.failure.c_str(), run.done - 1);
+    return 3;
+  }
+  if (run.signal) {
+    std::fprintf(stderr, "mbi deform: interrupted by %s (outputs up to frame %d kept)\n",
+                 run.signal == SIGINT ? "SIGINT" : "SIGTERM", run.done - 1);
+    return 128 + run.signal;
+  }
+  return 0;
+}
+
+}  // namespace
+
+bool is_sequence(const std::string& deformed, const std::string& out) {
+  const std::string ext = io::lower_extension(out);
+  return io::Trajectory::names_trajectory(deformed) || ext == ".pc2" || ext == ".mdd" || out.find('%') != std::string::npos;
+}
+
+int run_deform_sequence(const SequenceArgs& a) {
+  for (const auto& [flag, v] : {std::pair{"--control", &a.control}, {"--deformed", &a.deformed}, {"--mesh", &a.mesh}, {"--out", &a.out}})
+    if (v->empty()) throw std::runtime_error(std::string(flag) + " is required");
+  if (a.alpha && !(*a.alpha > 0)) throw std::runtime_error("--alpha must be > 0 (E_disc alone has extra null modes)");
+  if (!(a.fps > 0) || !std::isfinite(a.fps)) throw std::runtime_error("--fps must be > 0");
+  const OutKind kind = out_kind(a.out);
+  io::Trajectory traj(a.deformed);  // the list of frames; every file named exists
+  // One overwrite rule (docs/cli.md): every output checked before any work, inputs never outputs.
+  std::vector<fs::path> inputs = traj.files();
+  inputs.push_back(a.mesh);
+  for (const fs::path& p : io::control_mesh_files(a.control)) inputs.push_back(p);
+  io::OutputSet outputs(inputs, a.force);
+  const std::size_t i_out = kind == OutKind::numbered ? 0 : outputs.add(a.out, "--out");
+  const std::size_t i_stats = a.stats.empty() ? 0 : outputs.add(a.stats, "--stats");
+  if (kind == OutKind::numbered) check_numbered(a, inputs, traj.frames());
+  return run_sequence_frames(a, kind, traj, outputs, i_out, i_stats);
+}
+
+}  // namespace mbi::cli

@@ -1,0 +1,40 @@
+#pragma once
+// Transposes (vector-Jacobian products) of the linear maps from control positions to dense
+// points. For every method the dense positions are a fixed linear map of X (BI: M = 0;
+// Phong: M linear in X; modified-BI: M solved linearly from X, docs/method.md fact 11):
+//
+//   X -> M (ModifiedBI::solve, Phong::M) -> B (bezier_points) -> positions (evaluate)
+//
+// so dL/dX for a loss L on the positions is exact and independent of the pose:
+//
+//   GB = evaluate_transpose(emb, G, m)          dL/dB from G = dL/dpositions
+//   auto [GX, GM] = bezier_transpose(U, T, GB)  dL/dX through B directly, and dL/dM
+//   GX += solver.solve_transpose(GM)            (modified-BI; Phong: phong.M_transpose(GM))
+//
+// Shapes as in mbi::interp: U, X n x d, T m x (d+1), G p x d, B (m K) x d, M (n d) x d.
+#include <mbi/interp/embed.hpp>
+#include <mbi/interp/evaluate.hpp>
+#include <mbi/interp/modified_bi.hpp>
+
+namespace mbi::interp {
+
+/// The transpose of evaluate<double>(): dL/dB ((m K) x d, the BezierPoints layout) from
+/// G = dL/dpositions (p x d) for the points of emb in a mesh of m elements. Each point adds its
+/// Bernstein weights times its row of G to its element's K rows. threads = 0: all cores; the
+/// sums run in an order fixed by the thread count. Throws Error on mismatched sizes, an element
+/// outside [0, m), or a non-finite G (named by its row).
+BezierPoints evaluate_transpose(const Embedding& emb, const ConstPointsRef<double>& G, int elements,
+                                int threads = 0);
+
+/// The two parts of the transpose of bezier_points(U, T, X, M).
+struct BezierTranspose {
+  Eigen::MatrixXd X;  ///< n x d: dL/dX through B directly (for BI, M = 0, all of dL/dX)
+  VertexMatrices M;   ///< (n d) x d: dL/dM
+};
+
+/// The transpose of bezier_points() (and of bezier_bi(), whose transpose is the X part) from
+/// G = dL/dB ((m K) x d). Throws Error on mismatched sizes.
+BezierTranspose bezier_transpose(const Eigen::Ref<const Eigen::MatrixXd>& U,
+                                 const Eigen::Ref<const Eigen::MatrixXi>& T, const BezierPoints& G);
+
+}  // namespace mbi::interp

@@ -1,0 +1,125 @@
+// Transposes of evaluate() and bezier_points() (see adjoint.hpp).
+#include <mbi/interp/adjoint.hpp>
+
+#include "detail.hpp"
+#include "threads.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace mbi::interp {
+namespace {
+
+// Adds each point's Bernstein weights times its row of G into its element's K x D block of acc
+// (row-major, element after element), for the points [begin, end).
+template <int D>
+void scatter(const Embedding& emb, const ConstPointsRef<double>& G, long long begin, long long end, double* acc) {
+  constexpr int K = (D + 1) * (D + 2) / 2;
+  static constexpr std::array<std::pair<int, int>, 6> edges3{{{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}}};
+  static constexpr std::array<std::pair<int, int>, 3> edges2{{{0, 1}, {0, 2}, {1, 2}}};
+  for (long long p = begin; p < end; ++p) {
+    double b[D + 1], g[D];
+    for (int k = 0; k <= D; ++k) b[k] = emb.bary(p, k);
+    for (int c = 0; c < D; ++c) g[c] = G(p, c);
+    double* A = acc + static_cast<long long>(emb.element(p)) * K * D;
+    for (int k = 0; k <= D; ++k) {
+      const double w = b[k] * b[k];
+      for (int c = 0; c < D; ++c) A[k * D + c] += w * g[c];
+    }
+    for (int s = 0; s < K - D - 1; ++s) {
+      const auto [i, j] = D == 3 ? edges3[s] : edges2[s];
+      const double w = 2 * b[i] * b[j];
+      for (int c = 0; c < D; ++c) A[(D + 1 + s) * D + c] += w * g[c];
+    }
+  }
+}
+
+// The first row of G that is not finite (-1: none).
+long long first_non_finite(const ConstPointsRef<double>& G) {
+  for (Eigen::Index p = 0; p < G.rows(); ++p)
+    for (Eigen::Index c = 0; c < G.cols(); ++c)
+      if (!std::isfinite(G(p, c))) return p;
+  return -1;
+}
+
+}  // namespace
+
+BezierPoints evaluate_transpose(const Embedding& emb, const ConstPointsRef<double>& G, int elements, int threads) {
+  const int d = emb.dim();
+  if (d != 2 && d != 3) throw Error("the embedding must be 2D or 3D");
+  if (G.rows() != emb.size() || G.cols() != d)
+    throw Error("dL/dpositions must be " + std::to_string(emb.size()) + " x " + std::to_string(d) +
+                ", got " + std::to_string(G.rows()) + " x " + std::to_string(G.cols()));
+  if (elements < 0) throw Error("elements must be >= 0");
+  for (Eigen::Index p = 0; p < emb.size(); ++p)
+    if (emb.element(p) < 0 || emb.element(p) >= elements)
+      throw Error("point " + std::to_string(p) + " refers to element " + std::to_string(emb.element(p)) +
+                  " outside [0, " + std::to_string(elements) + ")");
+  const int K = (d + 1) * (d + 2) / 2;
+  const long long block = static_cast<long long>(elements) * K * d;
+  // one accumulator a thread (no two threads add into the same memory), summed in thread order
+  const long long np = emb.size();
+  const int nt = detail::thread_count(np, 16384, threads);
+  std::vector<double> acc(static_cast<size_t>(nt * block), 0.0);
+  const long long chunk = (np + nt - 1) / nt;
+  detail::parallel_blocks(nt, 1, nt, [&](long long t0, long long t1) {
+    for (long long t = t0; t < t1; ++t) {
+      const long long begin = t * chunk, end = std::min(np, begin + chunk);
+      if (begin >= end) continue;
+      if (d == 3) scatter<3>(emb, G, begin, end, acc.data() + t * block);
+      else scatter<2>(emb, G, begin, end, acc.data() + t * block);
+    }
+  });
+  BezierPoints out(static_cast<Eigen::Index>(elements) * K, d);
+  bool finite = true;
+  for (Eigen::Index r = 0; r < out.rows(); ++r)
+    for (int c = 0; c < d; ++c) {
+      double s = 0;
+      for (int t = 0; t < nt; ++t) s += acc[static_cast<size_t>(t * block + r * d + c)];
+      out(r, c) = s;
+      finite = finite && std::isfinite(s);
+    }
+  // a NaN or infinity in G reaches its element's sums whatever its weights (0 * inf is NaN)
+  if (!finite) {
+    const long long p = first_non_finite(G);
+    throw Error(p >= 0 ? "dL/dpositions row " + std::to_string(p) + " has a non-finite value"
+                       : std::string("dL/dpositions is too large: its sums overflow"));
+  }
+  return out;
+}
+
+BezierTranspose bezier_transpose(const Eigen::Ref<const Eigen::MatrixXd>& U,
+                                 const Eigen::Ref<const Eigen::MatrixXi>& T, const BezierPoints& G) {
+  detail::check_shapes(U, T);
+  const int d = static_cast<int>(U.cols());
+  const int n = static_cast<int>(U.rows());
+  const int K = (d + 1) * (d + 2) / 2;
+  if (G.rows() != T.rows() * K || G.cols() != d)
+    throw Error("dL/dB must be " + std::to_string(T.rows() * K) + " x " + std::to_string(d) + ", got " +
+                std::to_string(G.rows()) + " x " + std::to_string(G.cols()));
+  BezierTranspose out{Eigen::MatrixXd::Zero(n, d), VertexMatrices::Zero(static_cast<Eigen::Index>(n) * d, d)};
+  const auto& edges = bezier_edges(d);
+  for (Eigen::Index e = 0; e < T.rows(); ++e) {
+    for (int k = 0; k <= d; ++k) out.X.row(T(e, k)) += G.row(e * K + k);
+    for (size_t s = 0; s < edges.size(); ++s) {
+      const int i = T(e, edges[s].first), j = T(e, edges[s].second);
+      // P_ij = (x_i + x_j)/2 + (M_i - M_j)(u_j - u_i)/2  (fact 5)
+      for (int c = 0; c < d; ++c) {
+        const double g = 0.5 * G(e * K + d + 1 + static_cast<Eigen::Index>(s), c);
+        out.X(i, c) += g;
+        out.X(j, c) += g;
+        for (int r = 0; r < d; ++r) {
+          const double v = g * (U(j, r) - U(i, r));
+          out.M(i * d + c, r) += v;
+          out.M(j * d + c, r) -= v;
+        }
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace mbi::interp

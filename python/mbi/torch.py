@@ -1,0 +1,50 @@
+"""PyTorch autograd for mbi.Deformer: a loss on the dense positions back-propagates to the control
+positions X through Deformer.vjp (exact: the positions are linear in X for every method).
+
+    import mbi, mbi.torch
+    deformer = mbi.Deformer(U, T, P)
+    X = torch.tensor(U, requires_grad=True)
+    positions = mbi.torch.deform(deformer, X)      # (p, d), or (frames, p, d) for (frames, n, d)
+    loss = ((positions - target) ** 2).sum()
+    loss.backward()                                # X.grad = dL/dX
+
+Computed in float64 on the CPU: X of another dtype or device is converted, the result and the
+gradient are converted back. Importing this module needs torch; importing mbi does not.
+"""
+import torch
+
+__all__ = ["deform", "Deform", "DeformFunction"]
+
+
+class DeformFunction(torch.autograd.Function):
+    """positions = deformer.deform(X); the backward pass is deformer.vjp(dL/dpositions)."""
+
+    @staticmethod
+    def forward(ctx, X, deformer):
+        ctx.deformer = deformer
+        x = X.detach().to("cpu", torch.float64).numpy()
+        positions = torch.from_numpy(deformer.deform(x))
+        return positions.to(X.device, X.dtype)
+
+    @staticmethod
+    @torch.autograd.function.once_differentiable
+    def backward(ctx, grad):
+        g = grad.detach().to("cpu", torch.float64).numpy()
+        dX = torch.from_numpy(ctx.deformer.vjp(g))
+        return dX.to(grad.device, grad.dtype), None
+
+
+def deform(deformer, X):
+    """Dense positions of pose X ((n, d) or (frames, n, d)) as a differentiable tensor."""
+    return DeformFunction.apply(X, deformer)
+
+
+class Deform(torch.nn.Module):
+    """The Deformer as a module: forward(X) = deform(deformer, X)."""
+
+    def __init__(self, deformer):
+        super().__init__()
+        self.deformer = deformer
+
+    def forward(self, X):
+        return deform(self.deformer, X)

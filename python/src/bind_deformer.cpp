@@ -1,0 +1,152 @@
+// Deformer: bind once (embedding + precompute), then deform poses or batches of them, with
+// normals, in float64 (exact) or float32 (the fast kernel), and the vector-Jacobian product.
+#include "bindings.hpp"
+
+#include <mbi/pipeline/deformer.hpp>
+
+namespace mbi::python {
+namespace {
+
+using pipeline::Deformer;
+using Bound = Guarded<Deformer>;
+
+std::unique_ptr<Bound> make_deformer(const py::object& U, const py::object& T, const py::object& P,
+                                     const std::string& method, double alpha, double beta, bool pin_boundary,
+                                     const py::object& rest_normals, int threads) {
+  const Mesh c = control_mesh(U, T);
+  const Input p = float_matrix(P, "P", {-1, c.U.map.cols()});
+  pipeline::DeformerOptions o;
+  o.method = pipeline::kMethodNames.parse(method, "method");
+  o.interp.alpha = alpha;
+  o.interp.beta = beta;
+  o.interp.pin_boundary = pin_boundary;
+  o.threads = threads;
+  Eigen::MatrixXd normals;
+  if (!rest_normals.is_none()) normals = float_matrix(rest_normals, "rest_normals", {p.map.rows(), p.map.cols()}).map;
+  return without_gil([&] { return std::make_unique<Bound>(c.U.map, c.T, p.map, o, normals); });
+}
+
+// float32 results (the fast kernel) when out is float32 or dtype asks for it; float64 otherwise
+// (float_output and float32_output check out's dtype and layout).
+bool wants_float32(const py::object& out, const py::object& dtype) {
+  auto is_float = [](const py::dtype& dt, py::ssize_t bytes) { return dt.kind() == 'f' && dt.itemsize() == bytes; };
+  if (!out.is_none()) return py::isinstance<py::array>(out) && is_float(py::reinterpret_borrow<py::array>(out).dtype(), 4);
+  if (dtype.is_none()) return false;
+  py::dtype dt;
+  try {
+    dt = py::dtype::from_args(dtype);
+  } catch (py::error_already_set& e) {
+    throw Error(std::string("dtype: ") + e.what());
+  }
+  if (is_float(dt, 4) || is_float(dt, 8)) return is_float(dt, 4);
+  throw Error("dtype must be float64 (exact) or float32 (the fast kernel), not " + py::str(dt).cast<std::string>());
+}
+
+py::object deform(Bound& b, const py::object& X, const py::object& out, bool normals,
+                  const py::object& normals_out, const py::object& dtype) {
+  const Deformer& D = b.object;
+  const Eigen::Index n = D.vertices(), p = D.points(), d = D.dim();
+  Eigen::Index frames = 0;
+  const Input x = float_batch(X, "X", {n, d}, frames);
+  const Eigen::Index f = std::max<Eigen::Index>(frames, 1);
+  normals = normals || !normals_out.is_none();
+  if (wants_float32(out, dtype)) {
+    auto pos = float32_output(out, "out", f * p, d, frames);
+    if (!normals) {
+      b.run([&](Deformer& e) {
+        for (Eigen::Index k = 0; k < f; ++k) e.deform_float(x.map.middleRows(k * n, n), pos.second.middleRows(k * p, p));
+      });
+      return pos.first;
+    }
+    auto nrm = float32_output(normals_out, "normals_out", f * p, d, frames);
+    check_no_overlap(pos.first, nrm.first, "out", "normals_out");
+    b.run([&](Deformer& e) {
+      for (Eigen::Index k = 0; k < f; ++k)
+        e.deform_float(x.map.middleRows(k * n, n), pos.second.middleRows(k * p, p), nrm.second.middleRows(k * p, p));
+    });
+    return py::make_tuple(pos.first, nrm.first);
+  }
+  Output pos = float_output(out, "out", f * p, d, frames);
+  check_no_overlap(pos.array, x.array, "out", "X");
+  if (!normals) {
+    b.run([&](Deformer& e) { e.deform_batch(x.map, pos.map); });
+    return pos.array;
+  }
+  Output nrm = float_output(normals_out, "normals_out", f * p, d, frames);
+  check_no_overlap(pos.array, nrm.array, "out", "normals_out");
+  check_no_overlap(nrm.array, x.array, "normals_out", "X");
+  b.run([&](Deformer& e) {
+    for (Eigen::Index k = 0; k < f; ++k)
+      e.deform(x.map.middleRows(k * n, n), pos.map.middleRows(k * p, p), nrm.map.middleRows(k * p, p));
+  });
+  return py::make_tuple(pos.array, nrm.array);
+}
+
+py::object vjp(Bound& b, const py::object& G, const py::object& out) {
+  const Deformer& D = b.object;
+  const Eigen::Index n = D.vertices(), p = D.points(), d = D.dim();
+  Eigen::Index frames = 0;
+  const Input g = float_batch(G, "G", {p, d}, frames, false);  // the C++ call names a non-finite row
+  Output o = float_output(out, "out", std::max<Eigen::Index>(frames, 1) * n, d, frames);
+  check_no_overlap(o.array, g.array, "out", "G");
+  b.run([&](Deformer& e) { e.vjp_batch(g.map, o.map); });
+  return o.array;
+}
+
+}  // namespace
+
+void bind_deformer(py::module_& m) {
+  using namespace pybind11::literals;
+  py::class_<Bound>(m, "Deformer",
+                    "Bind once, deform many: the dense points P embedded in a rest control mesh (U, T) and the "
+                    "method's precompute, made once; deform() maps poses X (n, d) to positions (p, d).")
+      .def(py::init(&make_deformer), "U"_a, "T"_a, "P"_a, py::kw_only(), "method"_a = "modified-bi", "alpha"_a = 0.0,
+           "beta"_a = 0.0, "pin_boundary"_a = false, "rest_normals"_a = py::none(), "threads"_a = 0,
+           "U (n, d) rest control vertices, T (m, d+1) elements, P (p, d) dense rest points (units of U). method: "
+           "bi, modified-bi or phong; alpha, beta, pin_boundary: modified-BI's (0: defaults); rest_normals: unit "
+           "normals (p, d) for deform(..., normals=True); threads: 0 = all cores.")
+      .def("deform", &deform, "X"_a, py::kw_only(), "out"_a = py::none(), "normals"_a = false,
+           "normals_out"_a = py::none(), "dtype"_a = py::none(),
+           "Positions (p, d) of pose X (n, d), or (frames, p, d) of a batch X (frames, n, d). normals: also the "
+           "mapped unit normals, as (positions, normals). dtype float64 (default, exact) or float32 (the fast "
+           "kernel); out, normals_out: arrays to write into (their dtype decides).")
+      .def("vjp", &vjp, "G"_a, py::kw_only(), "out"_a = py::none(),
+           "dL/dX (n, d) from G = dL/dpositions (p, d) (or a batch: (frames, p, d) -> (frames, n, d)): the "
+           "transpose of deform(), exact; positions are linear in X for every method.")
+      .def(
+          "M",
+          [](Bound& b, const py::object& X) {
+            const Input x = float_matrix(X, "X", {b.object.vertices(), b.object.dim()});
+            return to_numpy(b.run([&](Deformer& e) { return e.M(x.map); }));
+          },
+          "X"_a, "The method's M ((n d), d) at pose X (0 for BI).")
+      .def(
+          "bezier",
+          [](Bound& b, const py::object& X) {
+            const Input x = float_matrix(X, "X", {b.object.vertices(), b.object.dim()});
+            return to_numpy(b.run([&](Deformer& e) { return e.bezier(x.map); }));
+          },
+          "X"_a, "The element Bezier points ((m K), d) at pose X.")
+      .def(
+          "set_alpha", [](Bound& b, double alpha) { b.run([&](Deformer& e) { e.set_alpha(alpha); }); }, "alpha"_a,
+          "Changes modified-BI's alpha (> 0) and refactors.")
+      .def_property_readonly(
+          "embedding", [](Bound& b) -> const interp::Embedding& { return b.object.embedding(); },
+          py::return_value_policy::reference_internal)
+      .def_property_readonly("method", [](Bound& b) { return std::string(pipeline::method_name(b.object.method())); })
+      .def_property_readonly("dim", [](Bound& b) { return b.object.dim(); })
+      .def_property_readonly("vertices", [](Bound& b) { return b.object.vertices(); }, "n")
+      .def_property_readonly("elements", [](Bound& b) { return b.object.elements(); }, "m")
+      .def_property_readonly("points", [](Bound& b) { return b.object.points(); }, "p")
+      .def_property_readonly("has_rest_normals", [](Bound& b) { return b.object.has_rest_normals(); })
+      .def_property_readonly("alpha", [](Bound& b) { return b.run([](Deformer& e) { return e.solver().alpha(); }); },
+                             "modified-BI's alpha (mbi.Error for the other methods)")
+      .def_property_readonly("beta", [](Bound& b) { return b.run([](Deformer& e) { return e.solver().beta(); }); },
+                             "modified-BI's beta (mbi.Error for the other methods)")
+      .def_property_readonly(
+          "memory_bytes",
+          [](Bound& b) { return b.run([](Deformer& e) { return e.solver().memory_bytes(); }); },
+          "bytes modified-BI's precompute keeps (mbi.Error for the other methods)");
+}
+
+}  // namespace mbi::python

@@ -1,0 +1,120 @@
+// Embedding, embed() and the control-mesh helpers.
+#include "bindings.hpp"
+
+#include <mbi/interp/embed.hpp>
+#include <mbi/interp/mesh.hpp>
+#include <mbi/interp/modified_bi.hpp>
+#include <mbi/interp/threads.hpp>
+
+namespace mbi::python {
+namespace {
+
+using interp::Embedding;
+
+py::array element_view(const py::object& self) {
+  const Embedding& e = self.cast<const Embedding&>();
+  return readonly_view(py::dtype::of<int>(), {e.size()}, {sizeof(int)}, e.element.data(), self);
+}
+
+py::array bary_view(const py::object& self) {
+  const Embedding& e = self.cast<const Embedding&>();
+  const py::ssize_t s = sizeof(double);
+  return readonly_view(py::dtype::of<double>(), {e.bary.rows(), e.bary.cols()}, {s, s * e.bary.rows()},
+                       e.bary.data(), self);
+}
+
+py::array gradients_view(const py::object& self) {
+  const Embedding& e = self.cast<const Embedding&>();
+  const py::ssize_t s = sizeof(double);
+  return readonly_view(py::dtype::of<double>(), {e.gradients.rows(), e.gradients.cols()},
+                       {s, s * e.gradients.rows()}, e.gradients.data(), self);
+}
+
+py::array outside_view(const py::object& self) {
+  const Embedding& e = self.cast<const Embedding&>();
+  return readonly_view(py::dtype::of<int>(), {static_cast<py::ssize_t>(e.outside.size())}, {sizeof(int)},
+                       e.outside.data(), self);
+}
+
+}  // namespace
+
+void bind_embedding(py::module_& m) {
+  using namespace pybind11::literals;
+  py::class_<Embedding>(m, "Embedding",
+                        "Dense points located in a control mesh: per point an element and its barycentric "
+                        "coordinates (read-only arrays; made by embed()).")
+      .def_property_readonly("element", element_view, "(p,) int32: the element holding (or nearest to) each point")
+      .def_property_readonly("bary", bary_view, "(p, d+1) float64: barycentric coordinates in that element (sum 1)")
+      .def_property_readonly("outside", outside_view,
+                             "(k,) int32: points outside every element, extrapolated from the nearest one")
+      .def_property_readonly("max_outside_distance", [](const Embedding& e) { return e.max_outside_distance; },
+                             "largest distance of an outside point to the mesh (units of the points)")
+      .def_property_readonly("gradients", gradients_view,
+                             "(m (d+1), d) float64: each element's basis gradients (for normals)")
+      .def_property_readonly("dim", &Embedding::dim, "d: 2 or 3")
+      .def_property_readonly("size", &Embedding::size, "p: the number of points")
+      .def("__len__", &Embedding::size)
+      .def("__repr__", [](const Embedding& e) {
+        return "<mbi.Embedding of " + std::to_string(e.size()) + " points in " + std::to_string(e.dim()) +
+               "D, " + std::to_string(e.outside.size()) + " outside>";
+      });
+
+  m.def(
+      "embed",
+      [](const py::object& U, const py::object& T, const py::object& P) {
+        const Mesh c = control_mesh(U, T);
+        const Input p = float_matrix(P, "P", {-1, c.U.map.cols()});
+        return without_gil([&] { return interp::embed(c.U.map, c.T, p.map); });
+      },
+      "U"_a, "T"_a, "P"_a,
+      "Locates the dense rest points P (p, d) in the control mesh: U (n, d) rest vertices, T (m, d+1) "
+      "elements (0-based). Returns an Embedding. Points outside are attached to the nearest element.");
+
+  m.def(
+      "embedded_positions",
+      [](const py::object& U, const py::object& T, const Embedding& e) {
+        const Mesh c = control_mesh(U, T);
+        return to_numpy(without_gil([&] { return interp::embedded_positions(c.U.map, c.T, e); }));
+      },
+      "U"_a, "T"_a, "embedding"_a, "The points an embedding stands for: sum_k bary[:, k] U[T[element, k]], (p, d).");
+
+  m.def(
+      "validate_mesh",
+      [](const py::object& U, const py::object& T) {
+        const Mesh c = control_mesh(U, T);
+        without_gil([&] { interp::validate_mesh(c.U.map, c.T); });
+      },
+      "U"_a, "T"_a, "Raises mbi.Error unless (U, T) is a valid control mesh (finite, indices in range, no flat element).");
+
+  m.def(
+      "interior_faces",
+      [](const py::object& T) {
+        const Eigen::MatrixXi t = index_matrix(T, "T");
+        return to_numpy(without_gil([&] { return interp::interior_faces(t); }));
+      },
+      "T"_a, "(F, d+2) int32: each interior face's d vertices, then its two elements.");
+
+  m.def(
+      "boundary_faces",
+      [](const py::object& U, const py::object& T) {
+        const Mesh c = control_mesh(U, T);
+        return to_numpy(without_gil([&] { return interp::boundary_faces(c.U.map, c.T); }));
+      },
+      "U"_a, "T"_a, "(B, d) int32: the boundary faces, oriented outward.");
+
+  m.def("default_alpha", &interp::default_alpha, "d"_a, "modified-BI's default alpha: 0.1 in 3D, 0.2 in 2D.");
+  m.def("cholmod_available", &interp::cholmod_available, "True when this build factors with CHOLMOD.");
+  m.def(
+      "set_threads",
+      [](int n) {
+        if (n < 0) throw interp::Error("threads must be >= 0 (0 = the cores this process may run on)");
+        interp::set_threads(n);
+      },
+      "n"_a,
+      "Threads of every later call of the library (one pool for the process, shared by all Python "
+      "threads), the calling one included; 0: the cores this process may run on. An object's own "
+      "threads= limits it further.");
+  m.def("threads", &interp::threads, "The thread count in force (>= 1).");
+}
+
+}  // namespace mbi::python

@@ -1,0 +1,66 @@
+#pragma once
+// The parts of the extension module mbi._mbi, one file each, and what they share.
+#include "arrays.hpp"
+
+#include <mbi/base/timer.hpp>
+
+#include <mutex>
+#include <utility>
+
+namespace mbi::python {
+
+void bind_embedding(py::module_& m);   // bind_embedding.cpp: Embedding, embed, mesh helpers
+void bind_methods(py::module_& m);     // bind_methods.cpp: ModifiedBI, Phong, Bezier points, metrics
+void bind_evaluate(py::module_& m);    // bind_evaluate.cpp: evaluate, FastEvaluator, transposes
+void bind_deformer(py::module_& m);    // bind_deformer.cpp: Deformer
+void bind_timing(py::module_& m);      // timing.cpp: C++ baselines of the overhead benchmark
+
+/// Seconds the calling thread last spent in a section without the GIL: the C++ part of its last
+/// call, which python/bench/overhead.py subtracts from the call's time seen from Python.
+inline thread_local double last_section_seconds = 0;
+
+/// Records the time from its construction to its destruction in last_section_seconds.
+struct SectionClock {
+  Clock::time_point t0 = Clock::now();
+  ~SectionClock() { last_section_seconds = ms_since(t0) * 1e-3; }
+};
+
+/// Runs f() without the GIL (every call that does real work), so that other Python threads run
+/// meanwhile; nothing in f may touch a Python object.
+template <class F>
+auto without_gil(F&& f) {
+  py::gil_scoped_release release;
+  SectionClock clock;
+  return f();
+}
+
+/// A control-sized result (M, Bezier points) that compute() makes (releasing the GIL itself):
+/// moved into a new array when out is None (no copy; Fortran order, which FastEvaluator reads
+/// in place), else written into out (rows x cols, checked before compute() runs).
+template <class F>
+py::array result(const py::handle& out, Eigen::Index rows, Eigen::Index cols, F&& compute) {
+  if (out.is_none()) return to_numpy(compute());
+  Output o = float_output(out, "out", rows, cols);
+  o.map = compute();
+  return o.array;
+}
+
+/// An object whose calls change state it keeps (a FastEvaluator's per-call terms, a Deformer's
+/// evaluator): one call at a time. The lock is taken after the GIL is released and let go
+/// before it is taken back, so that a thread waiting here never holds the GIL.
+template <class T>
+struct Guarded {
+  template <class... A>
+  explicit Guarded(A&&... args) : object(std::forward<A>(args)...) {}
+  template <class F>
+  auto run(F&& f) {
+    py::gil_scoped_release release;
+    SectionClock clock;
+    std::lock_guard<std::mutex> lock(mutex);
+    return f(object);
+  }
+  T object;
+  std::mutex mutex;
+};
+
+}  // namespace mbi::python
