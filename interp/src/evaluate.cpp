@@ -129,10 +129,12 @@ void kernel(const MatX<Scalar>& Prow /* D x (m K), column per control point */, 
 }
 
 // Checks B and emb, and for normals (normals_rest given) the basis gradients and the rest
-// normals; returns d. Everything is checked before an output is touched.
+// normals; returns d. Everything is checked before an output is touched, except the points'
+// elements when the kernels check them as they go (elements_later: the float path).
 template <typename Scalar>
-int check_all(const BezierPoints& B, const Embedding& emb, const ConstPointsRef<Scalar>* normals_rest) {
-  const int d = check_inputs(B, emb);
+int check_all(const BezierPoints& B, const Embedding& emb, const ConstPointsRef<Scalar>* normals_rest,
+              bool elements_later = false) {
+  const int d = check_inputs(B, emb, !elements_later);
   if (normals_rest) {
     const long long m = B.rows() / ((d + 1) * (d + 2) / 2);
     if (emb.gradients.rows() != m * (d + 1) || emb.gradients.cols() != d)
@@ -153,14 +155,20 @@ void check_output(const char* what, Eigen::Index rows, Eigen::Index cols, const 
                 std::to_string(d) + ", got " + std::to_string(rows) + " x " + std::to_string(cols));
 }
 
+// Float positions in 3D into memory of unit inner stride run on FastEvaluator's kernels (the
+// double path keeps the Bernstein form).
+template <typename Scalar>
+bool float_path(const BezierPoints& B, Eigen::Index inner_stride, bool normals) {
+  return std::is_same_v<Scalar, float> && !normals && B.cols() == 3 && inner_stride == 1;
+}
+
 // Inputs checked by check_all, outputs p x d.
 template <typename Scalar>
 void run(const BezierPoints& B, const Embedding& emb, int d, const ConstPointsRef<Scalar>* normals_rest,
          PointsRef<Scalar> positions, PointsRef<Scalar>* normals_out, int threads) {
-  // float positions in 3D with unit inner stride: FastEvaluator's kernels (the double path keeps
-  // the Bernstein form)
   if constexpr (std::is_same_v<Scalar, float>) {
-    if (!normals_out && d == 3 && positions.innerStride() == 1) return detail::evaluate_float3(B, emb, positions, threads);
+    if (float_path<Scalar>(B, positions.innerStride(), normals_out != nullptr))
+      return detail::evaluate_float3(B, emb, positions, threads);
   }
   // control points as D x (m K) so that each element's points are contiguous
   const MatX<Scalar> Prow = B.transpose().template cast<Scalar>();
@@ -175,7 +183,7 @@ void run(const BezierPoints& B, const Embedding& emb, int d, const ConstPointsRe
 template <typename Scalar>
 void evaluate(const BezierPoints& B, const Embedding& emb,
               Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& positions, int threads) {
-  const int d = check_all<Scalar>(B, emb, nullptr);
+  const int d = check_all<Scalar>(B, emb, nullptr, float_path<Scalar>(B, 1, false));
   positions.resize(emb.size(), d);
   run<Scalar>(B, emb, d, nullptr, positions, nullptr, threads);
 }
@@ -195,7 +203,7 @@ void evaluate(const BezierPoints& B, const Embedding& emb,
 
 template <typename Scalar>
 void evaluate(const BezierPoints& B, const Embedding& emb, PointsRef<Scalar> positions, int threads) {
-  const int d = check_all<Scalar>(B, emb, nullptr);
+  const int d = check_all<Scalar>(B, emb, nullptr, float_path<Scalar>(B, positions.innerStride(), false));
   check_output("positions", positions.rows(), positions.cols(), emb, d);
   run<Scalar>(B, emb, d, nullptr, positions, nullptr, threads);
 }

@@ -1,13 +1,21 @@
 #pragma once
 // Evaluation of the embedded points from element Bezier control points (method.md facts 5, 6).
-// Multithreaded; the same kernel serves BI (M = 0) and modified-BI.
+// Multithreaded (the library's pool); the same functions serve BI (M = 0) and modified-BI.
+//
+// Which to use: evaluate() is the one-shot call, nothing to set up. In float and 3D (positions
+// only) it runs FastEvaluator's kernels, at about twice FastEvaluator's time (it packs the
+// embedding on every call); in double it evaluates the Bernstein form exactly, several times
+// slower. A frame loop over the same points wants FastEvaluator (fast_evaluate.hpp), which packs
+// the points once, or pipeline::CpuEvaluator.
 #include <mbi/interp/embed.hpp>
 #include <mbi/interp/modified_bi.hpp>
 
 namespace mbi::interp {
 
 /// Positions of all embedded points: p x d. Scalar = float or double (control points are
-/// converted once). threads = 0: all cores.
+/// converted once). threads = 0: the library's count (set_threads). On the float 3D path a point
+/// whose element is not one of B's is found while evaluating: the Error names it, and positions
+/// are then partly written; every other error leaves the outputs untouched.
 template <typename Scalar>
 void evaluate(const BezierPoints& B, const Embedding& emb,
               Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& positions, int threads = 0);
