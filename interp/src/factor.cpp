@@ -3,11 +3,14 @@
 
 #include "threads.hpp"
 
+#include <mbi/interp/threads.hpp>
+
 #include <mbi/error.hpp>
 
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <mutex>
+#include <optional>
 #include <string>
 
 #ifdef MBI_HAVE_CHOLMOD
@@ -175,6 +178,10 @@ CholeskyFactor eigen_factor(const Eigen::SparseMatrix<double>& A) {
 }
 
 #ifdef MBI_HAVE_CHOLMOD
+// Flops above which the factorization runs BLAS on the library's threads (about 10,000 control
+// vertices and up; below it one thread is as fast, docs/performance.md "Threads").
+constexpr double kParallelFactorFlops = 4e9;
+
 CholeskyFactor factor_with_cholmod(const Eigen::SparseMatrix<double>& A) {
   cholmod_common c;
   cholmod_start(&c);
@@ -191,7 +198,7 @@ CholeskyFactor factor_with_cholmod(const Eigen::SparseMatrix<double>& A) {
   cholmod_sparse As = Eigen::viewAsCholmod(Eigen::Ref<Eigen::SparseMatrix<double>>(Ac));
   As.stype = -1;  // symmetric: CHOLMOD reads the lower triangle
   // serial: BLAS's and CHOLMOD's own threads would spin for milliseconds after it (threads.hpp)
-  const SerialForeignPools serial;
+  std::optional<SerialForeignPools> pools(std::in_place);
   // METIS keeps its random state in globals: orderings computed at once by two threads would
   // depend on timing (and so would the factor's round-off), so one thread orders at a time
   static std::mutex ordering;
@@ -199,6 +206,8 @@ CholeskyFactor factor_with_cholmod(const Eigen::SparseMatrix<double>& A) {
   cholmod_factor* L = cholmod_analyze(&As, &c);
   one_at_a_time.unlock();
   const bool analyzed = L != nullptr && c.status >= CHOLMOD_OK;
+  // a large factorization gains more from BLAS's threads than they cost spinning after it
+  if (analyzed && c.fl > kParallelFactorFlops) pools.emplace(interp::threads());
   const bool factored = analyzed && cholmod_factorize(&As, L, &c) && c.status >= CHOLMOD_OK;
   std::string why;
   if (!analyzed || !factored)  // an error of CHOLMOD's own (out of memory, too large, ...)

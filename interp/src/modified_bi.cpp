@@ -664,10 +664,12 @@ VertexMatrices ModifiedBI::solve(const Eigen::Ref<const Eigen::MatrixXd>& X) con
       for (int j = 0; j < n; ++j) cols[static_cast<size_t>(c) * n + j] = X(j, c);
     const std::ptrdiff_t rows = I.n_red;
     const double* c0 = cols.data();
-    // blocks of an even number of rows (the kernel takes rows two at a time), about 2^16
-    // entries of K each
-    const std::ptrdiff_t block = std::max<std::ptrdiff_t>(2, ((1 << 16) / std::max(n, 1)) & ~std::ptrdiff_t(1));
-    detail::parallel_blocks(rows, block, detail::thread_count(rows * n, 1 << 17), [&](long long a, long long b) {
+    // one block of an even number of rows a thread (the kernel takes rows two at a time): the
+    // caller, which takes the first, then reads the same part of K every frame and finds it in
+    // its cache
+    const int nt = detail::thread_count(rows * n, 1 << 17);
+    const std::ptrdiff_t block = std::max<std::ptrdiff_t>(2, ((rows + nt - 1) / nt + 1) & ~std::ptrdiff_t(1));
+    detail::parallel_blocks(rows, block, nt, [&](long long a, long long b) {
       dense_rows(I.K.data(), n, c0, c0 + n, c0 + 2 * static_cast<std::ptrdiff_t>(n), s3.data(), a, b);
     });
     sol.resize(static_cast<size_t>(I.n_red) * d);

@@ -176,13 +176,13 @@ Foreign& foreign() {
 
 }  // namespace
 
-SerialForeignPools::SerialForeignPools() {
+SerialForeignPools::SerialForeignPools(int blas_threads) : blas_threads_(std::max(1, blas_threads)) {
   Foreign& f = foreign();
   if (f.blas_get && f.blas_set) {
     std::lock_guard<std::mutex> lock(f.m);
     if (f.guards++ == 0) {
       f.blas_saved = f.blas_get();
-      if (f.blas_saved != 1) f.blas_set(1);
+      if (f.blas_saved != blas_threads_) f.blas_set(blas_threads_);
     }
   }
   // OpenMP's nthreads-var and dyn-var belong to the calling thread: with dynamic threads on and
@@ -203,7 +203,7 @@ SerialForeignPools::~SerialForeignPools() {
   }
   if (f.blas_get && f.blas_set) {
     std::lock_guard<std::mutex> lock(f.m);
-    if (--f.guards == 0 && f.blas_saved != 1) f.blas_set(f.blas_saved);
+    if (--f.guards == 0 && f.blas_saved != blas_threads_) f.blas_set(f.blas_saved);
   }
 }
 

@@ -101,21 +101,23 @@ class Steps {
   std::atomic<long long> count_{0}, block_{1};
 };
 
-/// While alive, BLAS (OpenBLAS, when it is the system's BLAS) and the OpenMP loops of libraries
-/// the calling thread calls into (CHOLMOD's) run on one thread: the precompute's factorization is
-/// serial, so neither library leaves threads spinning after it. OpenBLAS's count is process-wide:
-/// it is set to 1 by the first guard and given back by the last one alive (a BLAS call from
-/// another thread meanwhile runs on one thread too). OpenMP's settings are the calling thread's
-/// own. Both are looked up at run time (dlsym), so nothing here depends on either library.
+/// While alive, BLAS (OpenBLAS, when it is the system's BLAS) runs on blas_threads threads and
+/// the OpenMP loops of libraries the calling thread calls into (CHOLMOD's) on one: the
+/// precompute's factorization is serial unless it is large, so neither library leaves threads
+/// spinning after a small one. OpenBLAS's count is process-wide: it is set by the first guard and
+/// given back by the last one alive (a BLAS call from another thread meanwhile runs on that count
+/// too). OpenMP's settings are the calling thread's own. Both are looked up at run time (dlsym),
+/// so nothing here depends on either library.
 class SerialForeignPools {
  public:
-  SerialForeignPools();
+  explicit SerialForeignPools(int blas_threads = 1);
   ~SerialForeignPools();
   SerialForeignPools(const SerialForeignPools&) = delete;
   SerialForeignPools& operator=(const SerialForeignPools&) = delete;
 
  private:
   int omp_threads_ = 0, omp_dynamic_ = 0;
+  int blas_threads_ = 1;
 };
 
 }  // namespace mbi::interp::detail
