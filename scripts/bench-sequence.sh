@@ -36,6 +36,7 @@ root=$(pwd)
 mbi=$root/build/release/mbi
 work=build/bench-sequence
 mkdir -p "$work" "$out"
+out=$(cd "$out" && pwd)  # absolute: the work below happens in $work
 cd "$work"
 if [ ! -f model.ply ]; then
   "$mbi" run "$root/scenes/large.toml" --frames 1 --out run --force --quiet --gpu off >/dev/null
@@ -58,7 +59,7 @@ t3=$(now)
 "$root/build/release/mbi-bench" --benchmark_filter='BM_Sequence' --benchmark_repetitions=5 \
   --benchmark_report_aggregates_only=true --benchmark_out=bench.json --benchmark_out_format=json >/dev/null
 
-"$python" - "$t0" "$t1" "$t2" "$t3" "$separate" "$root/$out" <<'PY'
+"$python" - "$t0" "$t1" "$t2" "$t3" "$separate" "$out" <<'PY'
 import json, socket, subprocess, sys, time
 t0, t1, t2, t3 = map(float, sys.argv[1:5])
 separate, out = int(sys.argv[5]), sys.argv[6]

@@ -6,10 +6,10 @@
 # SECONDS per target (default 30); TARGETs from: obj off ply stl points tetgen gmsh vtk vtu pvd
 # pc2 mdd png scene script (default: all). Configures and builds a separate clang build in build/fuzz
 # (-DMBI_FUZZ=ON: the readers only, with -fsanitize=fuzzer,address,undefined), then runs the
-# targets one after another. Each starts from its seeds (tests/fuzz/<target>/, read only) and
-# the inputs found by earlier runs (build/fuzz/corpus/<target>/, kept between runs). A crash,
-# leak, sanitizer report, timeout (10 s for one input) or out-of-memory (2 GB) stops that
-# target; its input is saved as build/fuzz/artifacts/<target>/crash-* (or leak-, timeout-,
+# targets, as many at once as there are cores (MBI_JOBS). Each starts from its seeds
+# (tests/fuzz/<target>/, read only) and the inputs found by earlier runs
+# (build/fuzz/corpus/<target>/, kept between runs). A crash, leak, sanitizer report, timeout
+# (10 s for one input) or out-of-memory (2 GB) stops that target; its input is saved as build/fuzz/artifacts/<target>/crash-* (or leak-, timeout-,
 # oom-) and the script exits 1 after the other targets have run. MBI_FUZZ_SEED fixes
 # libFuzzer's random seed (CI: 1 unless set, so that a CI run explores the same way each time and
 # does not fail on a find of another day; runs by hand draw a new seed each time).
@@ -39,23 +39,31 @@ seed=()
 if [ -n "${MBI_FUZZ_SEED:-}" ]; then seed=(-seed="$MBI_FUZZ_SEED")
 elif [ -n "${CI:-}" ]; then seed=(-seed=1)
 fi
-failed=()
-for t in "${targets[@]}"; do
-  corpus=build/fuzz/corpus/$t
-  artifacts=build/fuzz/artifacts/$t
+# fuzz_one TARGET: runs it, prints its summary in one piece (targets run side by side), and
+# leaves build/fuzz/failed-TARGET behind when it found something
+fuzz_one() {
+  local t=$1 corpus=build/fuzz/corpus/$1 artifacts=build/fuzz/artifacts/$1 log=build/fuzz/fuzz_$1.log
   mkdir -p "$corpus" "$artifacts"
-  echo "== fuzz_$t: ${secs} s"
-  log=build/fuzz/fuzz_$t.log
   if ! build/fuzz/tests/fuzz/fuzz_$t -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 \
        -print_final_stats=1 "${seed[@]}" \
        -artifact_prefix="$artifacts/" "$corpus" "tests/fuzz/$t" >"$log" 2>&1; then
-    failed+=("$t")
-    tail -n 40 "$log"
+    touch "build/fuzz/failed-$t"
+    { echo "== fuzz_$t: ${secs} s"; tail -n 40 "$log"; }
     echo "fuzz_$t FAILED: input(s) in $artifacts/, log $log" >&2
   else
-    grep -E "^stat::number_of_executed_units|^stat::new_units_added" "$log" | tr '\n' ' ' || true
-    echo
+    echo "== fuzz_$t: ${secs} s: $(grep -E "^stat::number_of_executed_units|^stat::new_units_added" "$log" | tr '\n' ' ')"
   fi
+}
+# one target a core at a time (each is one process on one thread)
+rm -f build/fuzz/failed-*
+for t in "${targets[@]}"; do
+  while [ "$(jobs -rp | wc -l)" -ge "${MBI_JOBS:-$(nproc)}" ]; do wait -n || true; done
+  fuzz_one "$t" &
+done
+wait
+failed=()
+for t in "${targets[@]}"; do
+  [ -e "build/fuzz/failed-$t" ] && failed+=("$t")
 done
 if [ ${#failed[@]} -gt 0 ]; then
   echo "fuzz.sh: failures in: ${failed[*]}" >&2

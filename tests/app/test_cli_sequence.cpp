@@ -141,7 +141,7 @@ TEST_CASE("sequence: a bad frame ends it with every earlier frame complete", "[a
   for (const auto& e : fs::directory_iterator(dir.path())) CHECK(e.path().filename().string().rfind(".mbi-tmp", 0) != 0);
 }
 
-TEST_CASE("sequence: SIGINT stops after the frame in progress; the cache holds the frames done", "[app][sequence]") {
+TEST_CASE("sequence: SIGINT stops after the frame in progress, the cache holds the frames done", "[app][sequence]") {
   TempDir dir("seq");
   // 4,000 frames of 200,000 points: long enough to be interrupted a second after they start
   const Eigen::MatrixXd P = (Eigen::MatrixXd::Random(200000, 3).array() * 0.3 + 0.35).matrix();

@@ -170,7 +170,7 @@ TEST_CASE("gpu: one million points equal the CPU evaluator", "[gpu][large]") {
   CHECK(p.gpu.timings().evaluate_ms > 0);
 }
 
-TEST_CASE("gpu: no context when disabled; the reason is said", "[gpu]") {
+TEST_CASE("gpu: no context when disabled, the reason is said", "[gpu]") {
   ::setenv("MBI_GL", "none", 1);
   CHECK_THROWS_WITH(gpu::Context::headless(), Catch::Contains("MBI_GL=none"));
   ::unsetenv("MBI_GL");

@@ -32,7 +32,7 @@ Setup make(int d, int points, double lo = 0.0, double hi = 1.0) {
 }
 }  // namespace
 
-TEST_CASE("float and double evaluation agree to 1e-5 relative; threads do not change results", "[evaluate]") {
+TEST_CASE("float and double evaluation agree to 1e-5 relative, threads do not change results", "[evaluate]") {
   for (int d : {2, 3}) {
     const Setup s = make(d, 20000);
     Eigen::MatrixXd pd, nd;

@@ -1,6 +1,7 @@
 // The compact float kernel (FastEvaluator) against the double kernel (interp::evaluate<double>).
 #include <catch2/catch.hpp>
 
+#include "common/sanitizers.hpp"
 #include "test_support.hpp"
 
 #include <algorithm>
@@ -88,7 +89,7 @@ TEST_CASE("FastEvaluator: the AVX-512 and AVX2 kernels give the same positions",
     WARN("skipped: this CPU has no AVX-512");
     return;
   }
-  const Setup s = make(3, 100013, -0.2, 1.2);
+  const Setup s = make(3, mbi::test::sized(100013), -0.2, 1.2);
   for (const BezierPoints* B : {&s.B, &s.Bbi}) {
     RowMatrixXf p[2], n[2], q[2];
     int i = 0;
@@ -110,7 +111,7 @@ TEST_CASE("FastEvaluator: float positions and normals agree with the double kern
     for (bool far : {false, true}) {
       const Eigen::RowVectorXd offset = far ? Eigen::RowVectorXd::Constant(d, 1000.0) : Eigen::RowVectorXd();
       // points inside and outside (extrapolated) the control mesh
-      const Setup s = make(d, 50013, -0.2, 1.2, offset);
+      const Setup s = make(d, mbi::test::sized(50013), -0.2, 1.2, offset);
       REQUIRE(!s.emb.outside.empty());
       for (const BezierPoints* B : {&s.B, &s.Bbi}) for (Simd v : kernels()) {
         INFO("d = " << d << ", far " << far << ", kernel " << FastEvaluator::name(v));

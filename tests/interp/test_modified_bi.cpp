@@ -171,7 +171,7 @@ TEST_CASE("fact 3: exact face integrals agree with quadrature of the Bezier grad
   }
 }
 
-TEST_CASE("fact 4: null space of H_mm has dimension d + d(d-1)/2; pinning vertex 0 is not enough", "[modified_bi]") {
+TEST_CASE("fact 4: null space of H_mm has dimension d + d(d-1)/2, pinning vertex 0 is not enough", "[modified_bi]") {
   for (int d : {2, 3}) {
     const Mesh M = jittered_mesh(d, 7);
     const ModifiedBI mbi(M.U, M.T);
@@ -246,7 +246,7 @@ TEST_CASE("fact 4: x(u) does not depend on the gauge treatment", "[modified_bi]"
   }
 }
 
-TEST_CASE("fact 5: Bezier form equals the defining formula; fact 6: Jacobian and normals", "[modified_bi][evaluate]") {
+TEST_CASE("fact 5: Bezier form equals the defining formula, fact 6: Jacobian and normals", "[modified_bi][evaluate]") {
   for (int d : {2, 3}) {
     const Mesh M = jittered_mesh(d, 10);
     const int n = static_cast<int>(M.U.rows());
@@ -400,7 +400,7 @@ TEST_CASE("fact 9: boundary-pinned variant", "[modified_bi]") {
   }
 }
 
-TEST_CASE("fact 11: dense operator and sparse solves agree; set_alpha equals a fresh precompute", "[modified_bi]") {
+TEST_CASE("fact 11: dense operator and sparse solves agree, set_alpha equals a fresh precompute", "[modified_bi]") {
   for (int d : {2, 3}) {
     const Mesh M = jittered_mesh(d, 23);
     const Eigen::MatrixXd X = smooth_deform(M.U, 0.3);

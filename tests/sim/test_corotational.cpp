@@ -98,7 +98,7 @@ TEST_CASE("forces are minus the finite-difference gradient of the energy", "[sim
   }
 }
 
-TEST_CASE("exact Hessian matches finite differences of the forces; warped stiffness is exact "
+TEST_CASE("exact Hessian matches finite differences of the forces, warped stiffness is exact "
           "at rigidly rotated rest states",
           "[sim][corot]") {
   Fixture fx;

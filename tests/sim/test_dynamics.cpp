@@ -36,7 +36,7 @@ double mesh_volume(const mbi::test::Mesh& M, const Eigen::MatrixXd& X, double* l
 }
 }  // namespace
 
-TEST_CASE("twisting a bar by 180 degrees keeps its volume; linear FEM does not",
+TEST_CASE("twisting a bar by 180 degrees keeps its volume, linear FEM does not",
           "[sim][dynamics][twist]") {
   const double L = 1.0, h = 0.1;  // L / h = 10
   const auto M = mbi::test::bar(20, 2, 2, L, h);
@@ -354,7 +354,7 @@ TEST_CASE("simulator rejects bad input with a clear error", "[sim][errors]") {
   CHECK(sim.step().success);
 }
 
-TEST_CASE("PCG and LDLT give the same trajectory; Auto falls back to LDLT when PCG cannot "
+TEST_CASE("PCG and LDLT give the same trajectory, Auto falls back to LDLT when PCG cannot "
           "converge",
           "[sim][solver]") {
   const auto M = mbi::test::bar(12, 3, 3, 1.0, 0.25);  // 13 x 4 x 4 nodes = 624 nodes
@@ -411,7 +411,7 @@ TEST_CASE("PCG and LDLT give the same trajectory; Auto falls back to LDLT when P
   CHECK(failed);
 }
 
-TEST_CASE("Newton iterations solve the backward Euler equations; substeps equal smaller steps",
+TEST_CASE("Newton iterations solve the backward Euler equations, substeps equal smaller steps",
           "[sim][integrator]") {
   auto M = mbi::test::bar(8, 2, 2, 1.0, 0.25);
   const Material mat{2e4, 0.4, 1000};  // soft: large deformation within a few steps

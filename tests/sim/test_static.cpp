@@ -84,7 +84,7 @@ TEST_CASE("patch test: a linear field imposed on the boundary is reproduced insi
   CHECK(err < 1e-9);
 }
 
-TEST_CASE("cantilever under gravity converges toward Euler-Bernoulli; co-rotational equals "
+TEST_CASE("cantilever under gravity converges toward Euler-Bernoulli, co-rotational equals "
           "linear at small load",
           "[sim][static][cantilever]") {
   // L = 1 m, h = 0.1 m, E = 1e9 Pa: tip deflection ~1.5e-3 L (small load).
