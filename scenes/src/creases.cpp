@@ -75,7 +75,7 @@ Eigen::Vector3d crease_color(double t) {
   return (1 - s) * a + s * b;
 }
 
-double crease_scale(double largest) { return std::isfinite(largest) && largest > 0 ? largest : 1e-12; }
+double crease_scale(double largest) { return std::isfinite(largest) ? std::max(largest, kCreaseFloor) : kCreaseFloor; }
 
 std::string crease_number(double v) {
   if (v == 0) return "0";

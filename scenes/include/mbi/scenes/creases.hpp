@@ -50,9 +50,10 @@ class Creases {
 /// at 1; red minus blue grows with t, so "hotter" is measurable from pixels.
 Eigen::Vector3d crease_color(double t);
 
-/// The top of the shared scale for values up to `largest`: largest, or 1e-12 when it is not
-/// positive (everything shows cold).
+/// The top of the shared scale for values up to `largest`: largest, at least kCreaseFloor.
 double crease_scale(double largest);
+/// The smallest top of the scale: a jump of 0.1% strain; below it (round-off at rest) all is cold.
+inline constexpr double kCreaseFloor = 1e-3;
 
 /// A legend number: 3 significant digits ("0", "0.0423", "1.2e-05").
 std::string crease_number(double v);
