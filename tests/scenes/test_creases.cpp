@@ -53,7 +53,7 @@ RunResult run_twist(const fs::path& out, int frames, bool creases) {
 
 }  // namespace
 
-TEST_CASE("creases: the face jumps are the discontinuity energies per area; a point on a face takes its jump",
+TEST_CASE("creases: the face jumps are the discontinuity energies per area, a point on a face takes its jump",
           "[creases]") {
   const mbi::test::Mesh m = mbi::test::box_tet_mesh(2, 2, 2, Eigen::Vector3d(1, 1, 1));
   Eigen::MatrixXd X = m.U;
@@ -92,7 +92,7 @@ TEST_CASE("creases: the colour scale grows hotter (red minus blue) from 0 to 1",
   CHECK(crease_number(0.33896) == "0.339");
 }
 
-TEST_CASE("mbi run with output.creases: BI's panel glows where the table says it jumps more; off: the old pictures",
+TEST_CASE("mbi run with output.creases: BI's panel glows where the table says it jumps more, off: the usual pictures",
           "[creases][runner]") {
   mbi::test::TempDir dir("creases");
   const RunResult on = run_twist(dir / "on", 30, true);

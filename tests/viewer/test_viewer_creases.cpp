@@ -94,7 +94,7 @@ TEST_CASE("mbi view --creases: BI glows at the control faces where the table say
   CHECK(c["top"].get<double>() > 0);
 }
 
-TEST_CASE("mbi view --creases: at rest nothing glows; the g key turns the colours off and gives the plain picture",
+TEST_CASE("mbi view --creases: at rest nothing glows, the g key turns the colours off and gives the plain picture",
           "[viewer][xvfb][creases]") {
   TempDir dir("view");
   // negative control: paused at the rest pose, no jump anywhere: both views equally cold
