@@ -1,5 +1,5 @@
 // mbi run SCENE [--out DIR] [--frames N] [--mesh FILE] [--method bi|modified-bi|phong]
-//         [--gpu auto|on|off] [--force] [--quiet] [--threads N]
+//         [--gpu auto|on|off] [--creases] [--force] [--quiet] [--threads N]
 #include "commands.hpp"
 #include "signals.hpp"
 
@@ -23,11 +23,12 @@ struct RunArgs {
   std::optional<pipeline::Method> method;
   std::optional<scenes::GpuUse> gpu;
   int frames = 0;
-  bool force = false, quiet = false, force_3d = false;
+  bool force = false, quiet = false, force_3d = false, creases = false;
 };
 
 int run_run(const RunArgs& a) {
-  const scenes::Scene sc = scenes::load_scene(a.scene);
+  scenes::Scene sc = scenes::load_scene(a.scene);
+  if (a.creases) sc.output.creases = true;
   scenes::output_folder(sc, a.out);  // a name that cannot be a folder fails here, before work
   scenes::RunOptions o;
   o.out_dir = a.out;
@@ -99,6 +100,9 @@ const Registrar reg{
                  "evaluate and draw on the GPU: auto (when OpenGL is available, else the CPU, "
                  "saying so), on (error without OpenGL), off (CPU, double); default: the "
                  "scene's interpolation.gpu, auto");
+      sub.add_flag("--creases", a->creases,
+                   "3D pictures coloured by the jump of the deformation gradient at the control faces, "
+                   "with a legend (the scene's output.creases)");
       sub.add_flag("--force", a->force, "overwrite a non-empty output folder");
       sub.add_flag("--quiet", a->quiet, "no progress output");
       sub.add_flag("--force-3d", a->force_3d,

@@ -1,6 +1,6 @@
 // mbi view SCENE [--mesh FILE] [--method M] [--script FILE] [--record FILE] [--frames N]
 //               [--screenshot PATH] [--report FILE] [--force] [--width W] [--height H]
-//               [--paused] [--no-split] [--wireframe] [--no-panel] [--gpu auto|on|off]
+//               [--paused] [--no-split] [--wireframe] [--creases] [--no-panel] [--gpu auto|on|off]
 #include "commands.hpp"
 #include "signals.hpp"
 
@@ -17,7 +17,7 @@ struct ViewArgs {
   std::string scene, mesh, method, script, record, screenshot, report;
   int frames = 0, width = 1280, height = 720;
   std::optional<scenes::GpuUse> gpu;
-  bool paused = false, no_split = false, wireframe = false, no_panel = false, force = false;
+  bool paused = false, no_split = false, wireframe = false, creases = false, no_panel = false, force = false;
 };
 
 int run_view(const ViewArgs& a) {
@@ -35,6 +35,7 @@ int run_view(const ViewArgs& a) {
   o.playing = !a.paused;
   o.split = !a.no_split;
   o.wireframe = a.wireframe;
+  o.creases = a.creases;
   o.panel = !a.no_panel;
   o.force = a.force;
   handle_interrupts(nullptr);  // Ctrl-C ends the session at once, leaving no reserved temporaries
@@ -63,6 +64,8 @@ const Registrar reg{
       sub.add_flag("--paused", a->paused, "start paused");
       sub.add_flag("--no-split", a->no_split, "only the scene's method (no BI panel)");
       sub.add_flag("--wireframe", a->wireframe, "show the control mesh's edges");
+      sub.add_flag("--creases", a->creases,
+                   "colour the surface by the jump of the deformation gradient at the control faces (g key)");
       add_choice(sub, "--gpu", a->gpu, scenes::kGpuUseNames,
                  "evaluator: auto (the CPU kernel on a software OpenGL renderer such as llvmpipe, else "
                  "the GPU), on (the GPU), off (the CPU); default: the scene's interpolation.gpu, auto");

@@ -79,7 +79,7 @@ bool FrameLoop::frame(int f, RunResult& res, bool stopping) {
   const Eigen::MatrixXd* normals = write_now && pipe_.options().normals ? &pipe_.normals() : nullptr;
   // all parts of the frame, or none: each is taken back if a later one fails
   const bool drawn = picture.has_value();
-  if (drawn) pictures_.add(f, pipe_.control_positions(), std::move(*picture));
+  if (drawn) pictures_.add(f, pipe_, *picture);
   Undo undo_picture(drawn ? [this] { pictures_.discard_last(); } : std::function<void()>());
   metrics_.add_frame(std::move(record));
   Undo undo_metrics([this] { metrics_.discard_last(); });

@@ -1,5 +1,7 @@
 #include "pictures.hpp"
 
+#include "crease_pictures.hpp"
+
 #include <mbi/gpu/context.hpp>
 #include <mbi/gpu/evaluator.hpp>
 #include <mbi/gpu/renderer.hpp>
@@ -49,7 +51,8 @@ Pictures3D::Pictures3D(const Scene& sc, const SceneModels& m, const fs::path& di
   if (m.dim() != 3 || !sc.output.image) return;  // 2D pictures are written as the frames come
   lo_ = m.U.colwise().minCoeff().transpose();
   hi_ = m.U.colwise().maxCoeff().transpose();
-  if (context_) {
+  if (sc.output.creases) creases_ = std::make_unique<Creases>(m.U, m.T);
+  if (context_ && !creases_) {
     renderer_ = std::make_unique<gpu::Renderer>(*context_);
     renderer_->set_faces(m.dense.F);
   }
@@ -59,18 +62,24 @@ Pictures3D::~Pictures3D() = default;
 
 const char* Pictures3D::renderer() const { return renderer_ ? "gpu" : "cpu"; }
 
-void Pictures3D::add(int f, const Eigen::MatrixXd& X, const std::vector<interp::BezierPoints>& panels) {
+void Pictures3D::add(int f, pipeline::FramePipeline& pipe, const std::vector<interp::BezierPoints>& panels) {
+  const Eigen::MatrixXd& X = pipe.control_positions();
   if (X.cols() != 3) throw SceneError("3D pictures need 3D control positions");
+  std::vector<Eigen::VectorXd> jumps;
+  if (creases_)
+    for (pipeline::Method k : picture_methods(pipe.method())) jumps.push_back(creases_->face_jumps(pipe, k));
   if (!stored_) stored_ = std::make_unique<io::ScratchFile>(dir_, "pictures");
   // one record: frame, panel count, then each panel's rows, columns and values
   const long at = stored_->size();
   try {
     const std::int64_t head[2] = {f, static_cast<std::int64_t>(panels.size())};
     stored_->append(head, sizeof head);
-    for (const interp::BezierPoints& B : panels) {
+    for (size_t k = 0; k < panels.size(); ++k) {
+      const interp::BezierPoints& B = panels[k];
       const std::int64_t shape[2] = {B.rows(), B.cols()};
       stored_->append(shape, sizeof shape);
       stored_->append(B.data(), static_cast<std::size_t>(B.size()) * sizeof(double));
+      if (creases_) stored_->append(jumps[k].data(), static_cast<std::size_t>(jumps[k].size()) * sizeof(double));
     }
   } catch (...) {
     stored_->truncate(at);
@@ -79,6 +88,9 @@ void Pictures3D::add(int f, const Eigen::MatrixXd& X, const std::vector<interp::
   last_at_ = at;
   lo_before_ = lo_;
   hi_before_ = hi_;
+  top_before_ = top_;
+  for (const Eigen::VectorXd& j : jumps)
+    if (j.size()) top_ = std::max(top_, j.maxCoeff());
   lo_ = lo_.cwiseMin(X.colwise().minCoeff().transpose());
   hi_ = hi_.cwiseMax(X.colwise().maxCoeff().transpose());
 }
@@ -88,14 +100,18 @@ void Pictures3D::discard_last() {
   stored_->truncate(last_at_);
   lo_ = lo_before_;
   hi_ = hi_before_;
+  top_ = top_before_;
 }
 
-int Pictures3D::read_frame(long& at, std::vector<interp::BezierPoints>& panels) const {
+int Pictures3D::read_frame(long& at, std::vector<interp::BezierPoints>& panels,
+                           std::vector<Eigen::VectorXd>& jumps) const {
   std::int64_t head[2];
   stored_->read(at, head, sizeof head);
   at += sizeof head;
   panels.resize(static_cast<std::size_t>(head[1]));
-  for (interp::BezierPoints& B : panels) {
+  jumps.resize(creases_ ? panels.size() : 0);
+  for (size_t k = 0; k < panels.size(); ++k) {
+    interp::BezierPoints& B = panels[k];
     std::int64_t shape[2];
     stored_->read(at, shape, sizeof shape);
     at += sizeof shape;
@@ -103,6 +119,11 @@ int Pictures3D::read_frame(long& at, std::vector<interp::BezierPoints>& panels) 
     const std::size_t bytes = static_cast<std::size_t>(B.size()) * sizeof(double);
     stored_->read(at, B.data(), bytes);
     at += static_cast<long>(bytes);
+    if (!creases_) continue;
+    jumps[k].resize(creases_->faces());
+    const std::size_t jb = static_cast<std::size_t>(jumps[k].size()) * sizeof(double);
+    stored_->read(at, jumps[k].data(), jb);
+    at += static_cast<long>(jb);
   }
   return static_cast<int>(head[0]);
 }
@@ -126,11 +147,15 @@ void Pictures3D::write(pipeline::FramePipeline& pipe) {
   auto* gpu = renderer_ ? dynamic_cast<gpu::GpuEvaluator*>(&pipe.evaluator()) : nullptr;
   Eigen::MatrixXd V;
   std::vector<interp::BezierPoints> frame;
+  std::vector<Eigen::VectorXd> jumps;
   for (long at = 0; at < stored_->size();) {
-    const int f = read_frame(at, frame);
+    const int f = read_frame(at, frame, jumps);
     std::vector<io::Image> panels;
-    for (const interp::BezierPoints& B : frame) {
-      if (gpu) {
+    for (size_t k = 0; k < frame.size(); ++k) {
+      const interp::BezierPoints& B = frame[k];
+      if (creases_) {
+        panels.push_back(crease_panel(pipe, B, jumps[k], view, w, h));
+      } else if (gpu) {
         gpu->evaluate(B, true);
         panels.push_back(renderer_->render(*gpu, view, w, h));
       } else {
@@ -138,8 +163,21 @@ void Pictures3D::write(pipeline::FramePipeline& pipe) {
         panels.push_back(raster::render_mesh(V, m_.dense.F, view, w, h));
       }
     }
-    io::write_png(io::frame_path(dir_ / "frame", f, ".png"), raster::side_by_side(panels));
+    io::Image picture = raster::side_by_side(panels);
+    if (creases_) picture = stack(picture, crease_legend(picture.width, crease_scale(top_)));
+    io::write_png(io::frame_path(dir_ / "frame", f, ".png"), picture);
   }
+}
+
+io::Image Pictures3D::crease_panel(pipeline::FramePipeline& pipe, const interp::BezierPoints& B,
+                                   const Eigen::VectorXd& jumps, const raster::View& view, int w, int h) const {
+  Eigen::MatrixXd V;
+  interp::evaluate<double>(B, pipe.embedding(), V);
+  const Eigen::VectorXd v = creases_->point_values(pipe.embedding(), jumps);
+  const double top = crease_scale(top_);
+  Eigen::MatrixXd C(v.size(), 3);
+  for (Eigen::Index q = 0; q < v.size(); ++q) C.row(q) = crease_color(v(q) / top).transpose();
+  return render_colored(V, m_.dense.F, C, view, w, h);
 }
 
 }  // namespace mbi::scenes

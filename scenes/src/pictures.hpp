@@ -6,6 +6,8 @@
 #include <mbi/interp/modified_bi.hpp>
 #include <mbi/io/scratch_file.hpp>
 #include <mbi/pipeline/frame_pipeline.hpp>
+#include <mbi/raster/raster.hpp>
+#include <mbi/scenes/creases.hpp>
 #include <mbi/scenes/runner.hpp>
 
 #include <Eigen/Core>
@@ -45,17 +47,22 @@ class Pictures3D {
 
   /// What draws them: "gpu" or "cpu".
   const char* renderer() const;
-  /// Frame f's panels (Bezier points) at control positions X (n x 3): stored whole, or not at
-  /// all (throws io::IoError when the disk is full).
-  void add(int f, const Eigen::MatrixXd& X, const std::vector<interp::BezierPoints>& panels);
+  /// Frame f's panels (Bezier points, picture_methods of pipe's method) at pipe's control
+  /// positions, with each panel's face jumps when output.creases: stored whole, or not at all
+  /// (throws io::IoError when the disk is full).
+  void add(int f, pipeline::FramePipeline& pipe, const std::vector<interp::BezierPoints>& panels);
   /// Forgets the frame add() stored last (a later part of that frame failed).
   void discard_last();
   /// Draws and writes every stored picture (the pipeline's evaluator and embedding evaluate them).
   void write(pipeline::FramePipeline& pipe);
 
  private:
-  /// The frame stored at byte `at` of the scratch file; `at` moves past it.
-  int read_frame(long& at, std::vector<interp::BezierPoints>& panels) const;
+  /// The frame stored at byte `at` of the scratch file, its panels' face jumps (output.creases);
+  /// `at` moves past it.
+  int read_frame(long& at, std::vector<interp::BezierPoints>& panels, std::vector<Eigen::VectorXd>& jumps) const;
+  /// One panel coloured by its creases (CPU), on the run's shared scale.
+  io::Image crease_panel(pipeline::FramePipeline& pipe, const interp::BezierPoints& B, const Eigen::VectorXd& jumps,
+                         const raster::View& view, int w, int h) const;
 
   const Scene& sc_;
   const SceneModels& m_;
@@ -65,6 +72,8 @@ class Pictures3D {
   Eigen::Vector3d lo_, hi_, lo_before_, hi_before_;  // bounds, and before the last add()
   std::unique_ptr<io::ScratchFile> stored_;          // made at the first add()
   long last_at_ = 0;                                 // where the last frame stored starts
+  std::unique_ptr<Creases> creases_;                 // output.creases only
+  double top_ = 0, top_before_ = 0;                  // the largest face jump stored, and before the last add()
 };
 
 }  // namespace mbi::scenes

@@ -524,6 +524,7 @@ void parse_output(Table t, OutputSpec& o) {
   o.control_vtk = t.boolean("control_vtk", o.control_vtk);
   o.metrics = t.boolean("metrics", o.metrics);
   o.image = t.boolean("image", o.image);
+  o.creases = t.boolean("creases", o.creases);
   o.up = t.vec("up", o.up);
   if (o.up.norm() == 0) t.fail("up", "must be non-zero");
   t.finish();

@@ -1,5 +1,7 @@
 #include "draw.hpp"
 
+#include "crease_layer.hpp"
+
 #include <epoxy/gl.h>
 
 #include <algorithm>
@@ -36,6 +38,12 @@ void draw_views(gpu::Renderer& renderer, Stage& stage, const Interaction& in, co
   glClearColor(1, 1, 1, 1);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   const Eigen::Vector3d color(0.85, 0.62, 0.35);
+  const bool creases = options.creases && stage.d == 3;
+  if (creases) {  // the CPU's share only while on
+    if (!stage.creases) stage.creases = std::make_shared<CreaseLayer>(stage);
+    stage.creases->update(stage);
+  }
+  if (stage.creases) stage.creases->shown = creases;
   const int n = static_cast<int>(stage.views.size());
   double gpu_ms = 0;
   for (int k = 0; k < n; ++k) {
@@ -45,10 +53,11 @@ void draw_views(gpu::Renderer& renderer, Stage& stage, const Interaction& in, co
     stage.evaluator.evaluate(stage.pipe.bezier_with(stage.views[static_cast<size_t>(k)]), stage.d == 3);
     gpu_ms += stage.evaluator.timings().upload_ms + stage.evaluator.timings().pass_ms;
     const Eigen::Matrix4d vp = camera.view_projection(static_cast<double>(x1 - x0) / std::max(fb_height, 1));
-    if (stage.d == 3)
+    if (stage.d == 3 && (!creases || options.wireframe))
       renderer.draw(stage.gpu, vp, camera.direction(), color, options.wireframe ? &X3 : nullptr,
                     options.wireframe ? &stage.T : nullptr);
-    else
+    if (creases) stage.creases->draw(stage.gpu, static_cast<size_t>(k), vp, camera.direction());
+    if (stage.d == 2)
       renderer.draw_textured(stage.gpu, vp, *stage.image);
     draw_markers(renderer, in, options, X3, vp);
   }

@@ -1,5 +1,7 @@
 #include "panel.hpp"
 
+#include "crease_layer.hpp"
+
 #include <backends/imgui_impl_glfw.h>
 #include <backends/imgui_impl_opengl3.h>
 #include <imgui.h>
@@ -21,6 +23,7 @@ const char* kHelp =
     "  d      direct mode on/off (drag handles, no physics)\n"
     "  m      next method       s  split view (BI | method)\n"
     "  w      control wireframe h  handle markers\n"
+    "  g      creases in colour (the gradient jump at the control faces)\n"
     "  c      fold / unfold the panel\n"
     "  f      frame the model   p  screenshot (mbi-screenshot-NNNN.png)\n"
     "  [ / ]  alpha / 2, alpha x 2 (0.001 to 1)\n"
@@ -57,6 +60,7 @@ void view_switches(Stage& stage, ViewerOptions& options) {
   if (ImGui::Combo("method", &method, names.c_str())) stage.set_method(all[static_cast<size_t>(method)], options.split);
   if (ImGui::Checkbox("split view (BI | method)", &options.split)) stage.set_views(options.split);
   ImGui::Checkbox("control wireframe", &options.wireframe);
+  if (stage.d == 3) ImGui::Checkbox("creases in colour (g)", &options.creases);
   ImGui::Checkbox("handle markers", &options.handles);
   float a = static_cast<float>(stage.alpha);
   if (ImGui::SliderFloat("alpha", &a, static_cast<float>(Stage::kMinAlpha), static_cast<float>(Stage::kMaxAlpha), "%.3f",
@@ -145,6 +149,33 @@ void labels(const Stage& stage) {
   }
 }
 
+ImU32 scale_color(double t) {
+  const Eigen::Vector3d c = scenes::crease_color(t);
+  return IM_COL32(static_cast<int>(c(0) * 255 + 0.5), static_cast<int>(c(1) * 255 + 0.5), static_cast<int>(c(2) * 255 + 0.5), 255);
+}
+
+// The crease colours' legend at the views' bottom-left: what they show, the bar, its ends' values.
+void crease_legend(CreaseLayer& creases, const Layout& layout) {
+  const Rect& first = layout.views.front();
+  const float span = static_cast<float>(layout.views.back().x + layout.views.back().w - first.x);
+  const float w = std::min(360.0f, span - 32), x = static_cast<float>(first.x) + 16;
+  const float y = static_cast<float>(first.y + first.h) - 64, bar = y + 20;
+  ImDrawList* list = ImGui::GetForegroundDrawList();
+  list->AddRectFilled(ImVec2(x - 8, y - 6), ImVec2(x + w + 8, y + 58), IM_COL32(255, 255, 255, 220), 4.0f);
+  list->AddText(ImVec2(x, y), IM_COL32(30, 30, 30, 255), scenes::kCreaseQuantity);
+  const int segments = 32;
+  for (int s = 0; s < segments; ++s) {
+    const float a = x + w * static_cast<float>(s) / segments, b = x + w * static_cast<float>(s + 1) / segments;
+    list->AddRectFilledMultiColor(ImVec2(a, bar), ImVec2(b, bar + 14), scale_color(double(s) / segments),
+                                  scale_color(double(s + 1) / segments), scale_color(double(s + 1) / segments),
+                                  scale_color(double(s) / segments));
+  }
+  const std::string top = scenes::crease_number(scenes::crease_scale(creases.top()));
+  list->AddText(ImVec2(x, bar + 17), IM_COL32(30, 30, 30, 255), "0");
+  list->AddText(ImVec2(x + w - ImGui::CalcTextSize(top.c_str()).x, bar + 17), IM_COL32(30, 30, 30, 255), top.c_str());
+  creases.legend = {x, bar, w, 14};
+}
+
 void help(bool& open, const WindowSize& window) {
   ImGui::SetNextWindowPos(ImVec2(static_cast<float>(window.width) * 0.5f, static_cast<float>(window.height) * 0.5f),
                           ImGuiCond_Always, ImVec2(0.5f, 0.5f));
@@ -162,6 +193,7 @@ void draw_gui(Stage& stage, Interaction& in, ViewerOptions& options, Controls& c
   ImGui::NewFrame();
   if (options.panel) panel(stage, in, options, controls, times);
   labels(stage);
+  if (options.creases && stage.creases) crease_legend(*stage.creases, stage.layout);
   if (controls.help) help(controls.help, window);
   ImGui::Render();
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());

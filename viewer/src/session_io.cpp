@@ -1,5 +1,7 @@
 #include "session_io.hpp"
 
+#include "crease_layer.hpp"
+
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -152,6 +154,22 @@ std::deque<Event> Inputs::take(int frame) {
   return std::exchange(queue_, {});
 }
 
+namespace {
+
+// The crease colours of this frame: the scale, the legend's bar, per view its mean face jump and
+// the mean scale position (0 cold .. 1 hot) of its dense points near interior faces.
+nlohmann::json creases_report(const CreaseLayer& creases, const Stage& stage) {
+  nlohmann::json views = nlohmann::json::array();
+  for (size_t k = 0; k < creases.views().size() && k < stage.views.size(); ++k)
+    views.push_back({{"label", pipeline::method_name(stage.views[k])},
+                     {"mean_jump", creases.views()[k].mean_jump},
+                     {"mean_near", creases.views()[k].mean_near}});
+  const Rect& l = creases.legend;
+  return {{"top", creases.top()}, {"legend", {l.x, l.y, l.w, l.h}}, {"views", views}};
+}
+
+}  // namespace
+
 nlohmann::json frame_report(const Stage& stage, const Interaction& in, const FrameTimes& times,
                             const Eigen::MatrixXd& X3, const Camera& camera, const WindowSize& window,
                             bool controls_on_screen) {
@@ -201,6 +219,7 @@ nlohmann::json frame_report(const Stage& stage, const Interaction& in, const Fra
     }
     fr["control_window"] = cs;
   }
+  if (stage.creases && stage.creases->shown) fr["creases"] = creases_report(*stage.creases, stage);
   return fr;
 }
 }  // namespace mbi::viewer

@@ -7,10 +7,13 @@
 #include <mbi/viewer/viewer.hpp>
 
 #include <chrono>
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace mbi::viewer {
+
+class CreaseLayer;
 
 /// The window's size in logical pixels (what GLFW reports; at least 1 x 1).
 struct WindowSize {
@@ -58,6 +61,8 @@ struct Stage {
   sim::Material material;          ///< edited in the panel
   std::function<std::unique_ptr<pipeline::Driver>(const sim::Material&)> rebuild;
   std::vector<pipeline::Method> views;  ///< left to right
+  /// The creases in colour (options.creases, 3D): made when first shown, kept while the stage is
+  std::shared_ptr<CreaseLayer> creases;
 
   void set_views(bool split);
   void set_method(pipeline::Method method, bool split);

@@ -210,6 +210,7 @@ void Viewer::Impl::key(const std::string& k, Stage& stage, Interaction& in) {
     stage.set_views(opt.split);
   } else if (k == "c") controls.toggle_collapse = true;
   else if (k == "w") opt.wireframe = !opt.wireframe;
+  else if (k == "g") opt.creases = !opt.creases;
   else if (k == "h") opt.handles = !opt.handles;
   else if (k == "f" || k == "v") stage.frame(camera, opt.up);
   else if (k == "[" || k == "]") stage.set_alpha(stage.alpha * (k == "[" ? 0.5 : 2.0));

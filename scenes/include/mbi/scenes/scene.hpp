@@ -166,6 +166,7 @@ struct OutputSpec {
   bool control_vtk = true;
   bool metrics = true;
   bool image = true;               ///< PNG pictures of written frames
+  bool creases = false;            ///< 3D pictures coloured by the gradient jump (creases.hpp)
   Eigen::Vector3d up{0.0, 1.0, 0.0};  ///< 3D pictures: the direction shown upwards
 };
 

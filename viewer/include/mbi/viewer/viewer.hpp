@@ -42,6 +42,9 @@ struct ViewerOptions {
   std::string title = "mbi";
   bool split = true;                     ///< BI | the pipeline's method side by side
   bool wireframe = false;                ///< control-mesh edges
+  /// 3D: the dense surface coloured by the jump of the deformation gradient across the interior
+  /// control faces (mbi/scenes/creases.hpp), one scale for all views, with a legend
+  bool creases = false;
   bool handles = true;                   ///< handle markers (direct mode)
   bool playing = true;
   bool panel = true;                     ///< the ImGui panel
