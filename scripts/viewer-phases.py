@@ -4,6 +4,7 @@
     viewer-phases.py [--mbi build/release/mbi] [--gpu auto,on,off] [--frames 300] [--size 1280x720]
                      SCENE [-- MBI VIEW ARGS...]
 
+--gpu -: no --gpu option (a build from before it).
 Runs `mbi view SCENE --frames N --report` under Xvfb (xvfb-run) twice per evaluator, for N and
 for N / 3 frames: the difference of the two wall times over the difference of the frame counts
 gives the frame rate without the start-up (window, precompute). The phases are the medians of
@@ -25,7 +26,9 @@ PHASES = ("simulation", "solve", "interpolation", "drawing")
 def run(mbi, scene, gpu, frames, size, extra, report):
     w, h = size.split("x")
     cmd = ["xvfb-run", "-a", "-s", f"-screen 0 {w}x{int(h) + 80}x24", mbi, "view", scene, "--frames", str(frames),
-           "--gpu", gpu, "--width", w, "--height", h, "--report", report, "--force"] + extra
+           "--width", w, "--height", h, "--report", report] + (["--gpu", gpu] if gpu != "-" else []) + extra
+    if os.path.exists(report):
+        os.remove(report)
     t0 = time.perf_counter()
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     return time.perf_counter() - t0
@@ -51,7 +54,7 @@ def main():
             with open(report) as f:
                 frames = json.load(f)[20:]
             med = {p: statistics.median(fr["timings_ms"].get(p, 0.0) for fr in frames) for p in PHASES}
-            name = frames[-1]["evaluator"]["name"]
+            name = frames[-1].get("evaluator", {}).get("name", "gpu")
             print(f"| {os.path.basename(a.scene)} | {gpu} | {name} | {fps:.1f} | "
                   + " | ".join(f"{med[p]:.2f}" for p in PHASES) + f" | {sum(med.values()):.2f} |", flush=True)
     return 0

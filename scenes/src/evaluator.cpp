@@ -5,7 +5,7 @@
 namespace mbi::scenes {
 
 Evaluation make_evaluator(GpuUse use, const std::function<void(const std::string&)>& warn,
-                          std::shared_ptr<gpu::Context> context) {
+                          std::shared_ptr<gpu::Context> context, pipeline::Precision cpu) {
   Evaluation e;
   if (use != GpuUse::Off && context) {
     e.context = std::move(context);
@@ -20,7 +20,7 @@ Evaluation make_evaluator(GpuUse use, const std::function<void(const std::string
   if (e.context)
     e.evaluator = std::make_unique<gpu::GpuEvaluator>(*e.context);
   else
-    e.evaluator = std::make_unique<pipeline::CpuEvaluator>();
+    e.evaluator = std::make_unique<pipeline::CpuEvaluator>(cpu);
   return e;
 }
 

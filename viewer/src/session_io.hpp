@@ -42,6 +42,8 @@ class SessionFiles {
   /// write error is reported by check().
   void record(const Event& e);
   bool reporting() const { return report_.file != nullptr; }
+  /// Whether the session ends with a screenshot (--screenshot): every frame is then kept.
+  bool screenshot_at_end() const { return screenshot_.has_value(); }
   /// Appends one frame to the report.
   void report(const nlohmann::json& frame);
   /// Once a frame: flushes the recording; throws ViewerError on a write error of either file.

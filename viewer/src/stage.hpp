@@ -25,6 +25,7 @@ struct Controls {
   bool step_once = false, help = false, close = false;
   bool collapsed = false;        ///< the panel folded to a strip (c key, its title bar's arrow)
   bool toggle_collapse = false;  ///< the c key, for the panel's next frame
+  bool snapshot = false;         ///< the p key: this frame's picture to a file
   std::string message;  ///< shown in the panel (errors, screenshots)
 };
 

@@ -138,7 +138,7 @@ struct Viewer::Impl {
   void key(const std::string& k, Stage& stage, Interaction& in);
   void snapshot();
   void advance(Stage& stage, Interaction& in);
-  Eigen::MatrixXd draw(Stage& stage, Interaction& in);
+  Eigen::MatrixXd draw(Stage& stage, Interaction& in, bool keep);
   void finish();
 };
 
@@ -176,7 +176,9 @@ Viewer::~Viewer() {
 std::unique_ptr<pipeline::Evaluator> Viewer::evaluator() {
   const EvaluatorChoice choice = choose_evaluator(impl_->opt.gpu, impl_->context->renderer());
   impl_->evaluator_why = choice.why;
-  scenes::Evaluation e = scenes::make_evaluator(choice.use, [](const std::string&) {}, impl_->context);
+  // on the CPU the float kernels: the picture needs no more, and they are several times faster
+  scenes::Evaluation e =
+      scenes::make_evaluator(choice.use, [](const std::string&) {}, impl_->context, pipeline::Precision::Float);
   if (e.context) return std::move(e.evaluator);
   return std::make_unique<DrawnEvaluator>(std::move(e.evaluator), std::make_unique<gpu::GpuEvaluator>(*impl_->context));
 }
@@ -214,14 +216,15 @@ void Viewer::Impl::key(const std::string& k, Stage& stage, Interaction& in) {
   else if (k == "h") opt.handles = !opt.handles;
   else if (k == "f" || k == "v") stage.frame(camera, opt.up);
   else if (k == "[" || k == "]") stage.set_alpha(stage.alpha * (k == "[" ? 0.5 : 2.0));
-  else if (k == "p") snapshot();
+  else if (k == "p") controls.snapshot = true;
   else if (k == "?") controls.help = !controls.help;
   else if (k == "q" || k == "escape") controls.close = true;
 }
 
-// The p key: a screenshot now; one that cannot be written is said (panel, stderr, report), and
-// the session goes on.
+// The p key: a screenshot of this frame; one that cannot be written is said (panel, stderr,
+// report), and the session goes on.
 void Viewer::Impl::snapshot() {
+  controls.snapshot = false;
   char name[64];
   std::snprintf(name, sizeof name, "mbi-screenshot-%04d.png", frame);
   try {
@@ -245,15 +248,17 @@ void Viewer::Impl::advance(Stage& stage, Interaction& in) {
   controls.step_once = false;
 }
 
-// The views, then the panel over them; keeps the picture. Returns the drawn control positions.
-Eigen::MatrixXd Viewer::Impl::draw(Stage& stage, Interaction& in) {
+// The views, then the panel over them; keeps the picture when something will want it (reading
+// it back stalls a software renderer for milliseconds). Returns the drawn control positions.
+Eigen::MatrixXd Viewer::Impl::draw(Stage& stage, Interaction& in, bool keep) {
   int fbw, fbh;
   glfwGetFramebufferSize(window, &fbw, &fbh);
   Eigen::MatrixXd X3 = stage.control_positions_3d();
   lay_out(stage);
   draw_views(*renderer, stage, in, camera, opt, X3, fbw, fbh, times);
   draw_gui(stage, in, opt, controls, times, window_size());
-  last_shot = read_framebuffer(fbw, fbh);
+  if (keep || controls.snapshot) last_shot = read_framebuffer(fbw, fbh);
+  if (controls.snapshot) snapshot();
   return X3;
 }
 
@@ -279,7 +284,8 @@ void Viewer::show(const Shown& shown) {
     for (const Event& e : s.inputs.take(s.frame)) s.handle(e, stage, in);
     if (shown.per_frame) shown.per_frame(*this);
     s.advance(stage, in);
-    const Eigen::MatrixXd X3 = s.draw(stage, in);
+    // kept for --screenshot and for a caller's per_frame (Viewer::screenshot())
+    const Eigen::MatrixXd X3 = s.draw(stage, in, s.files->screenshot_at_end() || shown.per_frame);
     if (s.files->reporting()) {
       nlohmann::json fr = frame_report(stage, in, s.times, X3, s.camera, s.window_size(), s.frame == 0);
       if (!s.controls.message.empty()) fr["message"] = s.controls.message;

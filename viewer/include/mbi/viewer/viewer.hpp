@@ -95,7 +95,8 @@ class Viewer {
   /// Viewer::evaluator(), 2D without an image, a write error), io::IoError.
   void show(const Shown& shown);
 
-  /// The last frame's picture of the window (RGB).
+  /// The last frame's picture of the window (RGB), kept while Shown::per_frame is set or
+  /// options.screenshot asks for one (otherwise the last one kept, or an empty image).
   io::Image screenshot();
   int frame() const;
   ViewerOptions& options();
