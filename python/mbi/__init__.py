@@ -37,6 +37,7 @@ from ._mbi import (
     interior_faces,
     set_threads,
     threads,
+    threads_available,
     validate_mesh,
 )
 
@@ -48,5 +49,5 @@ __all__ = [
     "Deformer", "DiscontinuityTable", "Embedding", "Error", "FastEvaluator", "METHODS", "ModifiedBI",
     "Phong", "Summary", "bezier_bi", "bezier_points", "bezier_transpose", "boundary_faces",
     "cholmod_available", "default_alpha", "discontinuity_table", "embed", "embedded_positions",
-    "evaluate", "evaluate_transpose", "face_discontinuity", "interior_faces", "set_threads", "threads", "validate_mesh",
+    "evaluate", "evaluate_transpose", "face_discontinuity", "interior_faces", "set_threads", "threads", "threads_available", "validate_mesh",
 ]

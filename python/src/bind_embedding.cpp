@@ -115,6 +115,8 @@ void bind_embedding(py::module_& m) {
       "threads), the calling one included; 0: the cores this process may run on. An object's own "
       "threads= limits it further.");
   m.def("threads", &interp::threads, "The thread count in force (>= 1).");
+  m.def("threads_available", &interp::threads_available,
+        "False in a build without the thread pool (CMake MBI_WITH_THREADS=OFF): every call is serial.");
 }
 
 }  // namespace mbi::python

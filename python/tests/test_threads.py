@@ -89,7 +89,7 @@ def test_set_threads_changes_the_count_not_the_results():
         assert mbi.threads() == 1
         serial = mbi.Deformer(U, T, P).deform(X)
         mbi.set_threads(2)
-        assert mbi.threads() == 2
+        assert mbi.threads() == (2 if mbi.threads_available() else 1)  # a serial build runs on 1
         assert np.array_equal(mbi.Deformer(U, T, P).deform(X), serial)
         with pytest.raises(mbi.Error, match="threads"):
             mbi.set_threads(-1)
