@@ -23,24 +23,6 @@ import mbi
 from mbi import _mbi
 
 
-def box(nx, ny, nz):
-    import itertools
-    def idx(i, j, k):
-        return (k * (ny + 1) + j) * (nx + 1) + i
-    U = np.array([[i / nx, j / ny, k / nz] for k in range(nz + 1) for j in range(ny + 1) for i in range(nx + 1)])
-    T = []
-    for k, j, i in itertools.product(range(nz), range(ny), range(nx)):
-        for perm in itertools.permutations(range(3)):
-            c, v = [i, j, k], [idx(i, j, k)]
-            for s in range(3):
-                c[perm[s]] += 1
-                v.append(idx(*c))
-            if np.linalg.det(U[v[1:]] - U[v[0]]) < 0:
-                v[2], v[3] = v[3], v[2]
-            T.append(v)
-    return U, np.array(T)
-
-
 def python_times(call, calls):
     """Seconds of each of `calls` calls from Python, and of the C++ part of each (the section the
     bindings run without the GIL, mbi._mbi._timing.last_call)."""
@@ -85,7 +67,7 @@ def main():
     parser.add_argument("--vjp-calls", type=int, default=30)
     args = parser.parse_args()
 
-    U, T = box(7, 7, 6)
+    U, T = mbi.box_mesh(7, 7, 6)
     rng = np.random.default_rng(0)
     X = U + 0.02 * rng.standard_normal(U.shape)
     X[:, 1] += 0.3 * U[:, 0] ** 2

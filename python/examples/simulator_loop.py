@@ -14,25 +14,6 @@ import numpy as np
 import mbi
 
 
-def bar(nx, ny, nz, size):
-    """The control mesh: a box of nx ny nz cells, 6 tetrahedra a cell."""
-    def idx(i, j, k):
-        return (k * (ny + 1) + j) * (nx + 1) + i
-    U = np.array([[size[0] * i / nx, size[1] * j / ny, size[2] * k / nz]
-                  for k in range(nz + 1) for j in range(ny + 1) for i in range(nx + 1)])
-    T = []
-    for k, j, i in itertools.product(range(nz), range(ny), range(nx)):
-        for perm in itertools.permutations(range(3)):
-            c, v = [i, j, k], [idx(i, j, k)]
-            for s in range(3):
-                c[perm[s]] += 1
-                v.append(idx(*c))
-            if np.linalg.det(U[v[1:]] - U[v[0]]) < 0:
-                v[2], v[3] = v[3], v[2]
-            T.append(v)
-    return U, np.array(T)
-
-
 class MassSpring:
     """Springs along the edges of the tetrahedra, lumped masses, symplectic Euler with damping.
     Units: m, kg, s, N/m."""
@@ -67,7 +48,7 @@ def main():
     parser.add_argument("--method", default="modified-bi", choices=mbi.METHODS)
     args = parser.parse_args()
 
-    U, T = bar(6, 2, 2, (3.0, 1.0, 1.0))
+    U, T = mbi.box_mesh(6, 2, 2, (3.0, 1.0, 1.0))
     rng = np.random.default_rng(0)
     P = rng.uniform([0.05, 0.05, 0.05], [2.95, 0.95, 0.95], size=(args.points, 3))  # the dense model
     t0 = time.perf_counter()

@@ -6,32 +6,12 @@ start at rest, and a loss on the dense points back-propagates to X through mbi.t
     PYTHONPATH=build/release/python python3 python/examples/torch_fit.py [--method M]
 """
 import argparse
-import itertools
 
 import numpy as np
 import torch
 
 import mbi
 import mbi.torch
-
-
-def bar(nx, ny, nz, size):
-    """The control mesh: a box of nx ny nz cells, 6 tetrahedra a cell."""
-    def idx(i, j, k):
-        return (k * (ny + 1) + j) * (nx + 1) + i
-    U = np.array([[size[0] * i / nx, size[1] * j / ny, size[2] * k / nz]
-                  for k in range(nz + 1) for j in range(ny + 1) for i in range(nx + 1)])
-    T = []
-    for k, j, i in itertools.product(range(nz), range(ny), range(nx)):
-        for perm in itertools.permutations(range(3)):
-            c, v = [i, j, k], [idx(i, j, k)]
-            for s in range(3):
-                c[perm[s]] += 1
-                v.append(idx(*c))
-            if np.linalg.det(U[v[1:]] - U[v[0]]) < 0:
-                v[2], v[3] = v[3], v[2]
-            T.append(v)
-    return U, np.array(T)
 
 
 def bend_twist(P):
@@ -48,7 +28,7 @@ def main():
     parser.add_argument("--iterations", type=int, default=30)
     args = parser.parse_args()
 
-    U, T = bar(6, 2, 2, (3.0, 1.0, 1.0))
+    U, T = mbi.box_mesh(6, 2, 2, (3.0, 1.0, 1.0))
     P = np.random.default_rng(1).uniform([0, 0, 0], [3, 1, 1], size=(args.points, 3))
     model = mbi.torch.Deform(mbi.Deformer(U, T, P, method=args.method))
     target = torch.from_numpy(bend_twist(P))

@@ -40,13 +40,14 @@ from ._mbi import (
     threads_available,
     validate_mesh,
 )
+from .meshes import box_mesh
 
 __version__ = "0.1.0"
 
 METHODS = ("bi", "modified-bi", "phong")
 
 __all__ = [
-    "Deformer", "DiscontinuityTable", "Embedding", "Error", "FastEvaluator", "METHODS", "ModifiedBI",
+    "Deformer", "DiscontinuityTable", "box_mesh", "Embedding", "Error", "FastEvaluator", "METHODS", "ModifiedBI",
     "Phong", "Summary", "bezier_bi", "bezier_points", "bezier_transpose", "boundary_faces",
     "cholmod_available", "default_alpha", "discontinuity_table", "embed", "embedded_positions",
     "evaluate", "evaluate_transpose", "face_discontinuity", "interior_faces", "set_threads", "threads", "threads_available", "validate_mesh",

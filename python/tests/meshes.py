@@ -1,28 +1,15 @@
-"""Small test meshes and poses in numpy (no mbi needed), and a reference implementation of the
+"""Small test meshes and poses in numpy, and a reference implementation of the
 method's defining formula to check the package against."""
 import itertools
 
 import numpy as np
 
+import mbi
+
 
 def box(nx, ny, nz, size=(1.0, 1.0, 1.0)):
-    """A box of nx*ny*nz cells, 6 positively oriented tetrahedra a cell (Kuhn split)."""
-    def idx(i, j, k):
-        return (k * (ny + 1) + j) * (nx + 1) + i
-    U = np.array([[size[0] * i / nx, size[1] * j / ny, size[2] * k / nz]
-                  for k in range(nz + 1) for j in range(ny + 1) for i in range(nx + 1)])
-    T = []
-    for k, j, i in itertools.product(range(nz), range(ny), range(nx)):
-        for perm in itertools.permutations(range(3)):
-            c = [i, j, k]
-            v = [idx(*c)]
-            for s in range(3):
-                c[perm[s]] += 1
-                v.append(idx(*c))
-            if np.linalg.det(U[v[1:]] - U[v[0]]) < 0:
-                v[2], v[3] = v[3], v[2]
-            T.append(v)
-    return U, np.array(T, dtype=np.int64)
+    """A box of nx*ny*nz cells, 6 positively oriented tetrahedra a cell (mbi.box_mesh)."""
+    return mbi.box_mesh(nx, ny, nz, size)
 
 
 def square(nx, ny, size=(1.0, 1.0)):
