@@ -227,7 +227,8 @@ void GpuEvaluator::set_results(const Eigen::MatrixXd& positions, const Eigen::Ma
       (normals.size() > 0 && (normals.rows() != points_ || normals.cols() != dim_)))
     throw GlError("GpuEvaluator: results must be " + std::to_string(points_) + " x " + std::to_string(dim_));
   const size_t p = static_cast<size_t>(points_);
-  std::vector<float> buf(p * 3, 0.0f);
+  std::vector<float>& buf = upload_;  // staging kept between frames (evaluate() refills it too)
+  buf.assign(p * 3, 0.0f);
   auto upload = [&](unsigned buffer) {
     glBindBuffer(GL_ARRAY_BUFFER, buffer);
     glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(buf.size() * sizeof(float)), buf.data());

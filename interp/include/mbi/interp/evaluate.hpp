@@ -3,10 +3,10 @@
 // Multithreaded (the library's pool); the same functions serve BI (M = 0) and modified-BI.
 //
 // Which to use: evaluate() is the one-shot call, nothing to set up. In float and 3D (positions
-// only) it runs FastEvaluator's kernels, at about twice FastEvaluator's time (it packs the
-// embedding on every call); in double it evaluates the Bernstein form exactly, several times
-// slower. A frame loop over the same points wants FastEvaluator (fast_evaluate.hpp), which packs
-// the points once, or pipeline::CpuEvaluator.
+// only) it runs FastEvaluator's kernels, but packs the embedding on every call, so it is slower
+// than FastEvaluator; in double it evaluates the Bernstein form exactly, slower still. A frame
+// loop over the same points wants FastEvaluator (fast_evaluate.hpp), which packs the points
+// once, or pipeline::CpuEvaluator.
 #include <mbi/interp/embed.hpp>
 #include <mbi/interp/modified_bi.hpp>
 

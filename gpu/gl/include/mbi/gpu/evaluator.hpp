@@ -74,7 +74,7 @@ class GpuEvaluator final : public pipeline::Evaluator {
   interp::BezierPoints rest_bezier_;
   Eigen::MatrixXd rest_positions_, positions_, normals_;
   bool have_rest_normals_ = false, have_normals_ = false, read_ = false, evaluated_ = false;
-  std::vector<float> upload_;  // the frame's displacement control points, vec4 each
+  std::vector<float> upload_;  // staging: the frame's displacement control points (vec4 each), or set_results' values
   unsigned program_ = 0, vao_ = 0;
   unsigned element_ = 0, bary_ = 0, rest_ = 0, rest_normal_ = 0;  // static attribute buffers
   unsigned bezier_buffer_ = 0, bezier_texture_ = 0, gradient_buffer_ = 0, gradient_texture_ = 0;
