@@ -147,9 +147,17 @@ __attribute__((always_inline)) inline void sweep_body(const CholeskyFactor& F, c
 // the block's triangle, then every thread of the job updates chunks of kTopRows rows below it;
 // backward, every thread sums chunks of the rows below into the chunk's own partial sums, then
 // the caller adds them in chunk order and solves the triangle. The chunks do not depend on the
-// number of threads, nor, therefore, do the sums. Smaller supernodes run on the caller.
+// number of threads, nor, therefore, do the sums. Smaller supernodes run on the caller. A thread
+// claims several chunks at a time (about two claims a thread a step): each claim moves the
+// claim word's cache line between cores, which costs as much as a chunk's arithmetic.
 constexpr int kTopBlock = 16;
 constexpr std::ptrdiff_t kTopRows = 128;
+
+// rows claimed at a time out of `rows` shared by `threads` threads: whole chunks
+std::ptrdiff_t top_grain(std::ptrdiff_t rows, int threads) {
+  const std::ptrdiff_t chunks = (rows + kTopRows - 1) / kTopRows;
+  return std::max<std::ptrdiff_t>(1, chunks / (2 * std::max(1, threads))) * kTopRows;
+}
 
 // rows [lo, hi) of supernode block columns j .. j+B: X[r[i]] -= sum_k L(i, j+k) y_k
 template <int S>
@@ -249,7 +257,7 @@ __attribute__((target("avx2,fma"))) void one_super_avx2(const CholeskyFactor& F,
 // The caller's side of the top part (see above); partial: chunks x kTopBlock x S doubles, ytop:
 // kTopBlock x S.
 template <int S>
-void top_part(const CholeskyFactor& F, double* X, double* partial, double* ytop, Steps& steps) {
+void top_part(const CholeskyFactor& F, double* X, double* partial, double* ytop, Steps& steps, int threads) {
   TopForward fwd = top_forward_plain<S>;
   TopBackward bwd = top_backward_plain<S>;
   OneSuper one = one_super_plain<S>;
@@ -280,7 +288,7 @@ void top_part(const CholeskyFactor& F, double* X, double* partial, double* ytop,
         store<S>(ytop + k * S, y[k]);
       }
       const std::ptrdiff_t first = j + B;
-      steps.run(nsrow - first, kTopRows, [&](long long b, long long e) {
+      steps.run(nsrow - first, top_grain(nsrow - first, threads), [&](long long b, long long e) {
         fwd(L, nsrow, j, B, r, X, ytop, first + b, first + e);
       });
       for (int k = 0; k < B; ++k) store<S>(Xs + (j + k) * S, y[k]);
@@ -300,8 +308,10 @@ void top_part(const CholeskyFactor& F, double* X, double* partial, double* ytop,
     for (int j = (nscol - 1) / kTopBlock * kTopBlock; j >= 0; j -= kTopBlock) {
       const int B = std::min(kTopBlock, nscol - j);
       const std::ptrdiff_t first = j + B, chunks = (nsrow - first + kTopRows - 1) / kTopRows;
-      steps.run(nsrow - first, kTopRows, [&](long long b, long long e) {
-        bwd(L, nsrow, j, B, r, X, partial + b / kTopRows * kTopBlock * S, first + b, first + e);
+      steps.run(nsrow - first, top_grain(nsrow - first, threads), [&](long long b, long long e) {
+        for (long long c = b; c < e; c += kTopRows)
+          bwd(L, nsrow, j, B, r, X, partial + c / kTopRows * kTopBlock * S, first + c,
+              first + std::min<long long>(c + kTopRows, e));
       });
       Vec<S> x[kTopBlock];
       for (int k = B - 1; k >= 0; --k) {
@@ -316,12 +326,12 @@ void top_part(const CholeskyFactor& F, double* X, double* partial, double* ytop,
   }
 }
 
-void top_w(int S, const CholeskyFactor& F, double* X, double* partial, double* ytop, Steps& steps) {
+void top_w(int S, const CholeskyFactor& F, double* X, double* partial, double* ytop, Steps& steps, int threads) {
   switch (S) {
-    case 1: return top_part<1>(F, X, partial, ytop, steps);
-    case 2: return top_part<2>(F, X, partial, ytop, steps);
-    case 4: return top_part<4>(F, X, partial, ytop, steps);
-    default: return top_part<8>(F, X, partial, ytop, steps);
+    case 1: return top_part<1>(F, X, partial, ytop, steps, threads);
+    case 2: return top_part<2>(F, X, partial, ytop, steps, threads);
+    case 4: return top_part<4>(F, X, partial, ytop, steps, threads);
+    default: return top_part<8>(F, X, partial, ytop, steps, threads);
   }
 }
 
@@ -398,7 +408,8 @@ void CholeskyFactor::solve(double* B, int w) const {
     // backward sweeps, each a step; the same arithmetic on one thread as on many.
     Steps steps;
     const std::thread::id caller = std::this_thread::get_id();
-    run_shared(all_threads(), [&] {
+    const int threads = all_threads();
+    run_shared(threads, [&] {
       if (std::this_thread::get_id() != caller) return steps.join();
       steps.run(bins, 1, [&](long long g0, long long g1) {
         for (long long g = g0; g < g1; ++g) sweep_w(S, *this, &groups[g], true, X, prow.data());
@@ -406,7 +417,7 @@ void CholeskyFactor::solve(double* B, int w) const {
       for (int s : top)
         for (std::ptrdiff_t e = static_cast<std::ptrdiff_t>(super[s]) * S; e < static_cast<std::ptrdiff_t>(super[s + 1]) * S; ++e)
           for (int g = 0; g < bins; ++g) X[e] += X[nS * (1 + g) + e];
-      top_w(S, *this, X, partial, ytop, steps);
+      top_w(S, *this, X, partial, ytop, steps, threads);
       steps.run(bins, 1, [&](long long g0, long long g1) {
         for (long long g = g0; g < g1; ++g) sweep_w(S, *this, &groups[g], false, X, rows.data());
       });

@@ -392,6 +392,20 @@ const std::vector<std::pair<int, int>>& bezier_edges(int d) {
 
 namespace {
 
+// rows [a0, a1) of R (row-major, D columns) = A X for A in CSR (outer, inner, val) and X
+// column-major with leading dimension ld; D a constant, so that the compiler keeps the D sums in
+// registers.
+template <int D>
+void rhs_rows(const int* outer, const int* inner, const double* val, const double* x, Eigen::Index ld,
+              double* R, long long a0, long long a1) {
+  for (long long a = a0; a < a1; ++a) {
+    double acc[D] = {};
+    for (int p = outer[a]; p < outer[a + 1]; ++p)
+      for (int c = 0; c < D; ++c) acc[c] += val[p] * x[inner[p] + c * ld];
+    for (int c = 0; c < D; ++c) R[a * D + c] = acc[c];
+  }
+}
+
 // sol (r x 3, row-major) = K (r x n, row-major) X, X given by its 3 columns xs, ys, zs (each n
 // doubles; zs zero in 2D), rows [r0, r1).
 void dense_rows_portable(const double* K, std::ptrdiff_t n, const double* xs, const double* ys,
@@ -489,21 +503,20 @@ struct ModifiedBI::Impl {
 
   // sol (n_red x d, row-major) for the right-hand sides X (n x d) by the factor.
   void sparse_solve(const Eigen::Ref<const Eigen::MatrixXd>& X, std::vector<double>& sol) const {
-    // right-hand sides -beta H_mx X, row by row in parallel (rows of rhs_op: CSR)
+    // right-hand sides -beta H_mx X, row by row in parallel (rows of rhs_op: CSR); shared out
+    // from a few thousand rows on, so that no serial stretch between the calls is long enough for
+    // the pool's threads to fall asleep (a sleeping thread joins the next call late)
     sol.resize(static_cast<size_t>(n_red) * d);
     const int* outer = rhs_op.outerIndexPtr();
     const int* inner = rhs_op.innerIndexPtr();
     const double* val = rhs_op.valuePtr();
     const double* x = X.data();
     const Eigen::Index ld = X.outerStride();
-    const int nt = detail::thread_count(rhs_op.nonZeros(), 1 << 16);
-    detail::parallel_blocks(n_red, 1024, nt, [&](long long a0, long long a1) {
-      for (long long a = a0; a < a1; ++a) {
-        double acc[3] = {0.0, 0.0, 0.0};
-        for (int p = outer[a]; p < outer[a + 1]; ++p)
-          for (int c = 0; c < d; ++c) acc[c] += val[p] * x[inner[p] + c * ld];
-        for (int c = 0; c < d; ++c) sol[static_cast<size_t>(a) * d + c] = acc[c];
-      }
+    const int nt = detail::thread_count(rhs_op.nonZeros(), 1 << 14);
+    double* out = sol.data();
+    detail::parallel_blocks(n_red, 512, nt, [&](long long a0, long long a1) {
+      if (d == 3) rhs_rows<3>(outer, inner, val, x, ld, out, a0, a1);
+      else rhs_rows<2>(outer, inner, val, x, ld, out, a0, a1);
     });
     F.solve(sol.data(), d);
   }
