@@ -199,6 +199,8 @@ nlohmann::json frame_report(const Stage& stage, const Interaction& in, const Fra
                      {"label", pipeline::method_name(stage.views[k])}});
   fr["layout"] = {{"window", {window.width, window.height}}, {"panel", rect(stage.layout.panel)}, {"views", views}};
   fr["evaluator"] = {{"name", stage.evaluator.name()}, {"why", stage.evaluator_why}};
+  fr["looks"] = stage.looks;
+  fr["dense_points"] = stage.rest_dense.rows();
   fr["finite"] = X.allFinite();
   fr["timings_ms"] = {{"simulation", pipe.timings().drive_ms}, {"solve", pipe.timings().solve_ms},
                       {"interpolation", times.interpolation_ms}, {"drawing", times.drawing_ms}};

@@ -50,6 +50,7 @@ struct Stage {
   pipeline::Evaluator& evaluator;  ///< the pipeline's: the GPU pass or a DrawnEvaluator
   gpu::GpuEvaluator& gpu;          ///< the buffers drawn
   std::string evaluator_why;       ///< why this evaluator (the HUD)
+  std::string looks;               ///< the looks in use (kLooksNames; the report)
   const Eigen::MatrixXi& F;
   const io::Image* image;
   const int d;                     ///< 2 or 3

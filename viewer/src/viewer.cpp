@@ -323,6 +323,7 @@ void Viewer::show(const Shown& shown) {
   Impl& s = *impl_;
   Stage stage(shown);
   stage.evaluator_why = s.evaluator_why;
+  stage.looks = kLooksNames.name(s.looks);
   s.renderer->set_faces(shown.faces);
   if (s.scenery && shown.faces.cols() == 3) s.scenery->set_faces(shown.faces);
   s.dropped.clear();
