@@ -62,7 +62,10 @@ nlohmann::json view_and_poke(const std::string& model, const TempDir& dir) {
 
 TEST_CASE("mbi view MODEL: the built-in models start paused, are poked and close", "[viewer][xvfb]") {
   TempDir dir("view-builtin");
-  for (const char* model : {"cylinder", "bumpy-sphere", "paper-bar"}) view_and_poke(model, dir);
+  for (const char* model : {"cylinder", "paper-bar", "bumpy-sphere"}) {
+    if (mbi::test::kSanitized && std::string(model) == "bumpy-sphere") continue;  // 252,152 points: slow under ASan
+    view_and_poke(model, dir);
+  }
 }
 
 TEST_CASE("mbi view MODEL: every real model starts paused, is poked and closes", "[viewer][xvfb]") {
