@@ -47,7 +47,8 @@ void show(Viewer& viewer, const Loaded& l) {
 
 // The session: the first scene, then each model dropped on the window; one that cannot be
 // loaded is said, and the current one stays.
-void run(const ViewerOptions& options, std::unique_ptr<SessionFiles> files, Loaded first) {
+void run(ViewerOptions options, std::unique_ptr<SessionFiles> files, Loaded first) {
+  options.accept_drops = true;
   Viewer viewer(options, std::move(files));
   Loaded current = std::move(first);
   while (true) {

@@ -240,7 +240,10 @@ void Viewer::Impl::handle(const Event& e, Stage& stage, Interaction& in) {
     case Event::Release: in.release(); return;
     case Event::Scroll: in.scroll(e.dy); return;
     case Event::Key: key(e.key, stage, in); return;
-    case Event::Drop: dropped = e.path; return;
+    case Event::Drop:
+      if (opt.accept_drops) dropped = e.path;
+      else controls.message = "a dropped file is not taken here: " + e.path;
+      return;
   }
 }
 

@@ -66,6 +66,9 @@ struct ViewerOptions {
   std::filesystem::path report;          ///< JSON per frame: pokes, handles, energies (tests)
   std::filesystem::path video;           ///< recorded from the first frame (ffmpeg; video.hpp)
   Looks looks = Looks::Auto;
+  /// A model file dropped on the window ends show() (Viewer::dropped); view_scene loads it.
+  /// Off: a drop is only said (a caller's own show() runs on).
+  bool accept_drops = false;
   std::vector<std::filesystem::path> inputs;  ///< the files shown (scene, models): never outputs
   bool force = false;                    ///< replace existing output files (never an input)
   Eigen::Vector3d up = Eigen::Vector3d::UnitY();
