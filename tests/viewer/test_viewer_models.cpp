@@ -1,7 +1,8 @@
 // `mbi view MODEL` under Xvfb: the built-in models, every real model ($MBI_MODELS_DIR) and a
 // generated flat one start paused, take a scripted poke and close cleanly; a scripted drop
 // loads a model (and a bad one is said, the session going on); --video writes a video that
-// ffprobe reads with the frames and size asked for, and is refused at once without ffmpeg.
+// ffprobe reads with the frames and size asked for (so does the o key's), and is refused at once
+// without ffmpeg.
 #include <catch2/catch.hpp>
 
 #include <mbi/io/io.hpp>
@@ -131,6 +132,17 @@ TEST_CASE("mbi view --video: ffprobe reads the frames and size asked for, and wi
   REQUIRE(std::system(probe.c_str()) == 0);
   CHECK(mbi::test::slurp(dir / "probe.txt") == "320,240," + std::to_string(frames) + "\n");
   for (const auto& e : fs::directory_iterator(dir.path())) CHECK(e.path().filename().string().rfind(".mbi-tmp", 0) != 0);
+  // the o key: a video from one press to the next, in the current folder, named by the frame
+  std::ofstream(dir / "o.txt") << "1 key o\n6 key o\n";
+  const mbi::test::ViewRun o = mbi::test::view(
+      q(cube()) + " --width 320 --height 240 --no-panel --frames 8 --script " + q(dir / "o.txt"), dir, true, dir.path());
+  INFO(o.err);
+  REQUIRE(o.code == 0);
+  const std::string probe_o = "ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+                              "stream=width,height,nb_read_frames -of csv=p=0 " + q(dir / "mbi-video-0001.mp4") +
+                              " > " + q(dir / "probe-o.txt");
+  REQUIRE(std::system(probe_o.c_str()) == 0);
+  CHECK(mbi::test::slurp(dir / "probe-o.txt") == "320,240,5\n");
   // without ffmpeg on PATH: refused before any window (no display needed), nothing written
   const std::string cmd = "env -u DISPLAY PATH=/nonexistent \"" + std::string(MBI_EXE) + "\" view " + q(cube()) + " --video " +
                           q(dir / "none.mp4") + " 2> " + q(dir / "err.txt");

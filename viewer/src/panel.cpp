@@ -38,6 +38,7 @@ void statistics(const Stage& stage, const FrameTimes& times) {
   ImGui::Text("interpolation %.2f ms  drawing %.2f ms", times.interpolation_ms, times.drawing_ms);
   ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyleColorVec4(ImGuiCol_TextDisabled));
   ImGui::TextWrapped("%s (%s)", stage.evaluator.name().c_str(), stage.evaluator_why.c_str());
+  ImGui::TextWrapped("looks: %s", stage.looks.c_str());
   ImGui::PopStyleColor();
   ImGui::TextWrapped("%lld dense vertices, %lld control vertices, %lld elements",
               static_cast<long long>(stage.pipe.embedding().size()), static_cast<long long>(stage.U.rows()),
