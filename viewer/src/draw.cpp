@@ -47,7 +47,9 @@ void draw_views(gpu::Renderer& renderer, Stage& stage, const Interaction& in, co
   }
   if (stage.creases) stage.creases->shown = creases;
   scenery = stage.d == 3 ? scenery : nullptr;
-  const Ground ground = scenery ? ground_under(stage.U, X3, options.up) : Ground{};
+  if (scenery && !stage.ground) stage.ground = std::make_shared<Ground>(ground_at_rest(stage.U, stage.rest_dense, options.up));
+  Ground ground = scenery ? *stage.ground : Ground{};
+  if (scenery) cast_shadow(ground, X3);
   const int n = static_cast<int>(stage.views.size());
   double gpu_ms = 0;
   for (int k = 0; k < n; ++k) {

@@ -93,24 +93,44 @@ void uniform3(GLuint p, const char* name, const Eigen::Vector3d& v) {
 
 }  // namespace
 
-Ground ground_under(const Eigen::MatrixXd& U, const Eigen::MatrixXd& X, const Eigen::Vector3d& up_in) {
+namespace {
+
+// The extent of the points Y (rows) along e1 and e2.
+void footprint(const Eigen::MatrixXd& Y, const Ground& g, Eigen::Vector2d& lo, Eigen::Vector2d& hi) {
+  const Eigen::VectorXd a = Y * g.e1, b = Y * g.e2;
+  lo = {a.minCoeff(), b.minCoeff()};
+  hi = {a.maxCoeff(), b.maxCoeff()};
+}
+
+}  // namespace
+
+Ground ground_at_rest(const Eigen::MatrixXd& U, const Eigen::MatrixXd& P, const Eigen::Vector3d& up_in) {
   Ground g;
   const Eigen::Vector3d up = up_in.normalized();
   const Eigen::Vector3d side = std::abs(up.x()) < 0.9 ? Eigen::Vector3d(Eigen::Vector3d::UnitX()) : Eigen::Vector3d(Eigen::Vector3d::UnitY());
   g.e1 = side.cross(up).normalized();
   g.e2 = up.cross(g.e1);
-  const Eigen::VectorXd h = U * up, a = X * g.e1, b = X * g.e2, ra = U * g.e1, rb = U * g.e2;
-  const double size = std::max((U.colwise().maxCoeff() - U.colwise().minCoeff()).norm(), 1e-9);
-  const Eigen::Vector2d mid(0.5 * (ra.minCoeff() + ra.maxCoeff()), 0.5 * (rb.minCoeff() + rb.maxCoeff()));
-  g.center = (h.minCoeff() - 2e-3 * size) * up + mid.x() * g.e1 + mid.y() * g.e2;
+  Eigen::Vector2d cage_lo, cage_hi, model_lo, model_hi;
+  footprint(U, g, cage_lo, cage_hi);
+  footprint(P, g, model_lo, model_hi);
+  const double size = std::max((P.colwise().maxCoeff() - P.colwise().minCoeff()).norm(), 1e-9);
+  g.mid = 0.5 * (model_lo + model_hi);
+  // the model stands on the ground (its lowest point, a hair lower: no flicker where it touches)
+  g.center = ((P * up).minCoeff() - 2e-3 * size) * up + g.mid.x() * g.e1 + g.mid.y() * g.e2;
   g.half = 1.5 * size;
   g.spacing = std::pow(10.0, std::floor(std::log10(size / 4)));
-  // the shadow: the model's current footprint, a little inside it (the fade adds the rest)
-  const Eigen::Vector2d lo(a.minCoeff(), b.minCoeff()), hi(a.maxCoeff(), b.maxCoeff());
-  g.shadow_soft = 0.12 * size;
-  g.shadow_center = 0.5 * (lo + hi) - mid;
-  g.shadow_half = (0.5 * (hi - lo) - Eigen::Vector2d::Constant(0.25 * g.shadow_soft)).cwiseMax(0.0);
+  g.margin = 0.5 * ((cage_hi - cage_lo) - (model_hi - model_lo)).cwiseMax(0.0);
+  g.shadow_soft = 0.1 * size;
   return g;
+}
+
+void cast_shadow(Ground& g, const Eigen::MatrixXd& X) {
+  // the control mesh's footprint less its margin around the model, a little inside (the fade
+  // adds the rest)
+  Eigen::Vector2d lo, hi;
+  footprint(X, g, lo, hi);
+  g.shadow_center = 0.5 * (lo + hi) - g.mid;
+  g.shadow_half = (0.5 * (hi - lo) - g.margin - Eigen::Vector2d::Constant(0.25 * g.shadow_soft)).cwiseMax(0.0);
 }
 
 Scenery::Scenery() {

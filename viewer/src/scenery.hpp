@@ -21,11 +21,16 @@ struct Ground {
   double spacing = 1;  ///< between grid lines (a power of ten, world units)
   Eigen::Vector2d shadow_center = Eigen::Vector2d::Zero(), shadow_half = Eigen::Vector2d::Zero();
   double shadow_soft = 0.1;  ///< how far the shadow's edge fades (world units)
+  Eigen::Vector2d mid = Eigen::Vector2d::Zero();     ///< the model's middle at rest, in (e1, e2)
+  Eigen::Vector2d margin = Eigen::Vector2d::Zero();  ///< of the control mesh around the model at rest
 };
 
-/// The ground below the rest positions U (n x 3) along `up` (slightly lower: no flicker where the
-/// model touches it), the shadow the current positions X (n x 3) cast straight down.
-Ground ground_under(const Eigen::MatrixXd& U, const Eigen::MatrixXd& X, const Eigen::Vector3d& up);
+/// The ground under the model at rest P (dense points, p x 3) along `up`, U (n x 3) the control
+/// mesh at rest; no shadow yet. Once per model.
+Ground ground_at_rest(const Eigen::MatrixXd& U, const Eigen::MatrixXd& P, const Eigen::Vector3d& up);
+/// The shadow cast straight down by the control mesh now (X, n x 3), less the margin it has
+/// around the model at rest. Every frame.
+void cast_shadow(Ground& ground, const Eigen::MatrixXd& X);
 
 class Scenery {
  public:
