@@ -46,7 +46,9 @@ struct Shown {
 
 Shown view_creases(const TempDir& dir, const std::string& name, const std::string& args) {
   const fs::path rep = dir / (name + ".json"), shot = dir / (name + ".png");
-  const mbi::test::ViewRun r = mbi::test::view(twist_bar() + " --no-panel --report " + q(rep) + " --screenshot " + q(shot) + " " + args, dir);
+  // plain looks: the pixels measured are the model's on white (no ground, no shadow)
+  const mbi::test::ViewRun r = mbi::test::view(
+      twist_bar() + " --looks plain --no-panel --report " + q(rep) + " --screenshot " + q(shot) + " " + args, dir);
   INFO(r.err);
   REQUIRE(r.code == 0);
   return {mbi::test::read_report(rep).back(), mbi::io::read_png(shot)};

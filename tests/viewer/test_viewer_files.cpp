@@ -70,7 +70,7 @@ TEST_CASE("viewer scripts: unknown events and keys, trailing junk and bad fields
   CHECK(error_of("# keys\n0 key zz\n") == "s.txt:2: unknown key 'zz' (space, escape, ?, [, ], a-z, 0-9)");
   CHECK(error_of("1 press 1 2 0 junk\n") == "s.txt:1: unexpected 'junk' after the event");
   CHECK(error_of("1 key a b\n") == "s.txt:1: unexpected 'b' after the event");
-  CHECK(error_of("0 jump 1 2\n") == "s.txt:1: unknown event 'jump' (press, move, release, scroll, key)");
+  CHECK(error_of("0 jump 1 2\n") == "s.txt:1: unknown event 'jump' (press, move, release, scroll, key, drop)");
   CHECK(error_of("4 press 10 20\n") == "s.txt:1: 'press' takes X Y BUTTON");
   CHECK(error_of("4 press 10 20 8\n") == "s.txt:1: 'press': BUTTON '8' is not 0 to 7");
   CHECK(error_of("4 press 10 20 0.5\n") == "s.txt:1: 'press': BUTTON '0.5' is not 0 to 7");

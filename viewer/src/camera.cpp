@@ -85,6 +85,9 @@ Eigen::Vector2d Camera::project(const Eigen::Vector3d& p, int w, int h) const {
 
 std::optional<Hit> cast(const Ray& ray, const Eigen::Ref<const Eigen::MatrixXd>& V,
                         const Eigen::Ref<const Eigen::MatrixXi>& F) {
+  // a ray through a shared vertex or edge (a click at the middle of a regular grid) must not
+  // miss every triangle by rounding: a little slack, the barycentrics then clamped
+  constexpr double slack = 1e-9;
   std::optional<Hit> best;
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
     const Eigen::Vector3d a = V.row(F(f, 0)), b = V.row(F(f, 1)), c = V.row(F(f, 2));
@@ -94,11 +97,13 @@ std::optional<Hit> cast(const Ray& ray, const Eigen::Ref<const Eigen::MatrixXd>&
     if (std::abs(det) < 1e-300) continue;
     const double inv = 1 / det;
     const Eigen::Vector3d s = ray.origin - a;
-    const double u = s.dot(p) * inv;
-    if (u < 0 || u > 1) continue;
+    double u = s.dot(p) * inv;
+    if (u < -slack || u > 1 + slack) continue;
     const Eigen::Vector3d q = s.cross(e1);
-    const double v = ray.direction.dot(q) * inv;
-    if (v < 0 || u + v > 1) continue;
+    double v = ray.direction.dot(q) * inv;
+    if (v < -slack || u + v > 1 + slack) continue;
+    u = std::clamp(u, 0.0, 1.0);
+    v = std::clamp(v, 0.0, 1.0 - u);
     const double t = e2.dot(q) * inv;
     if (t < 0 || !std::isfinite(t)) continue;
     if (!best || t < best->t) {

@@ -1,6 +1,7 @@
 #include "draw.hpp"
 
 #include "crease_layer.hpp"
+#include "scenery.hpp"
 
 #include <epoxy/gl.h>
 
@@ -31,11 +32,12 @@ void draw_markers(gpu::Renderer& renderer, const Interaction& in, const ViewerOp
 
 void draw_views(gpu::Renderer& renderer, Stage& stage, const Interaction& in, const Camera& camera,
                 const ViewerOptions& options, const Eigen::MatrixXd& X3, int fb_width, int fb_height,
-                FrameTimes& times) {
+                FrameTimes& times, Scenery* scenery) {
   const auto started = Clock::now();
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   glViewport(0, 0, fb_width, fb_height);
-  glClearColor(1, 1, 1, 1);
+  if (scenery) glClearColor(float(kBackground[0]), float(kBackground[1]), float(kBackground[2]), 1);
+  else glClearColor(1, 1, 1, 1);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   const Eigen::Vector3d color(0.85, 0.62, 0.35);
   const bool creases = options.creases && stage.d == 3;
@@ -44,6 +46,10 @@ void draw_views(gpu::Renderer& renderer, Stage& stage, const Interaction& in, co
     stage.creases->update(stage);
   }
   if (stage.creases) stage.creases->shown = creases;
+  scenery = stage.d == 3 ? scenery : nullptr;
+  if (scenery && !stage.ground) stage.ground = std::make_shared<Ground>(ground_at_rest(stage.U, stage.rest_dense, options.up));
+  Ground ground = scenery ? *stage.ground : Ground{};
+  if (scenery) cast_shadow(ground, X3);
   const int n = static_cast<int>(stage.views.size());
   double gpu_ms = 0;
   for (int k = 0; k < n; ++k) {
@@ -53,7 +59,10 @@ void draw_views(gpu::Renderer& renderer, Stage& stage, const Interaction& in, co
     stage.evaluator.evaluate(stage.pipe.bezier_with(stage.views[static_cast<size_t>(k)]), stage.d == 3);
     gpu_ms += stage.evaluator.timings().upload_ms + stage.evaluator.timings().pass_ms;
     const Eigen::Matrix4d vp = camera.view_projection(static_cast<double>(x1 - x0) / std::max(fb_height, 1));
-    if (stage.d == 3 && (!creases || options.wireframe))
+    if (scenery) scenery->draw_ground(ground, vp);
+    if (scenery && !creases) scenery->draw_surface(stage.gpu, vp, camera, color);
+    // with the looks the renderer only adds the wireframe: its own surface is behind ours
+    if (stage.d == 3 && (!creases || options.wireframe) && (!scenery || options.wireframe))
       renderer.draw(stage.gpu, vp, camera.direction(), color, options.wireframe ? &X3 : nullptr,
                     options.wireframe ? &stage.T : nullptr);
     if (creases) stage.creases->draw(stage.gpu, static_cast<size_t>(k), vp, camera.direction());

@@ -18,6 +18,7 @@ const char* kHelp =
     "  on the background orbit (2D: pan)\n"
     "  right drag        pan; right click on a handle removes it\n"
     "  wheel / pinch     zoom\n"
+    "  drop a model file on the window to view it\n"
     "Keys:\n"
     "  space  play / pause      n  one step        r  reset\n"
     "  d      direct mode on/off (drag handles, no physics)\n"
@@ -26,6 +27,7 @@ const char* kHelp =
     "  g      creases in colour (the gradient jump at the control faces)\n"
     "  c      fold / unfold the panel\n"
     "  f      frame the model   p  screenshot (mbi-screenshot-NNNN.png)\n"
+    "  o      video: start / stop (mbi-video-NNNN.mp4; --video: pause)\n"
     "  [ / ]  alpha / 2, alpha x 2 (0.001 to 1)\n"
     "  ?      this help         q / escape  quit";
 
@@ -36,6 +38,7 @@ void statistics(const Stage& stage, const FrameTimes& times) {
   ImGui::Text("interpolation %.2f ms  drawing %.2f ms", times.interpolation_ms, times.drawing_ms);
   ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyleColorVec4(ImGuiCol_TextDisabled));
   ImGui::TextWrapped("%s (%s)", stage.evaluator.name().c_str(), stage.evaluator_why.c_str());
+  ImGui::TextWrapped("looks: %s", stage.looks.c_str());
   ImGui::PopStyleColor();
   ImGui::TextWrapped("%lld dense vertices, %lld control vertices, %lld elements",
               static_cast<long long>(stage.pipe.embedding().size()), static_cast<long long>(stage.U.rows()),

@@ -37,6 +37,16 @@ bool whole_word(std::string_view w, T& value) {
   return ec == std::errc() && end == w.data() + w.size();
 }
 
+// A drop's PATH: the line after the event's word, without a comment and outer blanks.
+std::string drop_path(std::string_view line) {
+  line = line.substr(0, line.find('#'));
+  const std::size_t at = line.find("drop") + 4;
+  const std::size_t first = line.find_first_not_of(" \t", at);
+  if (first == std::string_view::npos) return {};
+  const std::size_t last = line.find_last_not_of(" \t");
+  return std::string(line.substr(first, last + 1 - first));
+}
+
 // One event line of at least two words; throws naming the line.
 Event parse_event(const std::vector<std::string_view>& w, const std::filesystem::path& name, long long line) {
   Event e;
@@ -50,9 +60,10 @@ Event parse_event(const std::vector<std::string_view>& w, const std::filesystem:
   else if (kind == "move") e.kind = Event::Move, fields = 2, usage = "X Y";
   else if (kind == "scroll") e.kind = Event::Scroll, fields = 1, usage = "DY";
   else if (kind == "key") e.kind = Event::Key, fields = 1, usage = "NAME";
-  else fail(name, line, "unknown event '" + std::string(kind) + "' (press, move, release, scroll, key)");
+  else if (kind == "drop") e.kind = Event::Drop, fields = w.size() - 2, usage = "PATH";
+  else fail(name, line, "unknown event '" + std::string(kind) + "' (press, move, release, scroll, key, drop)");
   const std::string what = "'" + std::string(kind) + "'";
-  if (w.size() < 2 + fields) fail(name, line, what + " takes " + usage);
+  if (w.size() < 2 + fields || (e.kind == Event::Drop && fields == 0)) fail(name, line, what + " takes " + usage);
   if (w.size() > 2 + fields) fail(name, line, "unexpected '" + std::string(w[2 + fields]) + "' after the event");
   const auto number = [&](std::size_t i, const char* field) {
     double v = 0;
@@ -66,6 +77,7 @@ Event parse_event(const std::vector<std::string_view>& w, const std::filesystem:
       fail(name, line, "unknown key '" + std::string(w[2]) + "' (space, escape, ?, [, ], a-z, 0-9)");
     e.key = w[2];
   }
+  if (e.kind == Event::Drop) return e;  // its PATH is the rest of the line (parse_script)
   if (fields >= 2) e.x = number(2, "X"), e.y = number(3, "Y");
   if (fields == 3 && (!whole_word(w[4], e.button) || e.button < 0 || e.button > kMaxScriptButton))
     fail(name, line, what + ": BUTTON '" + std::string(w[4]) + "' is not 0 to " + std::to_string(kMaxScriptButton));
@@ -96,6 +108,7 @@ std::string format(const Event& e) {
     case Event::Release: return s + "release " + xy + " " + std::to_string(e.button);
     case Event::Scroll: return s + "scroll " + shortest(e.dy);
     case Event::Key: return s + "key " + e.key;
+    case Event::Drop: return s + "drop " + e.path;
   }
   return s;
 }
@@ -120,6 +133,7 @@ std::deque<Event> parse_script(std::string_view text, const std::filesystem::pat
     if (w.empty()) continue;
     if (w.size() < 2) fail(name, number, "expected FRAME EVENT ...");
     events.push_back(parse_event(w, name, number));
+    if (events.back().kind == Event::Drop) events.back().path = drop_path(line);
   }
   std::stable_sort(events.begin(), events.end(), [](const Event& a, const Event& b) { return a.frame < b.frame; });
   return events;

@@ -1,6 +1,7 @@
 #include "session_io.hpp"
 
 #include "crease_layer.hpp"
+#include "video.hpp"
 
 #include <algorithm>
 #include <cerrno>
@@ -52,7 +53,11 @@ SessionFiles::SessionFiles(const ViewerOptions& o) : inputs_(o.inputs), force_(o
   if (!o.record.empty()) record = outputs_->add(o.record, "--record");
   if (!o.screenshot.empty()) screenshot_ = outputs_->add(o.screenshot, "--screenshot");
   if (!o.report.empty()) report = outputs_->add(o.report, "--report");
-  for (const fs::path& p : {o.record, o.screenshot, o.report})
+  if (!o.video.empty()) {
+    ffmpeg_ = find_ffmpeg(o.video, "--video");  // before the window opens
+    video_ = outputs_->add(o.video, "--video");
+  }
+  for (const fs::path& p : {o.record, o.screenshot, o.report, o.video})
     if (!p.empty()) targets_.push_back(p);
   if (!o.script.empty()) {
     try {
@@ -113,16 +118,23 @@ void SessionFiles::check() {
     if (s->error) fail(*s);
 }
 
-void SessionFiles::snapshot(const fs::path& name, const io::Image& image) const {
+std::unique_ptr<io::OutputSet> SessionFiles::reserve(const fs::path& name) const {
   const fs::path here = fs::absolute(name).lexically_normal();
   for (const fs::path& t : targets_)
     if (fs::absolute(t).lexically_normal() == here)
       throw ViewerError(name.string() + ": is also an output of this session (" + t.string() + ")");
-  io::OutputSet one(inputs_, force_);
-  const std::size_t i = one.add(name, "");
-  write_png_for(one.staging(i), image, name.string());
-  one.commit();
+  auto one = std::make_unique<io::OutputSet>(inputs_, force_);
+  one->add(name, "");
+  return one;
 }
+
+void SessionFiles::snapshot(const fs::path& name, const io::Image& image) const {
+  const std::unique_ptr<io::OutputSet> one = reserve(name);
+  write_png_for(one->staging(0), image, name.string());
+  one->commit();
+}
+
+fs::path SessionFiles::video_staging() const { return video_ ? outputs_->staging(*video_) : fs::path(); }
 
 void SessionFiles::finish(const io::Image& last_shot) {
   if (finished_) return;
@@ -187,6 +199,8 @@ nlohmann::json frame_report(const Stage& stage, const Interaction& in, const Fra
                      {"label", pipeline::method_name(stage.views[k])}});
   fr["layout"] = {{"window", {window.width, window.height}}, {"panel", rect(stage.layout.panel)}, {"views", views}};
   fr["evaluator"] = {{"name", stage.evaluator.name()}, {"why", stage.evaluator_why}};
+  fr["looks"] = stage.looks;
+  fr["dense_points"] = stage.rest_dense.rows();
   fr["finite"] = X.allFinite();
   fr["timings_ms"] = {{"simulation", pipe.timings().drive_ms}, {"solve", pipe.timings().solve_ms},
                       {"interpolation", times.interpolation_ms}, {"drawing", times.drawing_ms}};

@@ -51,6 +51,13 @@ class SessionFiles {
   /// Writes `image` to `name` at once (the p key), under the same rules: an existing file only
   /// with `force`, never an input or an output of this session. Throws mbi::Error.
   void snapshot(const std::filesystem::path& name, const io::Image& image) const;
+  /// `name` reserved under the same rules (output 0 of the set), for a file written later (a
+  /// video started by a key). Throws mbi::Error.
+  std::unique_ptr<io::OutputSet> reserve(const std::filesystem::path& name) const;
+  /// --video: the ffmpeg found (checked when the files were made) and the staging file it
+  /// writes; empty paths without --video.
+  const std::filesystem::path& ffmpeg() const { return ffmpeg_; }
+  std::filesystem::path video_staging() const;
   /// Writes the screenshot, ends the report, moves every output into place. Throws
   /// ViewerError, or io::IoError when an output cannot be moved into place.
   void finish(const io::Image& last_shot);
@@ -71,7 +78,8 @@ class SessionFiles {
   bool force_ = false;
   std::unique_ptr<io::OutputSet> outputs_;
   std::vector<std::filesystem::path> targets_;
-  std::optional<std::size_t> screenshot_;
+  std::optional<std::size_t> screenshot_, video_;
+  std::filesystem::path ffmpeg_;
   std::deque<Event> script_;
   Stream record_, report_;
   bool report_empty_ = true, finished_ = false;

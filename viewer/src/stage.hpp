@@ -14,6 +14,7 @@
 namespace mbi::viewer {
 
 class CreaseLayer;
+struct Ground;
 
 /// The window's size in logical pixels (what GLFW reports; at least 1 x 1).
 struct WindowSize {
@@ -50,6 +51,7 @@ struct Stage {
   pipeline::Evaluator& evaluator;  ///< the pipeline's: the GPU pass or a DrawnEvaluator
   gpu::GpuEvaluator& gpu;          ///< the buffers drawn
   std::string evaluator_why;       ///< why this evaluator (the HUD)
+  std::string looks;               ///< the looks in use (kLooksNames; the report)
   const Eigen::MatrixXi& F;
   const io::Image* image;
   const int d;                     ///< 2 or 3
@@ -64,6 +66,8 @@ struct Stage {
   std::vector<pipeline::Method> views;  ///< left to right
   /// The creases in colour (options.creases, 3D): made when first shown, kept while the stage is
   std::shared_ptr<CreaseLayer> creases;
+  /// The looks' ground under the model at rest: made when first drawn, kept while the stage is
+  std::shared_ptr<Ground> ground;
 
   void set_views(bool split);
   void set_method(pipeline::Method method, bool split);

@@ -4,6 +4,8 @@
 #include "evaluation.hpp"
 #include "interaction.hpp"
 #include "panel.hpp"
+#include "recordings.hpp"
+#include "scenery.hpp"
 #include "session_io.hpp"
 
 #include <epoxy/gl.h>
@@ -42,7 +44,7 @@ const char* key_name(int key) {
   return nullptr;
 }
 
-GLFWwindow* open_window(const ViewerOptions& options) {
+GLFWwindow* open_window(const ViewerOptions& options, int samples) {
   if (!glfwInit()) {
     const char* why = nullptr;
     glfwGetError(&why);
@@ -53,6 +55,7 @@ GLFWwindow* open_window(const ViewerOptions& options) {
   glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
   glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
   glfwWindowHint(GLFW_SCALE_TO_MONITOR, GLFW_TRUE);
+  glfwWindowHint(GLFW_SAMPLES, samples);
   GLFWwindow* window = glfwCreateWindow(options.width, options.height, options.title.c_str(), nullptr, nullptr);
   if (!window) {
     const char* why = nullptr;
@@ -62,6 +65,28 @@ GLFWwindow* open_window(const ViewerOptions& options) {
   }
   glfwMakeContextCurrent(window);
   glfwSwapInterval(options.frames > 0 ? 0 : 1);
+  return window;
+}
+
+// The looks `asked` for on this OpenGL renderer: Auto is Software on a software renderer.
+Looks resolve_looks(Looks asked) {
+  if (asked != Looks::Auto) return asked;
+  const char* r = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+  const std::string renderer = r ? r : "";
+  const bool software = renderer.find("llvmpipe") != std::string::npos || renderer.find("softpipe") != std::string::npos;
+  return software ? Looks::Software : Looks::Full;
+}
+
+// The window for the looks: MSAA only in the full looks. Auto learns the renderer from a first
+// window, and opens another without MSAA on a software renderer (where it costs the frame rate).
+GLFWwindow* open_window_for_looks(const ViewerOptions& options, Looks& looks) {
+  const bool msaa_maybe = options.looks == Looks::Auto || options.looks == Looks::Full;
+  GLFWwindow* window = open_window(options, msaa_maybe ? 4 : 0);
+  looks = resolve_looks(options.looks);
+  if (msaa_maybe && looks != Looks::Full) {
+    glfwDestroyWindow(window);
+    window = open_window(options, 0);
+  }
   return window;
 }
 
@@ -75,6 +100,10 @@ struct Viewer::Impl {
   std::shared_ptr<gpu::Context> context;
   std::string evaluator_why;  ///< why options.gpu chose the evaluator (the HUD)
   std::unique_ptr<gpu::Renderer> renderer;
+  Looks looks = Looks::Plain;         ///< resolved: never Auto
+  std::unique_ptr<Scenery> scenery;   ///< the looks' ground and material; none when plain
+  std::unique_ptr<Recordings> videos;
+  std::filesystem::path dropped;      ///< a model dropped on the window: show() returns for it
   Camera camera;
   int frame = 0;
   std::unique_ptr<SessionFiles> files;
@@ -109,6 +138,12 @@ struct Viewer::Impl {
     if (ImGui::GetIO().WantCaptureMouse) return;
     Event e = of(w).event(Event::Scroll);
     e.dy = dy;
+    of(w).inputs.push(e);
+  }
+  static void on_drop(GLFWwindow* w, int count, const char** paths) {
+    if (count < 1) return;  // one model at a time: the first
+    Event e = of(w).event(Event::Drop);
+    e.path = paths[0];
     of(w).inputs.push(e);
   }
   static void on_key(GLFWwindow* w, int key, int, int action, int mods) {
@@ -148,14 +183,17 @@ Viewer::Viewer(const ViewerOptions& options, std::unique_ptr<SessionFiles> files
   impl_->opt = options;
   impl_->files = std::move(files);
   impl_->inputs.open(*impl_->files);
-  impl_->window = open_window(options);
+  impl_->window = open_window_for_looks(options, impl_->looks);
   impl_->context = gpu::Context::adopt_current();
   impl_->renderer = std::make_unique<gpu::Renderer>(*impl_->context);
+  if (impl_->looks != Looks::Plain) impl_->scenery = std::make_unique<Scenery>();
+  impl_->videos = std::make_unique<Recordings>(*impl_->files);
   glfwSetWindowUserPointer(impl_->window, impl_.get());
   glfwSetMouseButtonCallback(impl_->window, &Impl::on_mouse_button);
   glfwSetCursorPosCallback(impl_->window, &Impl::on_cursor);
   glfwSetScrollCallback(impl_->window, &Impl::on_scroll);
   glfwSetKeyCallback(impl_->window, &Impl::on_key);
+  glfwSetDropCallback(impl_->window, &Impl::on_drop);
   IMGUI_CHECKVERSION();
   ImGui::CreateContext();
   ImGui::GetIO().IniFilename = nullptr;
@@ -165,6 +203,8 @@ Viewer::Viewer(const ViewerOptions& options, std::unique_ptr<SessionFiles> files
 
 Viewer::~Viewer() {
   if (!impl_ || !impl_->window) return;
+  impl_->videos.reset();  // stops an unfinished ffmpeg
+  impl_->scenery.reset();
   impl_->renderer.reset();
   ImGui_ImplOpenGL3_Shutdown();
   ImGui_ImplGlfw_Shutdown();
@@ -184,6 +224,11 @@ std::unique_ptr<pipeline::Evaluator> Viewer::evaluator() {
 }
 
 int Viewer::frame() const { return impl_->frame; }
+std::filesystem::path Viewer::dropped() const { return impl_->dropped; }
+void Viewer::say(const std::string& message) {
+  impl_->controls.message = message;
+  std::fprintf(stderr, "mbi view: %s\n", message.c_str());
+}
 ViewerOptions& Viewer::options() { return impl_->opt; }
 
 io::Image Viewer::screenshot() { return impl_->last_shot; }
@@ -195,6 +240,10 @@ void Viewer::Impl::handle(const Event& e, Stage& stage, Interaction& in) {
     case Event::Release: in.release(); return;
     case Event::Scroll: in.scroll(e.dy); return;
     case Event::Key: key(e.key, stage, in); return;
+    case Event::Drop:
+      if (opt.accept_drops) dropped = e.path;
+      else controls.message = "a dropped file is not taken here: " + e.path;
+      return;
   }
 }
 
@@ -217,6 +266,11 @@ void Viewer::Impl::key(const std::string& k, Stage& stage, Interaction& in) {
   else if (k == "f" || k == "v") stage.frame(camera, opt.up);
   else if (k == "[" || k == "]") stage.set_alpha(stage.alpha * (k == "[" ? 0.5 : 2.0));
   else if (k == "p") controls.snapshot = true;
+  else if (k == "o") {
+    int fbw, fbh;
+    glfwGetFramebufferSize(window, &fbw, &fbh);
+    controls.message = videos->toggle(frame, fbw, fbh);
+  }
   else if (k == "?") controls.help = !controls.help;
   else if (k == "q" || k == "escape") controls.close = true;
 }
@@ -255,20 +309,32 @@ Eigen::MatrixXd Viewer::Impl::draw(Stage& stage, Interaction& in, bool keep) {
   glfwGetFramebufferSize(window, &fbw, &fbh);
   Eigen::MatrixXd X3 = stage.control_positions_3d();
   lay_out(stage);
-  draw_views(*renderer, stage, in, camera, opt, X3, fbw, fbh, times);
+  draw_views(*renderer, stage, in, camera, opt, X3, fbw, fbh, times, scenery.get());
   draw_gui(stage, in, opt, controls, times, window_size());
+  videos->add_frame(controls.message);
   if (keep || controls.snapshot) last_shot = read_framebuffer(fbw, fbh);
   if (controls.snapshot) snapshot();
   return X3;
 }
 
-void Viewer::Impl::finish() { files->finish(last_shot); }
+void Viewer::Impl::finish() {
+  videos->finish();  // --video's ffmpeg must succeed before any output moves into place
+  files->finish(last_shot);
+}
 
 void Viewer::show(const Shown& shown) {
   Impl& s = *impl_;
   Stage stage(shown);
   stage.evaluator_why = s.evaluator_why;
+  stage.looks = kLooksNames.name(s.looks);
   s.renderer->set_faces(shown.faces);
+  if (s.scenery && shown.faces.cols() == 3) s.scenery->set_faces(shown.faces);
+  s.dropped.clear();
+  if (s.frame == 0) {
+    int fbw, fbh;
+    glfwGetFramebufferSize(s.window, &fbw, &fbh);
+    s.videos->start(s.opt.video, fbw, fbh);
+  }
   stage.frame(s.camera, s.opt.up);
   stage.set_views(s.opt.split);
   Interaction in(stage, s.camera, s.opt);
@@ -282,6 +348,7 @@ void Viewer::show(const Shown& shown) {
     glfwPollEvents();
     s.lay_out(stage);
     for (const Event& e : s.inputs.take(s.frame)) s.handle(e, stage, in);
+    if (!s.dropped.empty()) return;  // the caller loads it and shows it: no files written yet
     if (shown.per_frame) shown.per_frame(*this);
     s.advance(stage, in);
     // kept for --screenshot and for a caller's per_frame (Viewer::screenshot())

@@ -4,10 +4,11 @@
 // builds this alone.
 //
 //   FRAME press X Y BUTTON | FRAME move X Y | FRAME release X Y BUTTON | FRAME scroll DY |
-//   FRAME key NAME
+//   FRAME key NAME | FRAME drop PATH
 //
 // X, Y in window coordinates (logical pixels, y down; any finite value: a drag may leave the
-// window), BUTTON 0 to 7 (GLFW's numbers: 0 left, 1 right, 2 middle), NAME one of kKeyNames.
+// window), BUTTON 0 to 7 (GLFW's numbers: 0 left, 1 right, 2 middle), NAME one of kKeyNames,
+// PATH a model file dropped on the window: the rest of the line, spaces included (no '#').
 // Empty lines and lines starting with '#' are skipped; a '#' after an event starts a comment.
 // Anything else is an error naming the file and line: an unknown event or key, a missing,
 // malformed or out-of-range field, or anything after the event (trailing junk).
@@ -32,10 +33,11 @@ inline constexpr int kMaxScriptButton = 7;
 
 struct Event {
   int frame = 0;
-  enum Kind { Press, Move, Release, Scroll, Key } kind = Move;
+  enum Kind { Press, Move, Release, Scroll, Key, Drop } kind = Move;
   double x = 0, y = 0, dy = 0;
   int button = 0;
   std::string key;
+  std::string path;  ///< Drop
 };
 
 /// Whether `name` is a key a script may press: space, escape, ?, [, ], a-z, 0-9.

@@ -21,6 +21,7 @@
 // of `inputs` or the script, never two at one file, only regular files (a FIFO or a device is
 // refused), an existing file only with `force`; all moved into place when show() returns, none
 // on an error. A write error is an error.
+#include <mbi/base/names.hpp>
 #include <mbi/gpu/evaluator.hpp>
 #include <mbi/io/image.hpp>
 #include <mbi/pipeline/frame_pipeline.hpp>
@@ -36,6 +37,14 @@
 #include <vector>
 
 namespace mbi::viewer {
+
+/// How the 3D views look. Full: a ground with a grid and a soft shadow, the clay material,
+/// anti-aliasing (4x MSAA); Software: the same without MSAA, for a software renderer's frame
+/// rate; Plain: a white background and a headlight only; Auto: Software on a software OpenGL
+/// renderer (llvmpipe, softpipe), else Full.
+enum class Looks { Auto, Full, Software, Plain };
+inline constexpr auto kLooksNames = name_table<Looks>(
+    {{Looks::Auto, "auto"}, {Looks::Full, "full"}, {Looks::Software, "software"}, {Looks::Plain, "plain"}});
 
 struct ViewerOptions {
   int width = 1280, height = 720;        ///< window size (logical pixels)
@@ -55,6 +64,11 @@ struct ViewerOptions {
   std::filesystem::path script;          ///< input events to replay
   std::filesystem::path record;          ///< input events to record
   std::filesystem::path report;          ///< JSON per frame: pokes, handles, energies (tests)
+  std::filesystem::path video;           ///< recorded from the first frame (ffmpeg; video.hpp)
+  Looks looks = Looks::Auto;
+  /// A model file dropped on the window ends show() (Viewer::dropped); view_scene loads it.
+  /// Off: a drop is only said (a caller's own show() runs on).
+  bool accept_drops = false;
   std::vector<std::filesystem::path> inputs;  ///< the files shown (scene, models): never outputs
   bool force = false;                    ///< replace existing output files (never an input)
   Eigen::Vector3d up = Eigen::Vector3d::UnitY();
@@ -82,6 +96,9 @@ class Viewer {
   /// Checks the options' files (mbi::Error naming the option), then opens the window and its
   /// OpenGL context. Throws ViewerError (no display: one line).
   explicit Viewer(const ViewerOptions& options = {});
+  /// With the session's files checked already (internal: view_scene checks them before it
+  /// loads the models, then opens the window).
+  Viewer(const ViewerOptions& options, std::unique_ptr<SessionFiles> files);
   ~Viewer();
   Viewer(const Viewer&) = delete;
   Viewer& operator=(const Viewer&) = delete;
@@ -99,13 +116,15 @@ class Viewer {
   /// options.screenshot asks for one (otherwise the last one kept, or an empty image).
   io::Image screenshot();
   int frame() const;
+  /// A model file dropped on the window (or a script's drop event): show() then returns at
+  /// once, before the frame's drawing, without writing the files; the caller loads the model
+  /// and calls show() again (view_scene does). Empty when show() returned for another reason.
+  std::filesystem::path dropped() const;
+  /// A line for the user: the panel and stderr (a dropped file that cannot be loaded).
+  void say(const std::string& message);
   ViewerOptions& options();
 
  private:
-  // view_scene checks the files before it loads the models, then opens the window
-  Viewer(const ViewerOptions& options, std::unique_ptr<SessionFiles> files);
-  friend void view_scene(const scenes::Scene&, const std::filesystem::path&, ViewerOptions);
-
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
