@@ -29,15 +29,16 @@ namespace fs = std::filesystem;
 namespace mbi::cli {
 namespace {
 
-enum class OutKind { pc2, mdd, numbered };
+enum class OutKind { pc2, mdd, gltf, numbered };
 
 OutKind out_kind(const std::string& out) {
   const std::string ext = io::lower_extension(out);
   if (ext == ".pc2") return OutKind::pc2;
   if (ext == ".mdd") return OutKind::mdd;
+  if ((ext == ".glb" || ext == ".gltf") && out.find('%') == std::string::npos) return OutKind::gltf;
   if (out.find('%') == std::string::npos)
-    throw std::runtime_error("--out " + out + ": a sequence goes into a point cache (.pc2, .mdd) or numbered files "
-                             "(a printf pattern: out_%04d.obj)");
+    throw std::runtime_error("--out " + out + ": a sequence goes into a point cache (.pc2, .mdd), an animated glTF "
+                             "(.glb, .gltf) or numbered files (a printf pattern: out_%04d.obj)");
   const io::FileFormat* f = io::file_format(out);
   if (!f || (f->kind != io::FileKind::surface && f->kind != io::FileKind::points))
     throw std::runtime_error("--out " + out + ": numbered files are .obj, .ply, .off, .stl, .txt or .xyz");
@@ -94,13 +95,25 @@ Eigen::MatrixXd to_pose(Eigen::MatrixXd X, const Model& m, const std::string& wh
   return X;
 }
 
-// The output's timing: PC2 start frame and sample rate (frames), MDD times (s).
+// The output's timing: PC2 start frame and sample rate (frames), MDD and glTF times (s).
 struct Timing {
   float pc2_start = 0.0f, pc2_rate = 1.0f;
   std::vector<float> mdd_times;
+  std::vector<double> gltf_times;  // strictly increasing, as glTF keys must be
 };
 
-Timing output_timing(const io::Trajectory& t, double fps) {
+// The MDD times when they increase, else one frame every 1/fps seconds.
+std::vector<double> increasing_times(const std::vector<float>& times, double fps) {
+  std::vector<double> t(times.begin(), times.end());
+  for (std::size_t k = 1; k < t.size(); ++k)
+    if (!(t[k] > t[k - 1])) {
+      for (std::size_t i = 0; i < t.size(); ++i) t[i] = static_cast<double>(i) / fps;
+      break;
+    }
+  return t;
+}
+
+Timing cache_timing(const io::Trajectory& t, double fps) {
   Timing o;
   const int F = t.frames();
   const std::vector<double>& times = t.times();
@@ -127,6 +140,12 @@ Timing output_timing(const io::Trajectory& t, double fps) {
   return o;
 }
 
+Timing output_timing(const io::Trajectory& t, double fps) {
+  Timing o = cache_timing(t, fps);
+  o.gltf_times = increasing_times(o.mdd_times, fps);
+  return o;
+}
+
 // SIGINT and SIGTERM while the frames run: the loop stops after the frame in progress (the one
 // signal policy of every command, signals.hpp); a second signal ends the process at once.
 class StopOnSignal {
@@ -141,8 +160,8 @@ class StopOnSignal {
   std::atomic<int> stop_{0};
 };
 
-// Writes the dense frames as they come: into a point cache (finished at the end, or at the last
-// good frame) or one numbered file a frame (each complete when it appears).
+// Writes the dense frames as they come: into a point cache or an animated glTF (finished at the
+// end, or at the last good frame) or one numbered file a frame (each complete when it appears).
 class FrameWriter {
  public:
   FrameWriter(OutKind kind, const fs::path& file, const std::string& pattern, const Model& m, const Timing& timing)
@@ -151,6 +170,11 @@ class FrameWriter {
     if (kind == OutKind::pc2) pc2_ = std::make_unique<io::Pc2Writer>(file, p, timing.pc2_start, timing.pc2_rate);
     if (kind == OutKind::mdd) mdd_ = std::make_unique<io::MddWriter>(file, p, timing.mdd_times);
     if (m.surface) surface_ = *m.surface;
+    if (kind == OutKind::gltf) {
+      if (!m.surface) throw std::runtime_error("--out " + pattern + ": a glTF needs a surface mesh, not points");
+      gltf_ = std::make_unique<io::GltfWriter>(file, surface_);
+      gltf_times_ = timing.gltf_times;
+    }
   }
 
   // positions p x d (double), normals p x 3 or empty
@@ -159,6 +183,11 @@ class FrameWriter {
     full_ << positions, model_.P_extra;
     if (kind_ == OutKind::pc2) return pc2_->append(full_);
     if (kind_ == OutKind::mdd) return mdd_->append(full_);
+    if (kind_ == OutKind::gltf) {
+      surface_.V = Eigen::MatrixXd::Zero(full_.rows(), 3);
+      surface_.V.leftCols(full_.cols()) = full_;
+      return gltf_->append(gltf_times_.at(static_cast<std::size_t>(k)), surface_.V, normals);
+    }
     const fs::path file = io::numbered_file(pattern_, k);
     const io::FileFormat* f = io::file_format(file);
     if (f->kind == io::FileKind::points) return io::write_points(file, full_);
@@ -175,6 +204,7 @@ class FrameWriter {
   void finish() {
     if (pc2_) pc2_->finish();
     if (mdd_) mdd_->finish();
+    if (gltf_) gltf_->finish();
   }
 
  private:
@@ -183,6 +213,8 @@ class FrameWriter {
   const Model& model_;
   std::unique_ptr<io::Pc2Writer> pc2_;
   std::unique_ptr<io::MddWriter> mdd_;
+  std::unique_ptr<io::GltfWriter> gltf_;
+  std::vector<double> gltf_times_;
   io::SurfaceMesh surface_;
   Eigen::MatrixXd full_;
 };
@@ -328,8 +360,8 @@ int run_sequence_frames(const SequenceArgs& a, OutKind kind, io::Trajectory& tra
   pipeline::DeformerOptions opt{.method = a.method, .interp = {}};
   opt.interp.alpha = a.alpha.value_or(0.0);
   opt.interp.pin_boundary = a.pin_boundary;
-  // numbered surfaces with normals get deformed normals; caches hold positions only
-  const bool normals = kind == OutKind::numbered && m.surface && d == 3 && m.surface->N.rows() == m.P.rows() &&
+  // numbered surfaces and glTF with normals get deformed normals; caches hold positions only
+  const bool normals = (kind == OutKind::numbered || kind == OutKind::gltf) && m.surface && d == 3 && m.surface->N.rows() == m.P.rows() &&
                        io::is_surface_file(a.out);
   t0 = Clock::now();
   std::optional<pipeline::Deformer> deformer;
@@ -341,7 +373,7 @@ int run_sequence_frames(const SequenceArgs& a, OutKind kind, io::Trajectory& tra
   run.precompute_ms = ms_since(t0);
   {
     // a cache of a 3D model: the float kernel, whose output is the cache's layout
-    const bool use_float = kind != OutKind::numbered && d == 3 && m.P_extra.cols() == 0;
+    const bool use_float = (kind == OutKind::pc2 || kind == OutKind::mdd) && d == 3 && m.P_extra.cols() == 0;
     FrameWriter out(kind, kind == OutKind::numbered ? fs::path() : outputs.staging(i_out), a.out, m,
                     output_timing(traj, a.fps));
     run_frames(a, traj, m, *deformer, out, use_float, run);

@@ -11,7 +11,7 @@ namespace {
 
 // The names of the files run_scene writes into its output folder.
 const std::regex& output_names() {
-  static const std::regex ours(R"((mesh_[0-9]+\.(obj|ply)|control_[0-9]+\.vtk|frame_[0-9]+\.png|dense\.pc2|metrics\.json))");
+  static const std::regex ours(R"((mesh_[0-9]+\.(obj|ply)|mesh\.glb|control_[0-9]+\.vtk|frame_[0-9]+\.png|dense\.pc2|metrics\.json))");
   return ours;
 }
 

@@ -8,6 +8,7 @@ namespace mbi::scenes {
 
 Outputs::Outputs(const Scene& sc, const SceneModels& m, const fs::path& dir) : sc_(sc), m_(m), dir_(dir) {
   if (sc.output.pc2) pc2_ = std::make_unique<io::Pc2Writer>(dir / "dense.pc2", static_cast<int>(m.dense.V.rows()), 0.0f, 1.0f);
+  if (sc.output.mesh_format == MeshFormat::Glb) gltf_ = std::make_unique<io::GltfWriter>(dir / "mesh.glb", m.dense);
 }
 
 void Outputs::frame(int f, const Eigen::MatrixXd& Xc, const Eigen::MatrixXd& dense,
@@ -16,7 +17,8 @@ void Outputs::frame(int f, const Eigen::MatrixXd& Xc, const Eigen::MatrixXd& den
   std::vector<fs::path> written;  // this frame's files, removed again if a later write fails
   try {
     if (write_now) {
-      if (sc_.output.mesh_format != MeshFormat::None) written.push_back(write_mesh(f, dense, normals));
+      if (gltf_) append_gltf(f, dense, normals);
+      else if (sc_.output.mesh_format != MeshFormat::None) written.push_back(write_mesh(f, dense, normals));
       if (sc_.output.control_vtk) {
         const Eigen::MatrixXd disp = Xc - m_.U;
         written.push_back(io::frame_path(dir_ / "control", f, ".vtk"));
@@ -55,6 +57,14 @@ fs::path Outputs::write_mesh(int f, const Eigen::MatrixXd& dense, const Eigen::M
   return io::write_frame(dir_ / "mesh", f, ext, m_.dense, V3, enc);
 }
 
+void Outputs::append_gltf(int f, const Eigen::MatrixXd& dense, const Eigen::MatrixXd* normals) {
+  // 2D: z = 0, or the plane of a flat model
+  Eigen::MatrixXd V3 = Eigen::MatrixXd::Constant(dense.rows(), 3, m_.flat_z.value_or(0.0));
+  V3.leftCols(dense.cols()) = dense;
+  const double t = f * sc_.simulation.parameters.dt;
+  gltf_->append(t, V3, normals && dense.cols() == 3 ? *normals : Eigen::MatrixXd());
+}
+
 fs::path Outputs::write_picture_2d(int f, const std::vector<const Eigen::MatrixXd*>& shown) {
   std::vector<io::Image> panels;
   const int W = m_.image->width, H = m_.image->height;
@@ -71,6 +81,7 @@ fs::path Outputs::write_picture_2d(int f, const std::vector<const Eigen::MatrixX
 
 void Outputs::finish() {
   if (pc2_) pc2_->finish();
+  if (gltf_) gltf_->finish();
 }
 
 }  // namespace mbi::scenes
