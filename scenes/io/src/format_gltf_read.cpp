@@ -142,6 +142,9 @@ class Gatherer {
     if (depth > static_cast<int>(m_.nodes.size())) fail(file_, 0, node_name(m_, n) + ": the node hierarchy has a cycle");
     const tinygltf::Node& node = m_.nodes[static_cast<std::size_t>(n)];
     const Eigen::Matrix4d M = parent * local_matrix(node);
+    // a node scaled to nothing is hidden, with its children (an animation of mbi shows one frame
+    // node at a time: read back, it gives its first frame)
+    if (M.topLeftCorner<3, 3>().determinant() == 0) return;
     if (node.mesh >= 0) {
       if (node.skin >= 0)
         fail(file_, 0, node_name(m_, n) + ": a skinned mesh (skin " + std::to_string(node.skin) +
@@ -222,7 +225,8 @@ class Gatherer {
       I.resize(static_cast<std::size_t>(nv));
       for (long long i = 0; i < nv; ++i) I[static_cast<std::size_t>(i)] = static_cast<double>(i);
     }
-    if (I.size() % 3 != 0) fail(file_, 0, where + ": " + std::to_string(I.size()) + " indices is not a whole number of triangles");
+    if (I.size() % 3 != 0)
+      fail(file_, 0, where + ": indices: " + std::to_string(I.size()) + " indices is not a whole number of triangles");
     for (std::size_t k = 0; k < I.size(); k += 3) {
       std::array<int, 3> t{};
       for (int c = 0; c < 3; ++c) {

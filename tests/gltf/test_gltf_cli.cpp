@@ -1,0 +1,112 @@
+// The multi-part glTF fixture (written by three.js, tests/gltf/data/README.md) through mbi cage,
+// mbi run (a scene writing mesh.glb) and mbi deform (the run's control trajectory into an
+// animated .glb); then, where the node packages are installed (tests/gltf/node), the Khronos
+// validator finds no error and three.js plays every frame back with our positions, materials
+// and UVs.
+#include <mbi/io/io.hpp>
+
+#include "common/files.hpp"
+#include "common/run_mbi.hpp"
+#include "common/skip.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <cstdlib>
+#include <fstream>
+
+namespace fs = std::filesystem;
+using mbi::test::q;
+using mbi::test::run_mbi;
+using mbi::test::TempDir;
+
+namespace {
+
+fs::path node_dir() { return mbi::test::source_dir() / "tests" / "gltf" / "node"; }
+
+const char* kScene = R"(name = "toy"
+[dense]
+path = "parts.glb"
+[control]
+path = "cage.node"
+[material]
+young = 2e4
+poisson = 0.4
+density = 1000
+[simulation]
+dt = 0.04
+frames = 4
+gravity = [0, -9.81, 0]
+[[constraints]]
+type = "fixed"
+select = { box_relative = { min = [0, 0.9, 0], max = [1, 1, 1] } }
+[interpolation]
+gpu = "off"
+[output]
+every = 1
+mesh_format = "glb"
+image = false
+)";
+
+// cage, run and deform in `dir`: run/mesh.glb with run/dense.pc2, anim.glb with anim.pc2.
+void run_pipeline(const TempDir& dir) {
+  fs::copy_file(mbi::test::source_dir() / "tests" / "gltf" / "data" / "parts.glb", dir / "parts.glb");
+  std::ofstream(dir / "toy.toml") << kScene;
+  auto r = run_mbi("cage parts.glb -n 60 -o cage", dir, "", dir.path());
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  r = run_mbi("run toy.toml --out run --quiet", dir, "", dir.path());
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  for (const char* out : {"anim.glb", "anim.pc2"}) {
+    r = run_mbi("deform --control cage --deformed 'run/control_%04d.vtk' --mesh parts.glb --out " + std::string(out), dir, "",
+                dir.path());
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    CHECK_THAT(r.out, Catch::Contains("frames:  5 of 5"));
+  }
+}
+
+bool have_node_packages() {
+  return fs::exists(node_dir() / "node_modules" / "three") && fs::exists(node_dir() / "node_modules" / "gltf-validator") &&
+         std::system("node --version > /dev/null 2>&1") == 0;
+}
+
+int node(const std::string& script, const std::string& args, const TempDir& dir) {
+  const std::string cmd = "cd " + q(dir.path()) + " && node " + q(node_dir() / script) + " " + args + " > node.txt 2>&1";
+  const int code = std::system(cmd.c_str());
+  INFO(mbi::test::slurp(dir / "node.txt"));
+  CHECK(code == 0);
+  return code;
+}
+
+}  // namespace
+
+TEST_CASE("glTF: the fixture through cage, run and deform keeps its parts", "[app][gltf]") {
+  TempDir dir("gltf_cli");
+  run_pipeline(dir);
+  const mbi::io::SurfaceMesh in = mbi::io::read_surface(dir / "parts.glb");
+  const mbi::io::PointCache cache = mbi::io::read_pc2(dir / "anim.pc2");
+  REQUIRE(cache.frames.size() == 5);
+  // an animated glTF reads back as its first frame, with the input's faces
+  for (const char* file : {"anim.glb", "run/mesh.glb"}) {
+    const mbi::io::SurfaceMesh first = mbi::io::read_surface(dir / file);
+    CHECK(first.F == in.F);
+    CHECK((first.V - cache.frames[0]).cwiseAbs().maxCoeff() < 1e-5);
+  }
+  // one frame: a static glTF
+  const auto r = run_mbi("deform --control cage --deformed run/control_0004.vtk --mesh parts.glb --out last.gltf", dir, "",
+                         dir.path());
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK((mbi::io::read_surface(dir / "last.gltf").V - cache.frames[4]).cwiseAbs().maxCoeff() < 1e-5);
+}
+
+TEST_CASE("glTF: the Khronos validator and three.js read our files back", "[app][gltf][node]") {
+  if (!have_node_packages()) mbi::test::skip("node or tests/gltf/node/node_modules missing (scripts/install-deps.sh test)");
+  TempDir dir("gltf_node");
+  run_pipeline(dir);
+  REQUIRE(run_mbi("deform --control cage --deformed cage.node --mesh parts.glb --out rest.gltf", dir, "", dir.path()).code == 0);
+  node("validate.mjs", "parts.glb anim.glb run/mesh.glb rest.gltf", dir);
+  node("playback.mjs", "anim.glb anim.pc2 parts.glb", dir);
+  node("playback.mjs", "run/mesh.glb run/dense.pc2 parts.glb", dir);
+}
