@@ -212,18 +212,21 @@ class GltfDocument {
   }
 
   // Node k is shown (scale 1) from its frame's time to the next frame's: keys at the times of
-  // frames k-1, k, k+1 (a window of the one list of times), step interpolated.
+  // frames k-1, k, k+1 (a window of the one list of times), step interpolated. The last frame
+  // lasts as long as the one before it (one more time), so that a looping player shows it.
   void add_animation() {
     std::vector<float> t(times_.begin(), times_.end());
+    const std::size_t F = t.size();
+    t.push_back(static_cast<float>(times_[F - 1] + (times_[F - 1] - times_[F - 2])));
     const int times_view = view(bytes_of(t), 0);
-    const std::vector<float> show_first{1, 1, 1, 0, 0, 0}, show_middle{0, 0, 0, 1, 1, 1, 0, 0, 0}, show_last{0, 0, 0, 1, 1, 1};
+    const std::vector<float> show_first{1, 1, 1, 0, 0, 0}, show_middle{0, 0, 0, 1, 1, 1, 0, 0, 0};
+    const std::vector<float> show_last{0, 0, 0, 1, 1, 1, 1, 1, 1};
     const int out_first = accessor(view(bytes_of(show_first), 0), 0, kFloat, 2, "VEC3");
     const int out_middle = accessor(view(bytes_of(show_middle), 0), 0, kFloat, 3, "VEC3");
-    const int out_last = accessor(view(bytes_of(show_last), 0), 0, kFloat, 2, "VEC3");
+    const int out_last = accessor(view(bytes_of(show_last), 0), 0, kFloat, 3, "VEC3");
     json samplers = json::array(), channels = json::array();
-    const std::size_t F = t.size();
     for (std::size_t k = 0; k < F; ++k) {
-      const std::size_t from = k == 0 ? 0 : k - 1, to = std::min(k + 1, F - 1);
+      const std::size_t from = k == 0 ? 0 : k - 1, to = k + 1 == F ? F : k + 1;
       const int in = accessor(times_view, static_cast<long long>(from * 4), kFloat, static_cast<long long>(to - from + 1), "SCALAR");
       accessors_[static_cast<std::size_t>(in)]["min"] = {t[from]};
       accessors_[static_cast<std::size_t>(in)]["max"] = {t[to]};
