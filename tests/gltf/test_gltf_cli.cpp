@@ -110,3 +110,32 @@ TEST_CASE("glTF: the Khronos validator and three.js read our files back", "[app]
   node("playback.mjs", "anim.glb anim.pc2 parts.glb", dir);
   node("playback.mjs", "run/mesh.glb run/dense.pc2 parts.glb", dir);
 }
+
+TEST_CASE("several dense meshes: one cage around all, each --out as that mesh deformed alone", "[app][gltf]") {
+  TempDir dir("gltf_parts");
+  run_pipeline(dir);
+  const fs::path sphere = mbi::test::source_dir() / "tests" / "data" / "vtu" / "sphere.obj";
+  auto r = run_mbi("cage parts.glb " + q(sphere) + " -n 80 -o two", dir, "", dir.path());
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  r = run_mbi("deform --control two --deformed two.node --mesh parts.glb --mesh " + q(sphere) +
+                  " --out both.glb --out both.obj",
+              dir, "", dir.path());
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  REQUIRE(run_mbi("deform --control two --deformed two.node --mesh parts.glb --out one.glb", dir, "", dir.path()).code == 0);
+  REQUIRE(run_mbi("deform --control two --deformed two.node --mesh " + q(sphere) + " --out one.obj", dir, "", dir.path()).code == 0);
+  CHECK(mbi::test::slurp(dir / "both.obj") == mbi::test::slurp(dir / "one.obj"));
+  CHECK(mbi::io::read_surface(dir / "both.glb").V == mbi::io::read_surface(dir / "one.glb").V);
+  // a trajectory into one output a mesh: a glTF and numbered OBJ files
+  r = run_mbi("deform --control cage --deformed 'run/control_%04d.vtk' --mesh parts.glb --mesh parts.glb --out a.glb "
+              "--out 'b_%02d.obj'",
+              dir, "", dir.path());
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(fs::exists(dir / "b_04.obj"));
+  CHECK(mbi::io::read_surface(dir / "a.glb").V == mbi::io::read_surface(dir / "anim.glb").V);
+  r = run_mbi("deform --control cage --deformed cage.node --mesh parts.glb --mesh parts.glb --out x.obj", dir, "", dir.path());
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("2 --mesh but 1 --out"));
+}
