@@ -66,6 +66,12 @@ void run_pipeline(const TempDir& dir) {
   }
 }
 
+void replace(std::string& s, const std::string& from, const std::string& to) {
+  const std::size_t at = s.find(from);
+  REQUIRE(at != std::string::npos);
+  s.replace(at, from.size(), to);
+}
+
 bool have_node_packages() {
   return fs::exists(node_dir() / "node_modules" / "three") && fs::exists(node_dir() / "node_modules" / "gltf-validator") &&
          std::system("node --version > /dev/null 2>&1") == 0;
@@ -138,4 +144,32 @@ TEST_CASE("several dense meshes: one cage around all, each --out as that mesh de
   r = run_mbi("deform --control cage --deformed cage.node --mesh parts.glb --mesh parts.glb --out x.obj", dir, "", dir.path());
   CHECK(r.code == 2);
   CHECK_THAT(r.err, Catch::Contains("2 --mesh but 1 --out"));
+}
+
+TEST_CASE("a scene of several [[dense]] models writes each on its own, as mbi deform does", "[app][gltf]") {
+  TempDir dir("gltf_scene_parts");
+  run_pipeline(dir);
+  fs::copy_file(mbi::test::source_dir() / "tests" / "data" / "vtu" / "sphere.obj", dir / "sphere.obj");
+  REQUIRE(run_mbi("cage parts.glb sphere.obj -n 80 -o two", dir, "", dir.path()).code == 0);
+  std::string scene = kScene;
+  replace(scene, "[dense]\npath = \"parts.glb\"", "[[dense]]\npath = \"parts.glb\"\n[[dense]]\npath = \"sphere.obj\"");
+  replace(scene, "cage.node", "two.node");
+  std::ofstream(dir / "two.toml") << scene;
+  auto r = run_mbi("run two.toml --out run2 --quiet", dir, "", dir.path());
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  r = run_mbi("deform --control two --deformed 'run2/control_%04d.vtk' --mesh parts.glb --mesh sphere.obj --out p.glb "
+              "--out 's_%04d.obj' --alpha 0.1",
+              dir, "", dir.path());
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK((mbi::io::read_surface(dir / "run2" / "mesh1.glb").V - mbi::io::read_surface(dir / "p.glb").V).cwiseAbs().maxCoeff() < 1e-6);
+  CHECK(fs::exists(dir / "run2" / "mesh2.glb"));
+  CHECK_FALSE(fs::exists(dir / "run2" / "mesh.glb"));
+  // a [[dense]] entry other than the first is a file
+  replace(scene, "path = \"sphere.obj\"", "builtin = \"cylinder\"");
+  std::ofstream(dir / "bad.toml") << scene;
+  r = run_mbi("run bad.toml --out run3 --quiet", dir, "", dir.path());
+  CHECK(r.code != 0);
+  CHECK_THAT(r.err, Catch::Contains("several dense models are files"));
 }

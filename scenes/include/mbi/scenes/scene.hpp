@@ -175,6 +175,9 @@ struct Scene {
   std::string name;
   Mode mode = Mode::Simulate;
   DenseSpec dense;
+  /// [[dense]] entries after the first: more dense models (files) driven by the same control
+  /// mesh, each written on its own ([dense] alone leaves this empty).
+  std::vector<DenseSpec> more_dense;
   ControlSpec control;
   sim::Material material = scene_material();
   SimulationSpec simulation;
