@@ -149,6 +149,9 @@ TEST_CASE("glTF in: node transforms, and skins, morph targets and bad accessors 
   CHECK_THAT(error_of(write_json(dir, index)), Catch::Contains("indices: 2 indices is not a whole number of triangles"));
 
   CHECK_THAT(error_of(write_json(dir, json::parse(R"({"asset": {"version": "2.0"}})"))), Catch::Contains("no scene"));
+  json device = one_triangle();  // a buffer is read only from a regular file
+  device["buffers"][0]["uri"] = "/dev/zero";
+  CHECK_THAT(error_of(write_json(dir, device)), Catch::Contains("t.gltf: not a readable glTF 2.0 file"));
   std::ofstream(dir / "junk.glb") << "glTF but not really";
   CHECK_THAT(error_of(dir / "junk.glb"), Catch::Contains("junk.glb: not a readable glTF 2.0 file"));
 }

@@ -27,9 +27,30 @@ bool keep_image(tinygltf::Image*, const int, std::string*, std::string*, int, in
   return true;
 }
 
+// Buffers in files beside the asset: read as every input of mbi is (regular files only, the size
+// capped: a uri naming /dev/zero or a FIFO is refused), names taken as written (tinygltf's own
+// expansion runs wordexp).
+bool regular_file(const std::string& name, void*) {
+  std::error_code ec;
+  return std::filesystem::is_regular_file(name, ec);
+}
+std::string as_written(const std::string& name, void*) { return name; }
+bool read_buffer(std::vector<unsigned char>* out, std::string* err, const std::string& name, void*) {
+  try {
+    const std::string bytes = slurp(name);
+    out->assign(bytes.begin(), bytes.end());
+    return true;
+  } catch (const std::exception& e) {
+    if (err) *err += e.what();
+    return false;
+  }
+}
+bool never_write(std::string*, const std::string&, const std::vector<unsigned char>&, void*) { return false; }
+
 tinygltf::Model load_model(std::string_view data, const path& file, bool binary) {
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(keep_image, nullptr);
+  loader.SetFsCallbacks({regular_file, as_written, read_buffer, never_write, nullptr});
   tinygltf::Model model;
   std::string err, warn;
   std::error_code ec;
