@@ -22,16 +22,15 @@ const mbi::cli::Registrar reg(
             "surface",
     [](CLI::App& sub) -> mbi::cli::Action {
       struct Args {
-        std::vector<std::string> dense;
-        std::string out, stats, vtk;
+        std::string first_dense, out, stats, vtk;
+        std::vector<std::string> dense;  // the first and the others
         mbi::generate::Mesher mesher = mbi::generate::Mesher::Voxel;
         int vertices = 200;
         bool force_3d = false, force = false;
       };
       auto a = std::make_shared<Args>();
-      sub.add_option("dense", a->dense,
-                     "dense surfaces (.obj, .off, .ply, .stl, .glb, .gltf): the cage encloses all of them")
-          ->required();
+      sub.add_option("dense", a->first_dense, "dense surface (.obj, .off, .ply, .stl, .glb, .gltf)")->required();
+      sub.add_option("more", a->dense, "more dense surfaces: the cage encloses all of them");
       sub.add_option("--vertices,-n", a->vertices, "target number of control vertices (8 or more)")
           ->required()
           ->check(CLI::Range(8, 1000000));
@@ -49,6 +48,7 @@ const mbi::cli::Registrar reg(
       return [a]() {
         namespace fs = std::filesystem;
         mbi::cli::handle_interrupts(nullptr);  // all or nothing: a signal ends it at once
+        a->dense.insert(a->dense.begin(), a->first_dense);
         // BASE, without a .node/.ele/.face extension; a folder's name ("dir/", ".") is refused
         // (it would make ".node" in the folder, or hidden "..node")
         fs::path base(a->out);
