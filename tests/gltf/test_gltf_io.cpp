@@ -149,6 +149,12 @@ TEST_CASE("glTF in: node transforms, and skins, morph targets and bad accessors 
   CHECK_THAT(error_of(write_json(dir, index)), Catch::Contains("indices: 2 indices is not a whole number of triangles"));
 
   CHECK_THAT(error_of(write_json(dir, json::parse(R"({"asset": {"version": "2.0"}})"))), Catch::Contains("no scene"));
+  json cycle = one_triangle();  // nodes form trees
+  cycle["nodes"][0]["children"] = {0};
+  CHECK_THAT(error_of(write_json(dir, cycle)), Catch::Contains("node 0 'tri': reached twice"));
+  json float_index = one_triangle();
+  float_index["accessors"][1] = {{"bufferView", 0}, {"componentType", 5126}, {"count", 3}, {"type", "SCALAR"}};
+  CHECK_THAT(error_of(write_json(dir, float_index)), Catch::Contains("indices") && Catch::Contains("is not"));
   json device = one_triangle();  // a buffer is read only from a regular file
   device["buffers"][0]["uri"] = "/dev/zero";
   CHECK_THAT(error_of(write_json(dir, device)), Catch::Contains("t.gltf: not a readable glTF 2.0 file"));

@@ -153,14 +153,22 @@ Eigen::Matrix4d local_matrix(const tinygltf::Node& n) {
   return A.matrix();
 }
 
+// Deepest node hierarchy read (the walk is recursive; real assets nest a few dozen levels).
+constexpr int kMaxDepth = 1000;
+
 // Builds the SurfaceMesh from the scene's nodes, one part per (node, primitive).
 class Gatherer {
  public:
-  Gatherer(const tinygltf::Model& m, const path& file, GltfAsset& asset) : m_(m), file_(file), asset_(asset) {}
+  Gatherer(const tinygltf::Model& m, const path& file, GltfAsset& asset, std::size_t bytes)
+      : m_(m), file_(file), asset_(asset), bytes_(static_cast<long long>(bytes)) {}
 
   void node(int n, const Eigen::Matrix4d& parent, int depth) {
     if (n < 0 || n >= static_cast<int>(m_.nodes.size())) fail(file_, 0, "node " + std::to_string(n) + " does not exist");
-    if (depth > static_cast<int>(m_.nodes.size())) fail(file_, 0, node_name(m_, n) + ": the node hierarchy has a cycle");
+    // nodes form trees: a node reached twice (two parents, a cycle) would repeat its subtree
+    if (seen_.empty()) seen_.resize(m_.nodes.size(), 0);
+    if (seen_[static_cast<std::size_t>(n)]++)
+      fail(file_, 0, node_name(m_, n) + ": reached twice in the scene (two parents or a cycle; glTF nodes form trees)");
+    if (depth > kMaxDepth) fail(file_, 0, node_name(m_, n) + ": the node hierarchy is deeper than " + std::to_string(kMaxDepth));
     const tinygltf::Node& node = m_.nodes[static_cast<std::size_t>(n)];
     const Eigen::Matrix4d M = parent * local_matrix(node);
     // a node scaled to nothing is hidden, with its children (an animation of mbi shows one frame
@@ -203,6 +211,10 @@ class Gatherer {
     const std::vector<double> P = read_accessor(m_, pos, {3}, file_, where + ": POSITION");
     const long long nv = static_cast<long long>(P.size() / 3), first = static_cast<long long>(v_.size());
     if (nv == 0) return;
+    // instances place a mesh many times: bounded by the file's size, and by int indices
+    if (first + nv > std::min<long long>(kMaxCount, 64 * bytes_ + (1 << 20)))
+      fail(file_, 0, where + ": more than " + std::to_string(first) + " vertices placed; too many for a file of " +
+                         std::to_string(bytes_) + " bytes");
     GltfPart part;
     part.name = name;
     part.first_vertex = first;
@@ -242,6 +254,10 @@ class Gatherer {
     std::vector<double> I;
     if (p.indices >= 0) {
       I = read_accessor(m_, p.indices, {1}, file_, where + ": indices");
+      const int type = m_.accessors[static_cast<std::size_t>(p.indices)].componentType;
+      if (type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+          type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+        fail(file_, 0, where + ": indices: component type " + std::to_string(type) + " is not an unsigned integer");
     } else {
       I.resize(static_cast<std::size_t>(nv));
       for (long long i = 0; i < nv; ++i) I[static_cast<std::size_t>(i)] = static_cast<double>(i);
@@ -251,7 +267,7 @@ class Gatherer {
     for (std::size_t k = 0; k < I.size(); k += 3) {
       std::array<int, 3> t{};
       for (int c = 0; c < 3; ++c) {
-        if (I[k + c] >= static_cast<double>(nv))
+        if (!(I[k + c] >= 0) || I[k + c] != std::floor(I[k + c]) || I[k + c] >= static_cast<double>(nv))
           fail(file_, 0, where + ": index " + std::to_string(k + c) + " is " + std::to_string(static_cast<long long>(I[k + c])) +
                              ", past the primitive's " + std::to_string(nv) + " vertices");
         t[static_cast<std::size_t>(c)] = static_cast<int>(first + static_cast<long long>(I[k + c]));
@@ -284,6 +300,8 @@ class Gatherer {
   std::vector<std::array<double, 3>> v_, n_;
   std::vector<char> have_n_;
   std::vector<std::array<int, 3>> f_;
+  std::vector<int> seen_;  // per node: times reached
+  long long bytes_;        // the file's size
 };
 
 // The names of the extensions used inside `j` (objects named "extensions", at any depth).
@@ -332,7 +350,7 @@ SurfaceMesh parse_gltf(std::string_view data, const path& file) {
   const int scene = model.defaultScene >= 0 ? model.defaultScene : 0;
   if (scene >= static_cast<int>(model.scenes.size())) fail(file, 0, "scene " + std::to_string(scene) + " does not exist");
   auto asset = std::make_shared<GltfAsset>();
-  Gatherer g(model, file, *asset);
+  Gatherer g(model, file, *asset, data.size());
   for (int n : model.scenes[static_cast<std::size_t>(scene)].nodes) g.node(n, Eigen::Matrix4d::Identity(), 0);
   SurfaceMesh s;
   g.finish(s);
