@@ -1,6 +1,7 @@
-// mbi cage DENSE --vertices N --out BASE [--stats STATS.json] [--mesher voxel|tetgen]: builds a
-// control mesh around a dense surface and writes BASE.node / BASE.ele (TetGen format).
+// mbi cage DENSE... --vertices N --out BASE [--stats STATS.json] [--mesher voxel|tetgen]: builds a
+// control mesh around one or several dense surfaces and writes BASE.node / BASE.ele (TetGen).
 #include "commands.hpp"
+#include "deform_parts.hpp"
 #include "signals.hpp"
 
 #include <mbi/generate/cage.hpp>
@@ -21,13 +22,15 @@ const mbi::cli::Registrar reg(
             "surface",
     [](CLI::App& sub) -> mbi::cli::Action {
       struct Args {
-        std::string dense, out, stats, vtk;
+        std::string first_dense, out, stats, vtk;
+        std::vector<std::string> dense;  // the first and the others
         mbi::generate::Mesher mesher = mbi::generate::Mesher::Voxel;
         int vertices = 200;
         bool force_3d = false, force = false;
       };
       auto a = std::make_shared<Args>();
-      sub.add_option("dense", a->dense, "dense surface (.obj, .off, .ply, .stl)")->required();
+      sub.add_option("dense", a->first_dense, "dense surface (.obj, .off, .ply, .stl, .glb, .gltf)")->required();
+      sub.add_option("more", a->dense, "more dense surfaces: the cage encloses all of them");
       sub.add_option("--vertices,-n", a->vertices, "target number of control vertices (8 or more)")
           ->required()
           ->check(CLI::Range(8, 1000000));
@@ -45,6 +48,7 @@ const mbi::cli::Registrar reg(
       return [a]() {
         namespace fs = std::filesystem;
         mbi::cli::handle_interrupts(nullptr);  // all or nothing: a signal ends it at once
+        a->dense.insert(a->dense.begin(), a->first_dense);
         // BASE, without a .node/.ele/.face extension; a folder's name ("dir/", ".") is refused
         // (it would make ".node" in the folder, or hidden "..node")
         fs::path base(a->out);
@@ -55,26 +59,27 @@ const mbi::cli::Registrar reg(
         node += ".node";
         ele += ".ele";
         // Every output checked and reserved before any work; all written at the end, or none.
-        mbi::io::OutputSet outputs({a->dense}, a->force);
+        mbi::io::OutputSet outputs({a->dense.begin(), a->dense.end()}, a->force);
         const std::size_t i_node = outputs.add(node, "--out");
         outputs.add(ele, "--out", i_node);
         const std::size_t i_stats = a->stats.empty() ? 0 : outputs.add(a->stats, "--stats");
         const std::size_t i_vtk = a->vtk.empty() ? 0 : outputs.add(a->vtk, "--vtk");
-        const mbi::io::SurfaceMesh dense = mbi::io::read_surface(a->dense);
+        const mbi::cli::DenseParts parts = mbi::cli::read_dense_parts(a->dense);
+        const mbi::io::SurfaceMesh dense = parts.joined();
         mbi::generate::CageOptions opt;
         opt.target_vertices = a->vertices;
         opt.force_3d = a->force_3d;
         opt.mesher = a->mesher;
         if (opt.mesher == mbi::generate::Mesher::TetGen && !a->force_3d && mbi::generate::is_planar(dense.V))
           throw std::runtime_error(
-              a->dense + ": the model is flat (every z = " + std::to_string(dense.V(0, 2)) +
+              parts.names() + ": the model is flat (every z = " + std::to_string(dense.V(0, 2)) +
               "), a 2D input; TetGen makes tetrahedra only: use the voxel mesher (the default) "
               "for a 2D triangle cage, or --force-3d for tetrahedra");
         const mbi::generate::CageResult cage = mbi::generate::make_cage(dense.V, dense.F, opt);
         outputs.write(i_node, [&](const fs::path& p) { mbi::io::write_tetgen(p, cage.U, cage.T); });
         if (!a->vtk.empty()) outputs.write(i_vtk, [&](const fs::path& p) { mbi::io::write_vtk(p, cage.U, cage.T); });
         nlohmann::json j;
-        j["input"] = a->dense;
+        j["input"] = a->dense.size() == 1 ? nlohmann::json(a->dense[0]) : nlohmann::json(a->dense);
         j["dense_vertices"] = dense.V.rows();
         j["target_vertices"] = a->vertices;
         j["mesher"] = mbi::generate::mesher_name(cage.mesher);

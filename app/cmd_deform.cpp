@@ -1,6 +1,6 @@
 // mbi deform: the interpolation as a command-line tool, for users with their own simulator.
 //
-//   mbi deform --control REST --deformed X --mesh DENSE --out OUT
+//   mbi deform --control REST --deformed X --mesh DENSE --out OUT [--mesh DENSE2 --out OUT2 ...]
 //              [--method bi|modified-bi|phong] [--alpha A] [--pin-boundary] [--stats STATS.json]
 //   mbi deform --example twist-bar [--out OUT] [--stats STATS.json]
 //   mbi deform --control REST --deformed TRAJECTORY --mesh DENSE --out CACHE|NUMBERED ...
@@ -10,6 +10,7 @@
 // error of each against the closed-form deformation.
 #include "commands.hpp"
 #include "deform_outside.hpp"
+#include "deform_parts.hpp"
 #include "deform_sequence.hpp"
 #include "signals.hpp"
 
@@ -44,7 +45,8 @@ bool is_point_list(const fs::path& p) {
 }
 
 struct DeformArgs {
-  std::string control, deformed, mesh, out, stats, example;
+  std::string control, deformed, stats, example;
+  std::vector<std::string> meshes, outs;  // one --out for each --mesh
   std::string method = pipeline::method_name(pipeline::Method::ModifiedBI);
   double alpha = 0.0;
   bool alpha_given = false;
@@ -55,7 +57,7 @@ struct DeformArgs {
 };
 
 SequenceArgs sequence_args(const DeformArgs& a) {
-  return {.control = a.control, .deformed = a.deformed, .mesh = a.mesh, .out = a.out, .stats = a.stats,
+  return {.control = a.control, .deformed = a.deformed, .meshes = a.meshes, .outs = a.outs, .stats = a.stats,
           .method = *pipeline::parse_method(a.method), .alpha = a.alpha_given ? std::optional(a.alpha) : std::nullopt,
           .pin_boundary = a.pin_boundary, .force = a.force, .max_outside = a.max_outside,
           .fps = a.fps};
@@ -65,9 +67,9 @@ SequenceArgs sequence_args(const DeformArgs& a) {
 struct Problem {
   Eigen::MatrixXd U, X;       // control rest / deformed, n x d
   Eigen::MatrixXi T;          // m x (d+1)
-  Eigen::MatrixXd P;          // dense rest points, p x d
+  Eigen::MatrixXd P;          // dense rest points of every part, p x d
   Eigen::MatrixXd P_extra;    // columns beyond d kept as they are (2D control, 3D surface)
-  std::optional<io::SurfaceMesh> surface;  // when the dense model is a surface
+  DenseParts dense;           // the dense models, their rows in P
   std::string control_name, deformed_name, mesh_name;
   // The deformation in closed form at the dense points (examples only): p x d and (p d) x d.
   Eigen::MatrixXd exact, exact_gradients;
@@ -77,7 +79,6 @@ Problem load_files(const DeformArgs& a) {
   Problem pb;
   pb.control_name = a.control;
   pb.deformed_name = a.deformed;
-  pb.mesh_name = a.mesh;
   const io::ControlMesh cm = io::read_control_mesh(a.control);
   pb.U = cm.U;
   pb.T = cm.T;
@@ -98,16 +99,11 @@ Problem load_files(const DeformArgs& a) {
     throw std::runtime_error(a.deformed + ": positions have " + std::to_string(pb.X.cols()) +
                              " coordinates, but the control mesh " + a.control + " is " +
                              std::to_string(d) + "D");
-  Eigen::MatrixXd P;
-  if (is_point_list(a.mesh)) {
-    P = io::read_points(a.mesh);
-  } else {
-    pb.surface = io::read_surface(a.mesh);
-    P = pb.surface->V;
-  }
-  if (P.rows() == 0) throw std::runtime_error(a.mesh + ": no points");
+  pb.dense = read_dense_parts(a.meshes);
+  pb.mesh_name = pb.dense.names();
+  const Eigen::MatrixXd& P = pb.dense.P;
   if (P.cols() < d)
-    throw std::runtime_error(a.mesh + ": points have " + std::to_string(P.cols()) +
+    throw std::runtime_error(pb.mesh_name + ": points have " + std::to_string(P.cols()) +
                              " coordinates, the control mesh is " + std::to_string(d) + "D");
   pb.P = P.leftCols(d);
   pb.P_extra = P.rightCols(P.cols() - d);
@@ -126,7 +122,8 @@ Problem load_example(const std::string& name) {
   generate::paper_bar_surface(s.V, s.F);
   pb.P = s.V;
   pb.P_extra.resize(s.V.rows(), 0);
-  pb.surface = s;
+  pb.dense.parts.push_back({.file = pb.mesh_name, .surface = s, .first = 0, .rows = s.V.rows()});
+  pb.dense.P = s.V;
   const double pi = std::acos(-1.0);
   pb.X = generate::twist_bend(pb.U, 0.0, 0.0, 0.0, 6.0, pi / 2, 0.05);
   pb.exact = generate::twist_bend(pb.P, 0.0, 0.0, 0.0, 6.0, pi / 2, 0.05);
@@ -235,13 +232,14 @@ void print_summary(const DeformArgs& a, const Problem& pb, const interp::Embeddi
               r.embed_ms, r.precompute_ms, r.phong_ms, r.solve_ms, r.evaluate_ms);
 }
 
-// The deformed dense model (positions `out`, p x d; `normals` or null) as output i of `outputs`.
+// Dense part k of the deformed points (`out`, p x d; `normals` or null) as output i of `outputs`.
 // The format follows the extension of `name`; a surface keeps what its file held besides
 // positions (write_surface); points alone make a vertices-only surface.
 void write_deformed(const io::OutputSet& outputs, std::size_t i, const std::string& name, const Problem& pb,
-                    const Eigen::MatrixXd& out, const Eigen::MatrixXd* normals) {
-  Eigen::MatrixXd full(out.rows(), out.cols() + pb.P_extra.cols());
-  full << out, pb.P_extra;
+                    std::size_t k, const Eigen::MatrixXd& out, const Eigen::MatrixXd* normals) {
+  const DensePart& part = pb.dense.parts.at(k);
+  Eigen::MatrixXd full(part.rows, out.cols() + pb.P_extra.cols());
+  full << out.middleRows(part.first, part.rows), pb.P_extra.middleRows(part.first, part.rows);
   if (is_point_list(name)) {
     outputs.write(i, [&](const fs::path& op) { io::write_points(op, full); });
     return;
@@ -249,37 +247,54 @@ void write_deformed(const io::OutputSet& outputs, std::size_t i, const std::stri
   if (full.cols() > 3)
     throw std::runtime_error(name + ": points with " + std::to_string(full.cols()) +
                              " coordinates cannot be written as a surface (use .txt/.xyz)");
-  io::SurfaceMesh s = pb.surface ? *pb.surface : io::SurfaceMesh{};
+  io::SurfaceMesh s = part.surface ? *part.surface : io::SurfaceMesh{};
   s.V = Eigen::MatrixXd::Zero(full.rows(), 3);
   s.V.leftCols(full.cols()) = full;
-  if (normals) s.N = *normals;
+  if (normals && part.has_normals()) s.N = normals->middleRows(part.first, part.rows);
   else s.N.resize(0, 0);
   outputs.write(i, [&](const fs::path& op) { io::write_surface(op, s); });
 }
 
+// One overwrite rule for every command: existing outputs only with --force, inputs never (by file
+// identity); every output checked and reserved before any work, all written at the end. Returns
+// the index of each --out in `outputs`.
+std::vector<std::size_t> reserve_outputs(const DeformArgs& a, io::OutputSet& outputs) {
+  std::vector<std::size_t> i_outs;
+  for (const std::string& out : a.outs) {
+    i_outs.push_back(outputs.add(out, "--out"));
+    if (!is_point_list(out) && !io::is_surface_file(out))
+      throw std::runtime_error("--out " + out + ": unknown output format '" + io::lower_extension(out) + "' (expected " +
+                               io::extensions_of(io::FileKind::surface) + ", .txt or .xyz)");
+  }
+  return i_outs;
+}
+
+std::vector<fs::path> input_files(const DeformArgs& a) {
+  std::vector<fs::path> inputs{a.control, a.deformed};
+  inputs.insert(inputs.end(), a.meshes.begin(), a.meshes.end());
+  for (const fs::path& p : io::control_mesh_files(a.control)) inputs.push_back(p);
+  return inputs;
+}
+
+void check_required(const DeformArgs& a) {
+  for (const auto& [flag, v] : {std::pair{"--control", &a.control}, {"--deformed", &a.deformed}})
+    if (v->empty()) throw std::runtime_error(std::string(flag) + " is required (or use --example)");
+  if (a.meshes.empty()) throw std::runtime_error("--mesh is required (or use --example)");
+  if (a.outs.empty()) throw std::runtime_error("--out is required (or use --example)");
+  if (a.outs.size() != a.meshes.size())
+    throw std::runtime_error(std::to_string(a.meshes.size()) + " --mesh but " + std::to_string(a.outs.size()) +
+                             " --out: give one --out for each --mesh, in the same order");
+}
+
 int run_deform(const DeformArgs& a) {
   const bool example = !a.example.empty();
-  if (!example && is_sequence(a.deformed, a.out)) return run_deform_sequence(sequence_args(a));
-  if (!example) {
-    for (const auto& [flag, v] : {std::pair{"--control", &a.control}, {"--deformed", &a.deformed},
-                                  {"--mesh", &a.mesh}, {"--out", &a.out}})
-      if (v->empty()) throw std::runtime_error(std::string(flag) + " is required (or use --example)");
-  }
-  // One overwrite rule for every command: existing outputs only with --force, inputs never (by
-  // file identity); every output checked and reserved before any work, all written at the end.
-  std::vector<fs::path> inputs;
-  if (!example) {
-    inputs = {a.control, a.deformed, a.mesh};
-    for (const fs::path& p : io::control_mesh_files(a.control)) inputs.push_back(p);
-  }
+  if (!example) check_required(a);
+  if (!example && is_sequence(a.deformed, a.outs)) return run_deform_sequence(sequence_args(a));
   handle_interrupts(nullptr);  // all or nothing: a signal ends it at once, no temporaries
-  io::OutputSet outputs(inputs, a.force);
-  const std::size_t i_out = a.out.empty() ? 0 : outputs.add(a.out, "--out");
+  io::OutputSet outputs(example ? std::vector<fs::path>() : input_files(a), a.force);
+  const std::vector<std::size_t> i_outs = reserve_outputs(a, outputs);
   const std::size_t i_stats = a.stats.empty() ? 0 : outputs.add(a.stats, "--stats");
-  if (!a.out.empty() && !is_point_list(a.out) && !io::is_surface_file(a.out))
-    throw std::runtime_error("--out " + a.out + ": unknown output format '" +
-                             io::lower_extension(a.out) +
-                             "' (expected .obj, .ply, .off, .stl, .txt or .xyz)");
+  if (example && a.outs.size() > 1) throw std::runtime_error("--example writes one --out");
   if (a.alpha_given && !(a.alpha > 0) )
     throw std::runtime_error("--alpha must be > 0 (E_disc alone has extra null modes)");
 
@@ -298,10 +313,8 @@ int run_deform(const DeformArgs& a) {
   po.method = *pipeline::parse_method(a.method);
   // A 3D surface with normals gets deformed normals (the file's normals are the rest normals).
   Eigen::MatrixXd rest_normals;
-  if (d == 3 && pb.surface && pb.surface->N.rows() == pb.P.rows()) {
-    rest_normals = pb.surface->N;
-    po.normals = true;
-  }
+  if (d == 3) rest_normals = pb.dense.normals();  // when a part has normals
+  po.normals = rest_normals.rows() > 0;
   po.interp.alpha = a.alpha_given ? a.alpha : 0.0;
   po.interp.pin_boundary = a.pin_boundary;
   // One element has no interior face: BI and Phong need none; modified-BI minimises the
@@ -346,7 +359,8 @@ int run_deform(const DeformArgs& a) {
   const interp::Embedding& embedding = pipe->embedding();
 
   // Outputs: nothing is written unless everything above succeeded.
-  if (!a.out.empty()) write_deformed(outputs, i_out, a.out, pb, out, po.normals ? &pipe->normals() : nullptr);
+  for (std::size_t k = 0; k < a.outs.size(); ++k)
+    write_deformed(outputs, i_outs[k], a.outs[k], pb, k, out, po.normals ? &pipe->normals() : nullptr);
   if (!a.stats.empty()) {
     const nlohmann::json j = stats_json(a, pb, embedding, r);
     check_finite(j, a.stats);
@@ -354,7 +368,7 @@ int run_deform(const DeformArgs& a) {
   }
   outputs.commit();
   print_summary(a, pb, embedding, r);
-  if (!a.out.empty()) std::printf("wrote %s\n", a.out.c_str());
+  for (const std::string& o : a.outs) std::printf("wrote %s\n", o.c_str());
   return 0;
 }
 
@@ -369,11 +383,13 @@ const Registrar reg{
                      "REQUIRED (unless --example) deformed control positions, one per control node in file order: "
                      ".node, .msh, .vtk, .vtu or plain text (n lines of d numbers); or a whole trajectory: .pc2, .mdd, "
                      ".pvd, numbered files x_%04d.vtk or a quoted glob 'x_*.vtk'");
-      sub.add_option("--mesh", a->mesh, "REQUIRED (unless --example) dense model: .obj/.ply/.off/.stl, or points .txt/.xyz");
-      sub.add_option("--out", a->out,
-                     "REQUIRED (unless --example) output, format by extension: .obj/.ply/.off/.stl (keeping the input's "
-                     "attributes when the format is the same) or points .txt/.xyz; for a trajectory a point cache "
-                     ".pc2/.mdd or numbered files out_%04d.obj");
+      sub.add_option("--mesh", a->meshes,
+                     "REQUIRED (unless --example) dense model: .obj/.ply/.off/.stl/.glb/.gltf, or points .txt/.xyz; "
+                     "repeat it for several models driven by one control mesh, each with its --out");
+      sub.add_option("--out", a->outs,
+                     "REQUIRED (unless --example) output of each --mesh, format by extension: .obj/.ply/.off/.stl/.glb/"
+                     ".gltf (keeping the input's attributes when the format is the same) or points .txt/.xyz; for a "
+                     "trajectory a point cache .pc2/.mdd, an animated glTF .glb/.gltf or numbered files out_%04d.obj");
       sub.add_option("--method", a->method, "interpolation")
           ->check(CLI::IsMember(pipeline::kMethodNames.names()));
       sub.add_option_function<double>(

@@ -4,6 +4,7 @@
 
 #include "commands.hpp"
 #include "deform_outside.hpp"
+#include "deform_parts.hpp"
 
 #include <mbi/base/timer.hpp>
 #include <mbi/error.hpp>
@@ -29,15 +30,16 @@ namespace fs = std::filesystem;
 namespace mbi::cli {
 namespace {
 
-enum class OutKind { pc2, mdd, numbered };
+enum class OutKind { pc2, mdd, gltf, numbered };
 
 OutKind out_kind(const std::string& out) {
   const std::string ext = io::lower_extension(out);
   if (ext == ".pc2") return OutKind::pc2;
   if (ext == ".mdd") return OutKind::mdd;
+  if ((ext == ".glb" || ext == ".gltf") && out.find('%') == std::string::npos) return OutKind::gltf;
   if (out.find('%') == std::string::npos)
-    throw std::runtime_error("--out " + out + ": a sequence goes into a point cache (.pc2, .mdd) or numbered files "
-                             "(a printf pattern: out_%04d.obj)");
+    throw std::runtime_error("--out " + out + ": a sequence goes into a point cache (.pc2, .mdd), an animated glTF "
+                             "(.glb, .gltf) or numbered files (a printf pattern: out_%04d.obj)");
   const io::FileFormat* f = io::file_format(out);
   if (!f || (f->kind != io::FileKind::surface && f->kind != io::FileKind::points))
     throw std::runtime_error("--out " + out + ": numbered files are .obj, .ply, .off, .stl, .txt or .xyz");
@@ -45,11 +47,18 @@ OutKind out_kind(const std::string& out) {
   return OutKind::numbered;
 }
 
-// The rest control mesh and the dense model.
+// One --out: its name, kind and index in the command's OutputSet (caches and glTF).
+struct Out {
+  std::string name;
+  OutKind kind;
+  std::size_t index = 0;
+};
+
+// The rest control mesh and the dense models (their points concatenated: deform_parts.hpp).
 struct Model {
   io::ControlMesh control;
+  DenseParts dense;
   Eigen::MatrixXd P, P_extra;  // dense rest points p x d, and columns beyond d (kept as they are)
-  std::optional<io::SurfaceMesh> surface;
   int dim() const { return control.dim(); }
 };
 
@@ -57,23 +66,16 @@ Model load_model(const SequenceArgs& a) {
   Model m;
   m.control = io::read_control_mesh(a.control);
   for (const std::string& note : m.control.notes) std::fprintf(stderr, "mbi deform: note: %s\n", note.c_str());
-  const io::FileFormat* f = io::file_format(a.mesh);
-  Eigen::MatrixXd P;
-  if (f && f->kind == io::FileKind::points) {
-    P = io::read_points(a.mesh);
-  } else {
-    m.surface = io::read_surface(a.mesh);
-    P = m.surface->V;
-  }
+  m.dense = read_dense_parts(a.meshes);
+  const Eigen::MatrixXd& P = m.dense.P;
   const int d = m.dim();
-  if (P.rows() == 0) throw std::runtime_error(a.mesh + ": no points");
   if (P.cols() < d)
-    throw std::runtime_error(a.mesh + ": points have " + std::to_string(P.cols()) + " coordinates, the control mesh is " +
-                             std::to_string(d) + "D");
+    throw std::runtime_error(m.dense.names() + ": points have " + std::to_string(P.cols()) +
+                             " coordinates, the control mesh is " + std::to_string(d) + "D");
   m.P = P.leftCols(d);
   m.P_extra = P.rightCols(P.cols() - d);
-  if (d + m.P_extra.cols() > 3 && m.surface)
-    throw std::runtime_error(a.mesh + ": more than 3 coordinates a point");
+  for (const DensePart& part : m.dense.parts)
+    if (d + m.P_extra.cols() > 3 && part.surface) throw std::runtime_error(part.file + ": more than 3 coordinates a point");
   return m;
 }
 
@@ -94,13 +96,25 @@ Eigen::MatrixXd to_pose(Eigen::MatrixXd X, const Model& m, const std::string& wh
   return X;
 }
 
-// The output's timing: PC2 start frame and sample rate (frames), MDD times (s).
+// The output's timing: PC2 start frame and sample rate (frames), MDD and glTF times (s).
 struct Timing {
   float pc2_start = 0.0f, pc2_rate = 1.0f;
   std::vector<float> mdd_times;
+  std::vector<double> gltf_times;  // strictly increasing, as glTF keys must be
 };
 
-Timing output_timing(const io::Trajectory& t, double fps) {
+// The MDD times when they increase, else one frame every 1/fps seconds.
+std::vector<double> increasing_times(const std::vector<float>& times, double fps) {
+  std::vector<double> t(times.begin(), times.end());
+  for (std::size_t k = 1; k < t.size(); ++k)
+    if (!(t[k] > t[k - 1])) {
+      for (std::size_t i = 0; i < t.size(); ++i) t[i] = static_cast<double>(i) / fps;
+      break;
+    }
+  return t;
+}
+
+Timing cache_timing(const io::Trajectory& t, double fps) {
   Timing o;
   const int F = t.frames();
   const std::vector<double>& times = t.times();
@@ -127,6 +141,12 @@ Timing output_timing(const io::Trajectory& t, double fps) {
   return o;
 }
 
+Timing output_timing(const io::Trajectory& t, double fps) {
+  Timing o = cache_timing(t, fps);
+  o.gltf_times = increasing_times(o.mdd_times, fps);
+  return o;
+}
+
 // SIGINT and SIGTERM while the frames run: the loop stops after the frame in progress (the one
 // signal policy of every command, signals.hpp); a second signal ends the process at once.
 class StopOnSignal {
@@ -141,59 +161,111 @@ class StopOnSignal {
   std::atomic<int> stop_{0};
 };
 
-// Writes the dense frames as they come: into a point cache (finished at the end, or at the last
-// good frame) or one numbered file a frame (each complete when it appears).
-class FrameWriter {
+// Writes one dense part's frames as they come: into a point cache or an animated glTF (finished
+// at the end, or at the last good frame) or one numbered file a frame (each complete when it
+// appears).
+class PartWriter {
  public:
-  FrameWriter(OutKind kind, const fs::path& file, const std::string& pattern, const Model& m, const Timing& timing)
-      : kind_(kind), pattern_(pattern), model_(m) {
-    const int p = static_cast<int>(m.P.rows());
+  PartWriter(OutKind kind, const fs::path& file, const std::string& pattern, const DensePart& part,
+             const Eigen::MatrixXd& extra, const Timing& timing)
+      : kind_(kind), pattern_(pattern), extra_(extra) {
+    const int p = static_cast<int>(part.rows);
     if (kind == OutKind::pc2) pc2_ = std::make_unique<io::Pc2Writer>(file, p, timing.pc2_start, timing.pc2_rate);
     if (kind == OutKind::mdd) mdd_ = std::make_unique<io::MddWriter>(file, p, timing.mdd_times);
-    if (m.surface) surface_ = *m.surface;
+    if (part.surface) surface_ = *part.surface;
+    normals_ = part.has_normals();
+    if (kind == OutKind::gltf) {
+      if (!part.surface) throw std::runtime_error("--out " + pattern + ": a glTF needs a surface mesh, not points");
+      gltf_ = std::make_unique<io::GltfWriter>(file, surface_);
+      gltf_times_ = timing.gltf_times;
+    }
   }
 
-  // positions p x d (double), normals p x 3 or empty
-  void write(int k, const Eigen::MatrixXd& positions, const Eigen::MatrixXd& normals) {
-    full_.resize(positions.rows(), positions.cols() + model_.P_extra.cols());
-    full_ << positions, model_.P_extra;
+  // the part's positions p x d (double), normals p x 3 or empty
+  void write(int k, const Eigen::Ref<const Eigen::MatrixXd>& positions, const Eigen::Ref<const Eigen::MatrixXd>& normals) {
+    full_.resize(positions.rows(), positions.cols() + extra_.cols());
+    full_ << positions, extra_;
     if (kind_ == OutKind::pc2) return pc2_->append(full_);
     if (kind_ == OutKind::mdd) return mdd_->append(full_);
+    if (kind_ == OutKind::gltf) {
+      surface_.V = Eigen::MatrixXd::Zero(full_.rows(), 3);
+      surface_.V.leftCols(full_.cols()) = full_;
+      const double t = gltf_times_.at(static_cast<std::size_t>(k));
+      return normals_ ? gltf_->append(t, surface_.V, normals) : gltf_->append(t, surface_.V);
+    }
     const fs::path file = io::numbered_file(pattern_, k);
     const io::FileFormat* f = io::file_format(file);
     if (f->kind == io::FileKind::points) return io::write_points(file, full_);
     surface_.V = Eigen::MatrixXd::Zero(full_.rows(), 3);
     surface_.V.leftCols(full_.cols()) = full_;
-    surface_.N = normals;
+    surface_.N = normals_ ? Eigen::MatrixXd(normals) : Eigen::MatrixXd();
     io::write_surface(file, surface_);
   }
-  // positions p x 3 floats, interleaved (the float kernel's output, a cache's layout)
-  void write(const interp::RowMatrixXf& xyz) {
-    if (pc2_) pc2_->append(xyz.data());
-    else mdd_->append(xyz.data());
+  // the part's positions p x 3 floats, interleaved (the float kernel's output, a cache's layout)
+  void write(const float* xyz) {
+    if (pc2_) pc2_->append(xyz);
+    else mdd_->append(xyz);
   }
   void finish() {
     if (pc2_) pc2_->finish();
     if (mdd_) mdd_->finish();
+    if (gltf_) gltf_->finish();
   }
 
  private:
   OutKind kind_;
   std::string pattern_;
-  const Model& model_;
+  Eigen::MatrixXd extra_;  // the part's columns beyond d
+  bool normals_ = false;   // its file had normals: its frames get the deformed ones
   std::unique_ptr<io::Pc2Writer> pc2_;
   std::unique_ptr<io::MddWriter> mdd_;
+  std::unique_ptr<io::GltfWriter> gltf_;
+  std::vector<double> gltf_times_;
   io::SurfaceMesh surface_;
   Eigen::MatrixXd full_;
 };
 
+// Every --out, one a dense part, fed the rows of its part.
+class FrameWriter {
+ public:
+  FrameWriter(const std::vector<Out>& outs, const io::OutputSet& outputs, const Model& m, const Timing& timing)
+      : model_(m) {
+    for (std::size_t k = 0; k < outs.size(); ++k) {
+      const DensePart& part = m.dense.parts[k];
+      const fs::path file = outs[k].kind == OutKind::numbered ? fs::path() : outputs.staging(outs[k].index);
+      parts_.push_back(std::make_unique<PartWriter>(outs[k].kind, file, outs[k].name, part,
+                                                    m.P_extra.middleRows(part.first, part.rows), timing));
+    }
+  }
+  // positions p x d (double), normals p x 3 or empty
+  void write(int k, const Eigen::MatrixXd& positions, const Eigen::MatrixXd& normals) {
+    for (std::size_t i = 0; i < parts_.size(); ++i) {
+      const DensePart& part = model_.dense.parts[i];
+      const Eigen::MatrixXd none;
+      parts_[i]->write(k, positions.middleRows(part.first, part.rows),
+                       normals.size() > 0 ? normals.middleRows(part.first, part.rows) : none.middleRows(0, 0));
+    }
+  }
+  // positions p x 3 floats, row-major
+  void write(const interp::RowMatrixXf& xyz) {
+    for (std::size_t i = 0; i < parts_.size(); ++i) parts_[i]->write(xyz.data() + 3 * model_.dense.parts[i].first);
+  }
+  void finish() {
+    for (auto& p : parts_) p->finish();
+  }
+
+ private:
+  const Model& model_;
+  std::vector<std::unique_ptr<PartWriter>> parts_;
+};
+
 // Every numbered output follows the overwrite rule before any work: each is checked as an
 // output of its own (and never the --stats file).
-void check_numbered(const SequenceArgs& a, const std::vector<fs::path>& inputs, int frames) {
+void check_numbered(const SequenceArgs& a, const std::string& pattern, const std::vector<fs::path>& inputs, int frames) {
   std::error_code ec;
   const fs::path stats = a.stats.empty() ? fs::path() : fs::weakly_canonical(a.stats, ec);
   for (int k = 0; k < frames; ++k) {
-    const fs::path f = io::numbered_file(a.out, k);
+    const fs::path f = io::numbered_file(pattern, k);
     io::OutputSet one(inputs, a.force);
     one.add(f, "--out");
     if (!stats.empty() && fs::weakly_canonical(f, ec) == stats)
@@ -288,77 +360,58 @@ nlohmann::json stats_json(const SequenceArgs& a, const Model& m, const pipeline:
   return j;
 }
 
+std::string joined(const std::vector<std::string>& names) {
+  std::string s;
+  for (const std::string& n : names) s += (s.empty() ? "" : ", ") + n;
+  return s;
+}
+
 void print_summary(const SequenceArgs& a, const Model& m, const pipeline::Deformer& deformer, int frames, const Run& run) {
   const int d = m.dim();
   std::printf("control: %s: %d vertices, %d %s (%dD)\n", a.control.c_str(), static_cast<int>(m.control.U.rows()),
               static_cast<int>(m.control.T.rows()), d == 3 ? "tetrahedra" : "triangles", d);
-  std::printf("dense:   %s: %d points (%zu outside)\n", a.mesh.c_str(), static_cast<int>(m.P.rows()),
+  std::printf("dense:   %s: %d points (%zu outside)\n", m.dense.names().c_str(), static_cast<int>(m.P.rows()),
               deformer.embedding().outside.size());
   std::printf("method:  %s", pipeline::method_name(a.method));
   if (pipeline::needs_solve(a.method))
     std::printf(", alpha %.4g, beta %.4g", deformer.solver().alpha(), deformer.solver().beta());
   std::printf("%s\nframes:  %d of %d from %s into %s\n", a.pin_boundary ? ", boundary pinned" : "", run.done, frames,
-              a.deformed.c_str(), a.out.c_str());
+              a.deformed.c_str(), joined(a.outs).c_str());
   const double n = std::max(run.done, 1);
   std::printf("times (ms): embed %.2f  precompute %.2f  per frame: read %.3f  deform %.3f  write %.3f\n", run.embed_ms,
               run.precompute_ms, run.read_ms / n, run.deform_ms / n, run.write_ms / n);
 }
 
-// Everything from the models to the last frame; `outputs` holds the --out cache and --stats.
-int run_sequence_frames(const SequenceArgs& a, OutKind kind, io::Trajectory& traj, io::OutputSet& outputs,
-                        std::size_t i_out, std::size_t i_stats) {
-  const Model m = load_model(a);
-  const int d = m.dim();
-  scenes::check_run_size(a.control, m.P.rows(), m.control.U.rows(), m.control.T.rows(), d);
-  if (traj.frames() == 0) throw std::runtime_error(a.deformed + ": no frames");
-  to_pose(traj.read(0), m, traj.where(0), a.control);  // a wrong node count fails before any work
-  Run run;
+// The embedding and the precompute, timed into `run`; with rest normals when `normals`.
+pipeline::Deformer make_deformer(const SequenceArgs& a, const Model& m, bool normals, Run& run) {
   auto t0 = Clock::now();
   interp::Embedding emb;
   try {
     emb = interp::embed(m.control.U, m.control.T, m.P);
   } catch (const mbi::Error& e) {
-    throw std::runtime_error(a.mesh + ": " + e.what());
+    throw std::runtime_error(m.dense.names() + ": " + e.what());
   }
   run.embed_ms = ms_since(t0);
   if (!emb.outside.empty())
     std::fprintf(stderr, "mbi deform: warning: %zu of %d points lie outside the control mesh (farthest %.3g); they follow "
                  "the nearest element by extrapolation\n", emb.outside.size(), emb.size(), emb.max_outside_distance);
-  if (a.max_outside) refuse_far_points(emb, m.control.U, m.control.T, m.P, *a.max_outside, a.mesh, a.control);
+  if (a.max_outside) refuse_far_points(emb, m.control.U, m.control.T, m.P, *a.max_outside, m.dense.names(), a.control);
   pipeline::DeformerOptions opt{.method = a.method, .interp = {}};
   opt.interp.alpha = a.alpha.value_or(0.0);
   opt.interp.pin_boundary = a.pin_boundary;
-  // numbered surfaces with normals get deformed normals; caches hold positions only
-  const bool normals = kind == OutKind::numbered && m.surface && d == 3 && m.surface->N.rows() == m.P.rows() &&
-                       io::is_surface_file(a.out);
   t0 = Clock::now();
-  std::optional<pipeline::Deformer> deformer;
   try {
-    deformer.emplace(m.control.U, m.control.T, std::move(emb), opt, normals ? m.surface->N : Eigen::MatrixXd());
+    pipeline::Deformer deformer(m.control.U, m.control.T, std::move(emb), opt,
+                                normals ? m.dense.normals() : Eigen::MatrixXd());
+    run.precompute_ms = ms_since(t0);
+    return deformer;
   } catch (const mbi::Error& e) {
     throw std::runtime_error(a.control + ": " + e.what());
   }
-  run.precompute_ms = ms_since(t0);
-  {
-    // a cache of a 3D model: the float kernel, whose output is the cache's layout
-    const bool use_float = kind != OutKind::numbered && d == 3 && m.P_extra.cols() == 0;
-    FrameWriter out(kind, kind == OutKind::numbered ? fs::path() : outputs.staging(i_out), a.out, m,
-                    output_timing(traj, a.fps));
-    run_frames(a, traj, m, *deformer, out, use_float, run);
-    if (run.done == 0 && run.signal) {
-      std::fprintf(stderr, "mbi deform: interrupted by signal %d before the first frame: nothing written\n", run.signal);
-      return 128 + run.signal;
-    }
-    if (run.done == 0) throw std::runtime_error(run.failure);
-    out.finish();
-  }
-  if (!a.stats.empty()) {
-    const nlohmann::json j = stats_json(a, m, *deformer, traj.frames(), run);
-    check_finite(j, a.stats);
-    io::write_text_atomic(outputs.staging(i_stats), j.dump(2) + "\n");
-  }
-  outputs.commit();
-  print_summary(a, m, *deformer, traj.frames(), run);
+}
+
+// Exit code and message of a run that stopped early; 0 when it did not.
+int report_stop(const Run& run) {
   if (!run.failure.empty()) {
     std::fprintf(stderr, "mbi deform: error: %s (outputs up to frame %d kept)\n", run.failure.c_str(), run.done - 1);
     return 3;
@@ -371,29 +424,77 @@ int run_sequence_frames(const SequenceArgs& a, OutKind kind, io::Trajectory& tra
   return 0;
 }
 
+// Everything from the models to the last frame; `outputs` holds the caches, glTF and --stats.
+int run_sequence_frames(const SequenceArgs& a, const std::vector<Out>& outs, io::Trajectory& traj,
+                        io::OutputSet& outputs, std::size_t i_stats) {
+  const Model m = load_model(a);
+  const int d = m.dim();
+  scenes::check_run_size(a.control, m.P.rows(), m.control.U.rows(), m.control.T.rows(), d);
+  if (traj.frames() == 0) throw std::runtime_error(a.deformed + ": no frames");
+  to_pose(traj.read(0), m, traj.where(0), a.control);  // a wrong node count fails before any work
+  // numbered surfaces and glTF get deformed normals when their part has normals; caches hold
+  // positions only, and take the float kernel (its output is their layout) for a 3D model
+  bool normals = false, use_float = d == 3 && m.P_extra.cols() == 0;
+  for (const Out& o : outs) {
+    normals |= (o.kind == OutKind::gltf || (o.kind == OutKind::numbered && io::is_surface_file(o.name)));
+    use_float &= o.kind == OutKind::pc2 || o.kind == OutKind::mdd;
+  }
+  normals = normals && d == 3 && m.dense.normals().rows() > 0;
+  Run run;
+  pipeline::Deformer deformer = make_deformer(a, m, normals, run);
+  {
+    FrameWriter out(outs, outputs, m, output_timing(traj, a.fps));
+    run_frames(a, traj, m, deformer, out, use_float, run);
+    if (run.done == 0 && run.signal) {
+      std::fprintf(stderr, "mbi deform: interrupted by signal %d before the first frame: nothing written\n", run.signal);
+      return 128 + run.signal;
+    }
+    if (run.done == 0) throw std::runtime_error(run.failure);
+    out.finish();
+  }
+  if (!a.stats.empty()) {
+    const nlohmann::json j = stats_json(a, m, deformer, traj.frames(), run);
+    check_finite(j, a.stats);
+    io::write_text_atomic(outputs.staging(i_stats), j.dump(2) + "\n");
+  }
+  outputs.commit();
+  print_summary(a, m, deformer, traj.frames(), run);
+  return report_stop(run);
+}
+
 }  // namespace
 
-bool is_sequence(const std::string& deformed, const std::string& out) {
-  const std::string ext = io::lower_extension(out);
-  return io::Trajectory::names_trajectory(deformed) || ext == ".pc2" || ext == ".mdd" || out.find('%') != std::string::npos;
+bool is_sequence(const std::string& deformed, const std::vector<std::string>& outs) {
+  if (io::Trajectory::names_trajectory(deformed)) return true;
+  for (const std::string& out : outs) {
+    const std::string ext = io::lower_extension(out);
+    if (ext == ".pc2" || ext == ".mdd" || out.find('%') != std::string::npos) return true;
+  }
+  return false;
 }
 
 int run_deform_sequence(const SequenceArgs& a) {
-  for (const auto& [flag, v] : {std::pair{"--control", &a.control}, {"--deformed", &a.deformed}, {"--mesh", &a.mesh}, {"--out", &a.out}})
+  for (const auto& [flag, v] : {std::pair{"--control", &a.control}, {"--deformed", &a.deformed}})
     if (v->empty()) throw std::runtime_error(std::string(flag) + " is required");
+  if (a.meshes.empty() || a.outs.size() != a.meshes.size())
+    throw std::runtime_error("give one --out for each --mesh (" + std::to_string(a.meshes.size()) + " --mesh, " +
+                             std::to_string(a.outs.size()) + " --out)");
   if (a.alpha && !(*a.alpha > 0)) throw std::runtime_error("--alpha must be > 0 (E_disc alone has extra null modes)");
   if (!(a.fps > 0) || !std::isfinite(a.fps)) throw std::runtime_error("--fps must be > 0");
-  const OutKind kind = out_kind(a.out);
+  std::vector<Out> outs;
+  for (const std::string& o : a.outs) outs.push_back({.name = o, .kind = out_kind(o)});
   io::Trajectory traj(a.deformed);  // the list of frames; every file named exists
   // One overwrite rule (docs/cli.md): every output checked before any work, inputs never outputs.
   std::vector<fs::path> inputs = traj.files();
-  inputs.push_back(a.mesh);
+  inputs.insert(inputs.end(), a.meshes.begin(), a.meshes.end());
   for (const fs::path& p : io::control_mesh_files(a.control)) inputs.push_back(p);
   io::OutputSet outputs(inputs, a.force);
-  const std::size_t i_out = kind == OutKind::numbered ? 0 : outputs.add(a.out, "--out");
+  for (Out& o : outs)
+    if (o.kind != OutKind::numbered) o.index = outputs.add(o.name, "--out");
   const std::size_t i_stats = a.stats.empty() ? 0 : outputs.add(a.stats, "--stats");
-  if (kind == OutKind::numbered) check_numbered(a, inputs, traj.frames());
-  return run_sequence_frames(a, kind, traj, outputs, i_out, i_stats);
+  for (const Out& o : outs)
+    if (o.kind == OutKind::numbered) check_numbered(a, o.name, inputs, traj.frames());
+  return run_sequence_frames(a, outs, traj, outputs, i_stats);
 }
 
 }  // namespace mbi::cli

@@ -6,11 +6,14 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace mbi::cli {
 
 struct SequenceArgs {
-  std::string control, deformed, mesh, out, stats;
+  std::string control, deformed;
+  std::vector<std::string> meshes, outs;  ///< one --out for each dense model
+  std::string stats;
   pipeline::Method method = pipeline::Method::ModifiedBI;
   std::optional<double> alpha;        ///< none: the method's default
   bool pin_boundary = false, force = false;
@@ -19,8 +22,8 @@ struct SequenceArgs {
 };
 
 /// Whether the arguments ask for a sequence: `deformed` names a trajectory (io::Trajectory) or
-/// `out` a point cache (.pc2, .mdd) or numbered files (a printf pattern).
-bool is_sequence(const std::string& deformed, const std::string& out);
+/// an output is a point cache (.pc2, .mdd) or numbered files (a printf pattern).
+bool is_sequence(const std::string& deformed, const std::vector<std::string>& outs);
 
 /// Runs it; returns the exit code: 0, 3 when a frame failed after earlier ones were written (they
 /// are kept), 128 + the signal when SIGINT or SIGTERM stopped it. Throws (exit 2, nothing

@@ -15,7 +15,7 @@ set -euo pipefail
 # faster factorization of the modified-BI precompute (optional: MBI_WITH_CHOLMOD), and OpenBLAS,
 # which CHOLMOD's supernodal factorization runs on (Debian's reference BLAS is several times
 # slower; the package takes over libblas.so.3 through update-alternatives); pugixml and zlib
-# for VTK XML (.vtu, .pvd) control meshes and trajectories.
+# for VTK XML (.vtu, .pvd) control meshes and trajectories; tinygltf (header-only) for glTF 2.0.
 run_packages=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libtet1.5-dev libopenmesh-dev
@@ -23,7 +23,7 @@ run_packages=(
   libepoxy-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri libglx-mesa0
   libglfw3-dev libimgui-dev
   libsuitesparse-dev libopenblas0-pthread
-  libpugixml-dev zlib1g-dev
+  libpugixml-dev zlib1g-dev libtinygltf-dev
 )
 # Testing: Catch2 (the test suite), Xvfb with xauth (the viewer's tests run under xvfb-run),
 # Python (scripts/test.sh --sanitizers), Google Benchmark (mbi-bench), matplotlib and git (the
@@ -38,6 +38,19 @@ test_packages=(
   pybind11-dev python3-dev python3-numpy python3-pytest python3-torch python3-venv python3-setuptools
   python3-meshio ffmpeg
 )
+# The glTF tests check our files with the Khronos validator and three.js (node packages pinned by
+# tests/gltf/node/package-lock.json, installed by `npm ci` below): node and npm from Debian where
+# no npm is installed already (a NodeSource node brings its own).
+if ! command -v npm >/dev/null 2>&1; then test_packages+=(nodejs npm); fi
+
+# The node packages of the glTF tests, into tests/gltf/node/node_modules (git-ignored).
+install_node_packages() {
+  local dir
+  dir="$(cd "$(dirname "$0")/.." && pwd)/tests/gltf/node"
+  if [ -d "$dir/node_modules/three" ] && [ -d "$dir/node_modules/gltf-validator" ]; then return 0; fi
+  echo "install-deps: npm ci in tests/gltf/node"
+  (cd "$dir" && npm ci --no-audit --no-fund)
+}
 
 case "${1:-test}" in
   run) packages=("${run_packages[@]}") ;;
@@ -55,6 +68,7 @@ done
 
 if [ ${#missing[@]} -eq 0 ]; then
   echo "install-deps: all ${#packages[@]} packages present"
+  if [ "${1:-test}" = test ]; then install_node_packages; fi
   exit 0
 fi
 
@@ -71,3 +85,4 @@ echo "install-deps: installing ${missing[*]}"
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq
 $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+if [ "${1:-test}" = test ]; then install_node_packages; fi

@@ -14,6 +14,15 @@ namespace fs = std::filesystem;
 namespace mbi::scenes {
 namespace {
 
+// Loop subdivision when the scene asks for it.
+void subdivide(const Scene& sc, const DenseSpec& d, io::SurfaceMesh& s) {
+  if (d.subdivide == 0) return;
+  if (s.V.cols() != 3) throw SceneError(sc.file.string() + ": dense.subdivide: only for 3D surfaces");
+  generate::loop_subdivide(s, d.subdivide);
+  s.N.resize(0, 0);  // the file's normals and attributes belong to the unrefined mesh
+  s.attributes.reset();
+}
+
 // The dense model: --mesh, the scene's file or a built-in; Loop-subdivided when the scene asks.
 void load_dense(const Scene& sc, const fs::path& mesh_override, SceneModels& m) {
   if (!mesh_override.empty()) {
@@ -43,13 +52,41 @@ void load_dense(const Scene& sc, const fs::path& mesh_override, SceneModels& m) 
         sc.dense.image.empty() ? "built-in test pattern" : resolve_path(sc, sc.dense.image).string();
     m.image = std::move(img);
   }
-  if (sc.dense.subdivide > 0) {
-    if (m.dense.V.cols() != 3) throw SceneError(sc.file.string() + ": dense.subdivide: only for 3D surfaces");
-    generate::loop_subdivide(m.dense, sc.dense.subdivide);
-    m.dense.N.resize(0, 0);  // the file's normals and attributes belong to the unrefined mesh
-    m.dense.attributes.reset();
-  }
+  subdivide(sc, sc.dense, m.dense);
   if (m.dense.V.rows() == 0) throw SceneError(m.dense_name + ": the dense model has no vertices");
+}
+
+// [[dense]]: the other models' files joined after the first (deform_parts in the app does the
+// same for mbi deform); each part keeps its own surface for its output.
+void add_more_dense(const Scene& sc, SceneModels& m) {
+  m.dense_parts.push_back({m.dense_name, 0, m.dense.V.rows(), m.dense});
+  for (const DenseSpec& d : sc.more_dense) {
+    const fs::path p = resolve_path(sc, d.path);
+    io::SurfaceMesh s = io::read_surface(p);
+    subdivide(sc, d, s);
+    if (s.V.rows() == 0) throw SceneError(p.string() + ": the dense model has no vertices");
+    m.dense_parts.push_back({p.string(), m.dense_parts.back().first + m.dense_parts.back().rows, s.V.rows(), s});
+  }
+  io::SurfaceMesh joined;
+  joined.V.resize(m.dense_parts.back().first + m.dense_parts.back().rows, 3);
+  Eigen::Index faces = 0;
+  bool normals = true;
+  for (const DensePart& part : m.dense_parts) {
+    faces += part.surface.F.rows();
+    normals = normals && part.surface.N.rows() == part.rows;
+  }
+  joined.F.resize(faces, 3);
+  if (normals) joined.N.resize(joined.V.rows(), 3);
+  faces = 0;
+  m.dense_name.clear();
+  for (const DensePart& part : m.dense_parts) {
+    joined.V.middleRows(part.first, part.rows) = part.surface.V;
+    if (normals) joined.N.middleRows(part.first, part.rows) = part.surface.N;
+    joined.F.middleRows(faces, part.surface.F.rows()) = part.surface.F.array() + static_cast<int>(part.first);
+    faces += part.surface.F.rows();
+    m.dense_name += (m.dense_name.empty() ? "" : ", ") + part.name;
+  }
+  m.dense = std::move(joined);
 }
 
 // A flat 3-coordinate model is 2D (as in mbi cage and mbi deform): z is dropped and kept in
@@ -142,6 +179,7 @@ void load_control(const Scene& sc, bool force_3d, std::optional<io::ControlMesh>
 SceneModels load_models(const Scene& sc, const fs::path& mesh_override, bool force_3d) {
   SceneModels m;
   load_dense(sc, mesh_override, m);
+  if (mesh_override.empty() && !sc.more_dense.empty()) add_more_dense(sc, m);
   std::optional<io::ControlMesh> from_file;
   if (!sc.control.path.empty()) from_file = io::read_control_mesh(resolve_path(sc, sc.control.path));
   drop_flat_z(sc, force_3d, from_file, m);

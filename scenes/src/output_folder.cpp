@@ -11,7 +11,7 @@ namespace {
 
 // The names of the files run_scene writes into its output folder.
 const std::regex& output_names() {
-  static const std::regex ours(R"((mesh_[0-9]+\.(obj|ply)|control_[0-9]+\.vtk|frame_[0-9]+\.png|dense\.pc2|metrics\.json))");
+  static const std::regex ours(R"((mesh[0-9]*_[0-9]+\.(obj|ply)|mesh[0-9]*\.glb|control_[0-9]+\.vtk|frame_[0-9]+\.png|dense\.pc2|metrics\.json))");
   return ours;
 }
 
@@ -87,6 +87,7 @@ std::vector<fs::path> input_files(const Scene& sc, const fs::path& mesh_override
   std::vector<fs::path> in{sc.file};
   if (!mesh_override.empty()) in.push_back(mesh_override);
   if (!sc.dense.path.empty()) in.push_back(resolve_path(sc, sc.dense.path));
+  for (const DenseSpec& d : sc.more_dense) in.push_back(resolve_path(sc, d.path));
   if (!sc.dense.image.empty()) in.push_back(resolve_path(sc, sc.dense.image));
   if (!sc.control.path.empty()) {
     fs::path c = resolve_path(sc, sc.control.path);

@@ -8,7 +8,35 @@ namespace mbi::scenes {
 
 Outputs::Outputs(const Scene& sc, const SceneModels& m, const fs::path& dir) : sc_(sc), m_(m), dir_(dir) {
   if (sc.output.pc2) pc2_ = std::make_unique<io::Pc2Writer>(dir / "dense.pc2", static_cast<int>(m.dense.V.rows()), 0.0f, 1.0f);
+  if (sc.output.mesh_format != MeshFormat::Glb) return;
+  if (m.dense_parts.empty()) gltf_.push_back(std::make_unique<io::GltfWriter>(dir / "mesh.glb", m.dense));
+  for (std::size_t k = 0; k < m.dense_parts.size(); ++k)
+    gltf_.push_back(std::make_unique<io::GltfWriter>(dir / ("mesh" + std::to_string(k + 1) + ".glb"), m.dense_parts[k].surface));
 }
+
+namespace {
+
+// The rows of one dense model; its normals only when its file had them.
+struct PartRows {
+  const io::SurfaceMesh& surface;
+  Eigen::MatrixXd V, N;
+  std::string base;  // "mesh", or "mesh1", "mesh2", ...
+};
+
+std::vector<PartRows> part_rows(const SceneModels& m, const Eigen::MatrixXd& V3, const Eigen::MatrixXd* normals) {
+  std::vector<PartRows> parts;
+  const Eigen::MatrixXd none;
+  if (m.dense_parts.empty()) parts.push_back({m.dense, V3, normals ? *normals : none, "mesh"});
+  for (std::size_t k = 0; k < m.dense_parts.size(); ++k) {
+    const DensePart& p = m.dense_parts[k];
+    const bool n = normals && normals->rows() == V3.rows() && p.surface.N.rows() == p.rows;
+    parts.push_back({p.surface, V3.middleRows(p.first, p.rows), n ? normals->middleRows(p.first, p.rows) : none,
+                     "mesh" + std::to_string(k + 1)});
+  }
+  return parts;
+}
+
+}  // namespace
 
 void Outputs::frame(int f, const Eigen::MatrixXd& Xc, const Eigen::MatrixXd& dense,
                     const std::vector<const Eigen::MatrixXd*>& shown, bool write_now,
@@ -16,7 +44,9 @@ void Outputs::frame(int f, const Eigen::MatrixXd& Xc, const Eigen::MatrixXd& den
   std::vector<fs::path> written;  // this frame's files, removed again if a later write fails
   try {
     if (write_now) {
-      if (sc_.output.mesh_format != MeshFormat::None) written.push_back(write_mesh(f, dense, normals));
+      if (!gltf_.empty()) append_gltf(f, dense, normals);
+      else if (sc_.output.mesh_format != MeshFormat::None)
+        for (const fs::path& p : write_mesh(f, dense, normals)) written.push_back(p);
       if (sc_.output.control_vtk) {
         const Eigen::MatrixXd disp = Xc - m_.U;
         written.push_back(io::frame_path(dir_ / "control", f, ".vtk"));
@@ -44,15 +74,25 @@ void Outputs::append_pc2(const Eigen::MatrixXd& dense) {
   }
 }
 
-fs::path Outputs::write_mesh(int f, const Eigen::MatrixXd& dense, const Eigen::MatrixXd* normals) {
+std::vector<fs::path> Outputs::write_mesh(int f, const Eigen::MatrixXd& dense, const Eigen::MatrixXd* normals) {
   const std::string ext = std::string(".") + format_name(sc_.output.mesh_format);
   const io::Encoding enc = sc_.output.mesh_format == MeshFormat::Ply ? io::Encoding::binary : io::Encoding::ascii;
-  if (dense.cols() == 3)
-    return io::write_frame(dir_ / "mesh", f, ext, m_.dense, dense, enc, normals ? *normals : Eigen::MatrixXd());
+  // 2D: z = 0, or the plane of a flat model; no normals
+  Eigen::MatrixXd V3 = Eigen::MatrixXd::Constant(dense.rows(), 3, m_.flat_z.value_or(0.0));
+  V3.leftCols(dense.cols()) = dense;
+  std::vector<fs::path> written;
+  for (const PartRows& p : part_rows(m_, V3, dense.cols() == 3 ? normals : nullptr))
+    written.push_back(io::write_frame(dir_ / p.base, f, ext, p.surface, p.V, enc, p.N));
+  return written;
+}
+
+void Outputs::append_gltf(int f, const Eigen::MatrixXd& dense, const Eigen::MatrixXd* normals) {
   // 2D: z = 0, or the plane of a flat model
   Eigen::MatrixXd V3 = Eigen::MatrixXd::Constant(dense.rows(), 3, m_.flat_z.value_or(0.0));
   V3.leftCols(dense.cols()) = dense;
-  return io::write_frame(dir_ / "mesh", f, ext, m_.dense, V3, enc);
+  const double t = f * sc_.simulation.parameters.dt;
+  const std::vector<PartRows> parts = part_rows(m_, V3, dense.cols() == 3 ? normals : nullptr);
+  for (std::size_t k = 0; k < parts.size(); ++k) gltf_[k]->append(t, parts[k].V, parts[k].N);
 }
 
 fs::path Outputs::write_picture_2d(int f, const std::vector<const Eigen::MatrixXd*>& shown) {
@@ -71,6 +111,7 @@ fs::path Outputs::write_picture_2d(int f, const std::vector<const Eigen::MatrixX
 
 void Outputs::finish() {
   if (pc2_) pc2_->finish();
+  for (auto& g : gltf_) g->finish();
 }
 
 }  // namespace mbi::scenes

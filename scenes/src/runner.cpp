@@ -49,7 +49,7 @@ void finish_run(const Scene& sc, pipeline::FramePipeline& pipe,
   try {
     out.finish();
   } catch (const std::exception& e) {
-    record_failure(res, std::string("dense.pc2: ") + e.what());
+    record_failure(res, std::string("dense.pc2 or mesh.glb: ") + e.what());
   }
   const auto t0 = Clock::now();
   try {

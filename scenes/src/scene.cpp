@@ -350,6 +350,21 @@ void parse_dense(Table t, DenseSpec& d) {
   t.finish();
 }
 
+// [dense], or several [[dense]] entries: the first is sc.dense, the others (files only) follow it.
+void parse_dense_models(Table& top, Scene& sc) {
+  if (!top.at("dense").is_array()) return parse_dense(top.sub("dense"), sc.dense);
+  std::vector<Table> entries = top.array_of_tables("dense");
+  if (entries.empty()) throw SceneError(top.where(top.at("dense")) + ": dense: give at least one [[dense]] entry");
+  for (std::size_t k = 0; k < entries.size(); ++k) {
+    DenseSpec d;
+    parse_dense(entries[k], d);
+    if (entries.size() > 1 && d.path.empty())
+      throw SceneError(entries[k].where(entries[k].value()) + ": dense: several dense models are files (path), not built-ins");
+    if (k == 0) sc.dense = d;
+    else sc.more_dense.push_back(d);
+  }
+}
+
 // cells = [nx, ny(, nz)] of a built-in box or grid, counted in 64 bits before it is built.
 Eigen::Vector3i parse_cells(Table& t, ControlBuiltin builtin) {
   Eigen::Vector3d c = t.vec("cells", Eigen::Vector3d(2, 2, 8), 2);
@@ -558,7 +573,7 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& file) {
   sc.name = top.string("name", file.stem().string());
   sc.mode = top.choice("mode", Mode::Simulate, kModeNames);
   if (!top.has("dense")) throw SceneError(fname + ":1: dense: missing table [dense]");
-  parse_dense(top.sub("dense"), sc.dense);
+  parse_dense_models(top, sc);
   if (!top.has("control")) throw SceneError(fname + ":1: control: missing table [control]");
   parse_control(top.sub("control"), sc.control);
   if (top.has("material")) parse_material(top.sub("material"), sc.material);

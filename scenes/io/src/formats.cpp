@@ -2,6 +2,7 @@
 // read and write it. Every choice of a format by extension goes through here: the readers and
 // writers of io.hpp, and the command line (file_format, read_positions, control_mesh_files).
 #include "control.hpp"
+#include "format_gltf.hpp"
 #include "surface.hpp"
 
 namespace mbi::io {
@@ -45,6 +46,16 @@ constexpr FormatRow kFormats[] = {
      .write_surface = detail::write_stl,
      .attributes_fit = detail::stl_attributes_fit,
      .triangles_only = true},
+    {.format = {".glb", "glTF 2.0 binary", FileKind::surface},
+     .parse_surface = detail::parse_gltf,
+     .write_surface = detail::write_gltf,
+     .attributes_fit = detail::gltf_attributes_fit,
+     .triangles_only = true},
+    {.format = {".gltf", "glTF 2.0", FileKind::surface},
+     .parse_surface = detail::parse_gltf,
+     .write_surface = detail::write_gltf,
+     .attributes_fit = detail::gltf_attributes_fit,
+     .triangles_only = true},
     {.format = {".node", "TetGen nodes", FileKind::control},
      .read_control = read_tetgen,
      .read_positions = read_node,
@@ -71,7 +82,7 @@ constexpr FormatRow kFormats[] = {
     {.format = {".pvd", "ParaView collection", FileKind::collection}},
 };
 // A control mesh of any other name is a TetGen base name ("box", "box.1").
-constexpr const FormatRow& kTetgen = kFormats[4];
+constexpr const FormatRow& kTetgen = kFormats[6];
 
 const FormatRow* row_of(const path& file) {
   const std::string ext = lower_extension(file);
@@ -98,7 +109,9 @@ const FormatRow& control_row(const path& file) {
 const SurfaceAttributes* kept_attributes(const FormatRow& row, const SurfaceMesh& mesh,
                                          Eigen::Index vertices, const Polygons& faces) {
   const SurfaceAttributes* a = mesh.attributes.get();
-  const bool fit = a && row.attributes_fit && a->format == row.format.extension &&
+  // .gltf and .glb hold the same document: attributes read from either fit both
+  const bool same = a && (a->format == row.format.extension || (a->gltf && row.write_surface == detail::write_gltf));
+  const bool fit = same && row.attributes_fit &&
                    a->vertices == vertices && row.attributes_fit(*a, faces);
   return fit ? a : nullptr;
 }

@@ -8,20 +8,25 @@
 #include "io_common.hpp"
 
 #include <array>
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace mbi::io {
+namespace detail {
+struct GltfAsset;
+}
 
 /// Everything a surface file holds besides positions, faces and normals (see SurfaceMesh).
 struct SurfaceAttributes {
-  std::string format;       // ".obj", ".ply" or ".stl"
+  std::string format;       // ".obj", ".ply", ".stl" or ".glb"
   bool binary = false;      // PLY, STL
   bool big_endian = false;  // binary PLY
   long long vertices = 0;   // vertex count of the file (attributes fit a mesh with as many)
   detail::ObjAttributes obj;
   detail::PlyAttributes ply;
   detail::StlAttributes stl;
+  std::shared_ptr<const detail::GltfAsset> gltf;  // .gltf and .glb (format ".glb")
 };
 
 namespace detail {

@@ -27,8 +27,19 @@
 namespace mbi::scenes {
 
 /// A scene's models, ready to run: the dense model and the control mesh in one dimension d.
+/// One of several dense models ([[dense]]): its rows in SceneModels::dense and its own surface
+/// (attributes, for its own output files).
+struct DensePart {
+  std::string name;
+  Eigen::Index first = 0, rows = 0;
+  io::SurfaceMesh surface;
+};
+
 struct SceneModels {
   io::SurfaceMesh dense;           ///< 3D: the surface; 2D: V n x 2 grid, F triangles
+  /// Several dense models: every part, in order (dense is then all of them joined: faces
+  /// renumbered, normals when every part has them, no attributes); empty for one model.
+  std::vector<DensePart> dense_parts;
   Eigen::MatrixXd U;               ///< control rest positions n x d
   Eigen::MatrixXi T;               ///< control elements m x (d+1)
   std::optional<io::Image> image;  ///< 2D: the texture (pixels; dense V are pixel coordinates)

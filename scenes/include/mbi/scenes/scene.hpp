@@ -33,7 +33,7 @@ enum class Mode {
 };
 enum class DenseBuiltin { None, PaperBar, Cylinder, BumpySphere, ImageGrid };
 enum class ControlBuiltin { None, PaperBar, Box, Grid2D };
-enum class MeshFormat { Obj, Ply, None };
+enum class MeshFormat { Obj, Ply, Glb, None };
 /// Where the dense points are evaluated and pictures drawn: the GPU (OpenGL transform feedback)
 /// or the CPU. Auto uses the GPU when an OpenGL context can be made and says so when it cannot.
 enum class GpuUse { Auto, On, Off };
@@ -53,7 +53,7 @@ inline constexpr auto kControlBuiltinNames = name_table<ControlBuiltin>(
      {ControlBuiltin::Box, "box"},
      {ControlBuiltin::Grid2D, "grid-2d"}});
 inline constexpr auto kMeshFormatNames = name_table<MeshFormat>(
-    {{MeshFormat::Obj, "obj"}, {MeshFormat::Ply, "ply"}, {MeshFormat::None, "none"}});
+    {{MeshFormat::Obj, "obj"}, {MeshFormat::Ply, "ply"}, {MeshFormat::Glb, "glb"}, {MeshFormat::None, "none"}});
 inline constexpr auto kGpuUseNames =
     name_table<GpuUse>({{GpuUse::Auto, "auto"}, {GpuUse::On, "on"}, {GpuUse::Off, "off"}});
 inline constexpr auto kHandleModeNames = name_table<interp::HandleMode>(
@@ -175,6 +175,9 @@ struct Scene {
   std::string name;
   Mode mode = Mode::Simulate;
   DenseSpec dense;
+  /// [[dense]] entries after the first: more dense models (files) driven by the same control
+  /// mesh, each written on its own ([dense] alone leaves this empty).
+  std::vector<DenseSpec> more_dense;
   ControlSpec control;
   sim::Material material = scene_material();
   SimulationSpec simulation;

@@ -2,12 +2,12 @@
 // File formats of mbi, each in its own file of src/ (format_*.cpp), chosen by extension through
 // one table (src/formats.cpp; file_format below):
 //   dense surfaces  OBJ, OFF (ASCII), PLY (ASCII, binary of either endianness), STL (ASCII,
-//                   binary): read and written
+//                   binary), glTF 2.0 (.gltf, .glb): read and written
 //   point lists     .txt, .xyz: read and written
 //   control meshes  TetGen .node/.ele: read and written, .face: written; Gmsh .msh 2.2, 4.0 and
 //                   4.1, ASCII or binary: read; legacy VTK .vtk 2.0-5.1, ASCII or BINARY: read,
 //                   ASCII: written; VTK XML .vtu (ASCII, base64, raw appended, zlib): read
-//   animation       OBJ/PLY frame sequences: written; PC2 and MDD point caches: read and
+//   animation       OBJ/PLY frame sequences, glTF animations: written; PC2 and MDD point caches: read and
 //                   written; ParaView .pvd collections: read; control trajectories (Trajectory)
 // PNG images are read and written by image.hpp.
 //
@@ -244,6 +244,36 @@ std::filesystem::path write_frame(const std::filesystem::path& base, int frame,
                                   const Eigen::Ref<const Eigen::MatrixXd>& V,
                                   Encoding encoding = Encoding::as_read,
                                   const Eigen::Ref<const Eigen::MatrixXd>& N = Eigen::MatrixXd());
+
+/// glTF 2.0 animation (.glb, or .gltf with the buffer inside as base64) of a deformed surface:
+/// one node per frame, each with a mesh of every part (a mesh read from a glTF keeps its parts,
+/// materials, UVs and colours; any other mesh is one part), shown in turn by step-keyed node
+/// scale, which Blender's and three.js's importers play back. Positions and normals are stored
+/// as float32 (a relative error of at most 2^-24 a coordinate), indices, UVs and colours once
+/// for all frames. The frames are kept in memory (12 bytes a vertex, 24 with normals) and
+/// written by finish(); a file past 4 GB (the .glb limit) is refused at the frame that would
+/// pass it. Destroyed before finish(), nothing is written.
+class GltfWriter {
+ public:
+  /// `topology`: the faces and attributes of the frames to come (positions unused).
+  GltfWriter(const std::filesystem::path& file, const SurfaceMesh& topology);
+  ~GltfWriter();
+  GltfWriter(const GltfWriter&) = delete;
+  GltfWriter& operator=(const GltfWriter&) = delete;
+
+  /// One frame at `time` (s, after the previous frame's): V n x 3, N n x 3 or empty (no
+  /// normals; the same for every frame). Throws IoError (nothing kept of this frame).
+  void append(double time, const Eigen::Ref<const Eigen::MatrixXd>& V,
+              const Eigen::Ref<const Eigen::MatrixXd>& N = Eigen::MatrixXd());
+  /// Writes the frames appended so far, atomically.
+  void finish();
+  int samples() const;
+
+ private:
+  struct State;
+  std::filesystem::path file_;
+  std::unique_ptr<State> state_;
+};
 
 /// PC2 point cache (Blender "Mesh Cache" modifier): header "POINTCACHE2\0", int32 version 1,
 /// int32 numPoints, float32 startFrame, float32 sampleRate, int32 numSamples, then float32 x,y,z

@@ -1,0 +1,11 @@
+// libFuzzer target: the glTF reader (.glb and .gltf: the first bytes decide) (mbi::io::parse_surface) (docs/hardening.md; seeds in tests/fuzz/gltf/).
+#include "fuzz_common.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string_view in = mbi::fuzz::bytes(data, size);
+  try {
+    mbi::fuzz::check_surface(mbi::io::parse_surface(in, "fuzz.glb"));
+  } catch (const mbi::io::IoError&) {
+  }
+  return 0;
+}

@@ -1,0 +1,14 @@
+// node validate.mjs FILE...: the Khronos glTF validator's report of each file; exit 1 on any error.
+import validator from 'gltf-validator';
+import { readFileSync } from 'node:fs';
+
+let failed = false;
+for (const file of process.argv.slice(2)) {
+  const report = await validator.validateBytes(new Uint8Array(readFileSync(file)));
+  const { numErrors, numWarnings } = report.issues;
+  console.log(`${file}: ${numErrors} errors, ${numWarnings} warnings`);
+  for (const m of report.issues.messages)
+    if (m.severity <= 1) console.log(`  ${m.severity === 0 ? 'error' : 'warning'} ${m.code} ${m.pointer ?? ''}: ${m.message}`);
+  failed ||= numErrors > 0;
+}
+process.exit(failed ? 1 : 0);
