@@ -119,6 +119,8 @@ Eigen::VectorXd float_vector(const py::handle& obj, const char* name, Eigen::Ind
   py::array a = as_array(obj, name);
   if (a.ndim() != 1 || a.shape(0) != size)
     throw Error(std::string(name) + " must have shape (" + std::to_string(size) + ",), got " + shape_of(a));
+  // (0, -9.81, 0) and (1, 0, 0) alike: integers are exact as float64 here
+  if (a.dtype().kind() == 'i' || a.dtype().kind() == 'u') a = a.attr("astype")("float64");
   const Input in = float_matrix(a.attr("reshape")(size, 1), name, {size, 1});
   return in.map.col(0);
 }

@@ -208,7 +208,8 @@ void bind_caches(py::module_& m) {
     for (const io::PvdEntry& e : io::read_pvd(p)) out.append(py::make_tuple(e.time, e.file.string()));
     return out;
   }, py::arg("path"), "A ParaView collection: [(time, file)] sorted by time (files not opened).");
-  m.def("read_trajectory", [](const std::string& spec) {
+  m.def("read_trajectory", [](const py::object& path) {
+    const std::string spec = path_arg(path, "spec").string();
     auto [frames, times] = without_gil([&] {
       io::Trajectory t(spec);
       std::vector<Eigen::MatrixXd> list;
