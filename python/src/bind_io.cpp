@@ -158,8 +158,9 @@ py::array cache_frames(const io::PointCache& c) {
   return stacked(c.frames, n, 3);
 }
 
+// times: MDD's, one a frame (s); empty: frame k at k / rate
 void write_cache(const fs::path& p, const Input& x, Eigen::Index frames, float start, float rate,
-                 const py::object& times) {
+                 std::vector<float> t) {
   const Eigen::Index n = x.map.rows() / std::max<Eigen::Index>(frames, 1);
   const std::string ext = io::lower_extension(p);
   if (ext == ".pc2") {
@@ -168,9 +169,8 @@ void write_cache(const fs::path& p, const Input& x, Eigen::Index frames, float s
     return w.finish();
   }
   if (ext != ".mdd") throw io::IoError(p.string() + ": a point cache is .pc2 or .mdd");
-  std::vector<float> t;
-  if (!times.is_none()) t = times.cast<std::vector<float>>();
-  else for (Eigen::Index k = 0; k < frames; ++k) t.push_back(static_cast<float>(k) / rate);
+  if (t.empty())
+    for (Eigen::Index k = 0; k < frames; ++k) t.push_back(static_cast<float>(k) / rate);
   if (static_cast<Eigen::Index>(t.size()) != frames)
     throw Error("times must have one entry a frame (" + std::to_string(frames) + "), got " + std::to_string(t.size()));
   io::MddWriter w(p, static_cast<int>(n), t);
@@ -198,7 +198,9 @@ void bind_caches(py::module_& m) {
     Eigen::Index f = 0;
     const Input x = float_batch(frames, "frames", {-1, 3}, f);
     if (f == 0) throw Error("frames must have shape (frames, n, 3)");
-    without_gil([&] { write_cache(p, x, f, start_frame, sample_rate, times); });
+    std::vector<float> t;
+    if (!times.is_none()) t = times.cast<std::vector<float>>();
+    without_gil([&] { write_cache(p, x, f, start_frame, sample_rate, std::move(t)); });
   }, py::arg("path"), py::arg("frames"), py::kw_only(), py::arg("start_frame") = 0.0f, py::arg("sample_rate") = 1.0f,
      py::arg("times") = py::none(),
      "Writes (frames, n, 3) float32 positions to .pc2 (start_frame, sample_rate) or .mdd (times, s).");
