@@ -109,6 +109,7 @@ def test_control_meshes_of_every_format(tmp_path):
     U, T = mbi.read_control_mesh(tmp_path / "m")
     np.testing.assert_array_equal(U, NODES)
     np.testing.assert_array_equal(T, TETS)
+    np.testing.assert_array_equal(mbi.read_positions(tmp_path / "m.node"), NODES)
     gmsh = ("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n5\n" + "".join(
         f"{i + 1} {' '.join(str(v) for v in p)}\n" for i, p in enumerate(NODES)) +
         "$EndNodes\n$Elements\n2\n1 4 2 0 1 1 2 3 4\n2 4 2 0 1 2 3 4 5\n$EndElements\n")

@@ -168,3 +168,47 @@ def test_refused_input_names_the_argument():
         mbi.FramePipeline(U, T, U, driver="sim")
     with pytest.raises(ValueError, match="integrator: unknown value"):
         sim.set_params(integrator="euler")
+
+
+def test_per_element_materials_rotation_and_midpoint():
+    U, T = bar()
+    one = mbi.Simulator(U, T, youngs_modulus=3e5, poisson_ratio=0.35, density=800, dt=0.01)
+    each = mbi.Simulator(U, T, element_materials=np.tile([3e5, 0.35, 800], (len(T), 1)), dt=0.01)
+    for s in (one, each):
+        s.fix(np.flatnonzero(U[:, 2] == 0))
+        s.step()
+    np.testing.assert_array_equal(one.positions, each.positions)
+    spin = mbi.Simulator(U, T, dt=0.01)
+    top = np.flatnonzero(U[:, 2] == 1)
+    spin.add_kinematic(top, center=(0.1, 0.1, 0), axis=(0, 0, 1), angular_velocity=2 * np.pi)
+    for _ in range(50):  # half a turn in 0.5 s
+        spin.step()
+    np.testing.assert_allclose(spin.positions[top, :2], 0.2 - U[top, :2], atol=1e-9)
+    free = mbi.Simulator(U, T, dt=0.01, gravity=(0, 0, 0), integrator="implicit-midpoint", newton_iterations=4,
+                         newton_tolerance=1e-12)
+    free.set_velocities(np.random.default_rng(3).standard_normal(U.shape) * 0.1)
+    p0 = free.linear_momentum()
+    for _ in range(5):
+        assert free.step()
+    np.testing.assert_allclose(free.linear_momentum(), p0, atol=1e-9)
+
+
+def test_pipeline_normals_methods_and_reset():
+    U, T = bar()
+    P = U.mean(0) + 0.05 * np.random.default_rng(0).standard_normal((40, 3))
+    N = np.tile([0.0, 0.0, 1.0], (len(P), 1))
+    X = U + 0.02 * np.random.default_rng(4).standard_normal(U.shape)
+    pipe = mbi.FramePipeline(U, T, P, mbi.GivenDriver(X), rest_normals=N, alpha=0.2)
+    pipe.step()
+    positions, normals = mbi.Deformer(U, T, P, rest_normals=N, alpha=0.2).deform(X, normals=True)
+    np.testing.assert_allclose(pipe.positions, positions, atol=1e-12)
+    np.testing.assert_allclose(pipe.normals, normals, atol=1e-12)
+    pipe.set_method("bi")
+    pipe.step()
+    assert pipe.method == "bi" and pipe.frame == 1
+    np.testing.assert_allclose(pipe.positions, mbi.Deformer(U, T, P, method="bi").deform(X), atol=1e-12)
+    np.testing.assert_array_equal(pipe.M, 0)
+    pipe.reset()
+    assert pipe.frame == -1
+    soft = mbi.FramePipeline(U, T, P, mbi.HandleDriver(U, T, np.flatnonzero(U[:, 2] == 0), mode="soft"))
+    assert soft.step() and soft.driver == "handles"
