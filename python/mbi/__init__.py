@@ -75,7 +75,7 @@ from ._mbi import (
 )
 from .meshes import box_mesh
 from .scenes import run_scene
-from . import batch  # noqa: E402  (plain Python: no Dask needed to import it)
+from . import batch  # plain Python: importing it needs no Dask
 
 __version__ = "0.1.0"
 
