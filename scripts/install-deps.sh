@@ -29,14 +29,15 @@ run_packages=(
 # Python (scripts/test.sh --sanitizers), Google Benchmark (mbi-bench), matplotlib and git (the
 # benchmark report's plots and commit), clang with its libFuzzer runtime (scripts/fuzz.sh);
 # the Python package (python/: pybind11, the headers, numpy, pytest, PyTorch for its autograd
-# wrapper, venv for the install test); meshio (the VTK XML fixtures' writer, tests/data/vtu);
-# ffmpeg (the viewer's --video pipes frames to it at run time, optional; its tests use ffprobe).
+# wrapper, venv for the install test, Dask's distributed scheduler for the batch recipe and its
+# test on a LocalCluster); meshio (the VTK XML fixtures' writer, tests/data/vtu); ffmpeg (the
+# viewer's --video pipes frames to it at run time, optional; its tests use ffprobe).
 test_packages=(
   catch2 xvfb xauth python3
   libbenchmark-dev python3-matplotlib git
   clang libclang-rt-14-dev
   pybind11-dev python3-dev python3-numpy python3-pytest python3-torch python3-venv python3-setuptools
-  python3-meshio ffmpeg
+  python3-meshio python3-distributed ffmpeg
 )
 # The glTF tests check our files with the Khronos validator and three.js (node packages pinned by
 # tests/gltf/node/package-lock.json, installed by `npm ci` below): node and npm from Debian where

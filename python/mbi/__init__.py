@@ -9,23 +9,44 @@ matrices; B ((m K), d) element Bezier points, K = (d+1)(d+2)/2. Positions are in
     positions = deformer.deform(X)                           # per pose: (p, d)
     dX = deformer.vjp(dL_dpositions)                         # dL/dX, exact
 
+Beyond the method: mbi.Simulator (co-rotational FEM) and mbi.FramePipeline (simulator, dragged
+handles or given poses to dense points each frame); files (read_surface, write_surface keeping
+the file's attributes, read_control_mesh, point caches); mbi.cage (a control mesh around a model);
+mbi.run_scene (a scene file, as `mbi run`); mbi.batch (runs on a Dask cluster).
+
 Every error of the libraries and every refused argument raises mbi.Error (a ValueError) with the
-message of the C++ library. PyTorch autograd: mbi.torch (imported on its own). docs/python.md
-documents the whole API.
+message of the C++ library; a file that cannot be read or written raises mbi.FileError (an
+mbi.Error and an OSError) naming it. PyTorch autograd: mbi.torch (imported on its own).
+docs/python.md documents the whole API; __init__.pyi gives editors its signatures.
 """
 from ._mbi import (
+    INTEGRATORS,
+    SOLVERS,
+    Cage,
+    ControlMesh,
     Deformer,
     DiscontinuityTable,
     Embedding,
     Error,
     FastEvaluator,
+    FileError,
+    FramePipeline,
+    FrameResult,
+    GivenDriver,
+    HandleDriver,
     ModifiedBI,
     Phong,
+    PointCache,
+    Simulator,
+    StaticResult,
+    StepResult,
     Summary,
+    Surface,
     bezier_bi,
     bezier_points,
     bezier_transpose,
     boundary_faces,
+    cage,
     cholmod_available,
     default_alpha,
     discontinuity_table,
@@ -35,20 +56,39 @@ from ._mbi import (
     evaluate_transpose,
     face_discontinuity,
     interior_faces,
+    read_control_mesh,
+    read_point_cache,
+    read_points,
+    read_positions,
+    read_pvd,
+    read_surface,
+    read_trajectory,
     set_threads,
     threads,
     threads_available,
     validate_mesh,
+    write_point_cache,
+    write_points,
+    write_surface,
+    write_tetgen,
+    write_vtk,
 )
 from .meshes import box_mesh
+from .scenes import run_scene
+from . import batch  # plain Python: importing it needs no Dask
 
 __version__ = "0.1.0"
 
 METHODS = ("bi", "modified-bi", "phong")
 
 __all__ = [
-    "Deformer", "DiscontinuityTable", "box_mesh", "Embedding", "Error", "FastEvaluator", "METHODS", "ModifiedBI",
-    "Phong", "Summary", "bezier_bi", "bezier_points", "bezier_transpose", "boundary_faces",
-    "cholmod_available", "default_alpha", "discontinuity_table", "embed", "embedded_positions",
-    "evaluate", "evaluate_transpose", "face_discontinuity", "interior_faces", "set_threads", "threads", "threads_available", "validate_mesh",
+    "Cage", "ControlMesh", "Deformer", "DiscontinuityTable", "Embedding", "Error", "FastEvaluator", "FileError",
+    "FramePipeline", "FrameResult", "GivenDriver", "HandleDriver", "INTEGRATORS", "METHODS", "ModifiedBI", "Phong",
+    "PointCache", "SOLVERS", "Simulator", "StaticResult", "StepResult", "Summary", "Surface", "batch",
+    "bezier_bi", "bezier_points", "bezier_transpose", "boundary_faces", "box_mesh", "cage", "cholmod_available",
+    "default_alpha", "discontinuity_table", "embed", "embedded_positions", "evaluate", "evaluate_transpose",
+    "face_discontinuity", "interior_faces", "read_control_mesh", "read_point_cache", "read_points",
+    "read_positions", "read_pvd", "read_surface", "read_trajectory", "run_scene", "set_threads", "threads",
+    "threads_available", "validate_mesh", "write_point_cache", "write_points", "write_surface", "write_tetgen",
+    "write_vtk",
 ]

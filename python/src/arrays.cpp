@@ -115,6 +115,24 @@ Input float_batch(const py::handle& obj, const char* name, Shape shape, Eigen::I
   return in;
 }
 
+Eigen::VectorXd float_vector(const py::handle& obj, const char* name, Eigen::Index size) {
+  py::array a = as_array(obj, name);
+  if (a.ndim() != 1 || a.shape(0) != size)
+    throw Error(std::string(name) + " must have shape (" + std::to_string(size) + ",), got " + shape_of(a));
+  // (0, -9.81, 0) and (1, 0, 0) alike: integers are exact as float64 here
+  if (a.dtype().kind() == 'i' || a.dtype().kind() == 'u') a = a.attr("astype")("float64");
+  const Input in = float_matrix(a.attr("reshape")(size, 1), name, {size, 1});
+  return in.map.col(0);
+}
+
+std::vector<int> index_list(const py::handle& obj, const char* name) {
+  py::array a = as_array(obj, name);
+  if (a.ndim() != 1) throw Error(std::string(name) + " must be a 1D list of indices, got shape " + shape_of(a));
+  if (a.shape(0) == 0) return {};  // [] is float64 to numpy
+  const Eigen::MatrixXi m = index_matrix(a.attr("reshape")(a.shape(0), 1), name, {a.shape(0), 1});
+  return {m.data(), m.data() + m.size()};
+}
+
 Eigen::MatrixXi index_matrix(const py::handle& obj, const char* name, Shape shape) {
   py::array a = as_array(obj, name);
   if (a.ndim() != 2)

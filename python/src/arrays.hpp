@@ -12,6 +12,7 @@
 
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace mbi::python {
 
@@ -50,6 +51,14 @@ Input float_batch(const py::handle& obj, const char* name, Shape shape, Eigen::I
 
 /// A 2D integer array of `shape` (any signed or unsigned integer type, checked to fit in int32).
 Eigen::MatrixXi index_matrix(const py::handle& obj, const char* name, Shape shape = {});
+
+/// A vector of `size` floats (a list, a tuple or a 1D array), finite: a point, a direction, a
+/// force.
+Eigen::VectorXd float_vector(const py::handle& obj, const char* name, Eigen::Index size);
+inline Eigen::Vector3d vector3(const py::handle& obj, const char* name) { return float_vector(obj, name, 3); }
+
+/// A 1D list of indices (any integer type, checked to fit in int32): node lists.
+std::vector<int> index_list(const py::handle& obj, const char* name);
 
 /// A control mesh: U (n, d) rest vertices read in place, T (m, d+1) elements.
 struct Mesh {

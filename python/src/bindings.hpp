@@ -4,6 +4,8 @@
 
 #include <mbi/base/timer.hpp>
 
+#include <pybind11/stl.h>  // std::vector and std::string arguments and results
+
 #include <mutex>
 #include <utility>
 
@@ -14,6 +16,11 @@ void bind_methods(py::module_& m);     // bind_methods.cpp: ModifiedBI, Phong, B
 void bind_evaluate(py::module_& m);    // bind_evaluate.cpp: evaluate, FastEvaluator, transposes
 void bind_deformer(py::module_& m);    // bind_deformer.cpp: Deformer
 void bind_timing(py::module_& m);      // timing.cpp: C++ baselines of the overhead benchmark
+void bind_sim(py::module_& m);         // bind_sim.cpp: Simulator
+void bind_pipeline(py::module_& m);    // bind_pipeline.cpp: FramePipeline and its drivers
+void bind_io(py::module_& m);          // bind_io.cpp: file readers and writers
+void bind_cage(py::module_& m);        // bind_cage.cpp: cage
+void bind_scene(py::module_& m);       // bind_scene.cpp: run_scene
 
 /// Seconds the calling thread last spent in a section without the GIL: the C++ part of its last
 /// call, which python/bench/overhead.py subtracts from the call's time seen from Python.

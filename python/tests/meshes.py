@@ -1,6 +1,7 @@
 """Small test meshes and poses in numpy, and a reference implementation of the
 method's defining formula to check the package against."""
 import itertools
+import os
 
 import numpy as np
 
@@ -63,3 +64,24 @@ def reference(U, T, X, M, emb):
         Mi = M.reshape(-1, d, d)[i]
         x += b[:, k, None] * (X[i] + np.einsum("prc,pc->pr", Mi, u - U[i]))
     return x
+
+
+def bar_surface(path):
+    """Writes the surface of a 1 x 1 x 4 box centred on the z axis (the extent of the scenes'
+    built-in cylinder) to `path`: a small dense model for runs under the sanitizers."""
+    U, T = mbi.box_mesh(1, 1, 4, size=(1.0, 1.0, 4.0))
+    U = U - (0.5, 0.5, 0.0)
+    mbi.write_surface(path, U, mbi.boundary_faces(U, T))
+    return path
+
+
+def scene_without_pictures(scene, folder):
+    """A copy of a scene file of scenes/ (built-in models only) in `folder` that writes no
+    pictures: the software renderer is the slow part of a short run under the sanitizers."""
+    with open(scene) as f:
+        text = f.read()
+    assert "[output]\n" in text, scene
+    path = os.path.join(str(folder), os.path.basename(scene))
+    with open(path, "w") as f:
+        f.write(text.replace("[output]\n", "[output]\nimage = false\n"))
+    return path

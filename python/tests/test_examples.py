@@ -36,3 +36,22 @@ def test_overhead_benchmark_runs():
                             capture_output=True, text=True, timeout=600)
     assert result.returncode == 0, result.stdout + result.stderr
     assert "vjp / deform" in result.stdout
+
+
+@pytest.mark.skipif(not os.environ.get("MBI_MODELS_DIR"), reason="MBI_MODELS_DIR is not set")
+def test_deform_model_keeps_the_texture(tmp_path):
+    """A real model (spot, with texture coordinates) deformed with a generated cage: the OBJ
+    written keeps every `vt` of the input (the example compares them and says so)."""
+    out = tmp_path / "spot.obj"
+    text = run("deform_model.py", "--out", str(out), "--frames", "5" if SMALL else "15", "--vertices", "120")
+    assert "ok: the deformed model keeps its" in text
+    model = os.path.join(os.environ["MBI_MODELS_DIR"], "spot.obj")
+    vt = [line for line in open(model) if line.startswith("vt ")]
+    assert len(vt) > 0 and [line for line in open(out) if line.startswith("vt ")] == vt
+
+
+@pytest.mark.skipif(SMALL, reason="Dask's worker processes are slow to start under ASan (test_dask.py says why)")
+def test_dask_sweep_on_two_workers():
+    pytest.importorskip("distributed")
+    text = run("dask_sweep.py", "--workers", "2", "--frames", "5", "--points", "1000", "--check")
+    assert "8 runs on 2 worker(s)" in text and "ok: the batch equals the same runs one by one" in text

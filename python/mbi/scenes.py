@@ -1,0 +1,40 @@
+"""Scenes run from Python: mbi.run_scene, `mbi run` without the command line."""
+import json
+import os
+
+from . import _mbi
+
+
+def summary_dict(s):
+    """An mbi.Summary as {"mean", "std", "max"}."""
+    return {"mean": s.mean, "std": s.std, "max": s.max}
+
+
+def table_dict(t):
+    """An mbi.DiscontinuityTable as a dict of plain numbers (the shape of metrics.json's "last_disc")."""
+    out = {"bi": summary_dict(t.bi), "modified_bi": summary_dict(t.modified_bi), "ratio": summary_dict(t.ratio),
+           "faces": t.faces, "e_vibr": t.e_vibr, "e_disc": t.e_disc, "e_total": t.e_total}
+    if t.phong is not None:
+        out["phong"] = summary_dict(t.phong)
+        out["phong_ratio"] = summary_dict(t.phong_ratio)
+    return out
+
+
+def run_scene(path, out=None, *, frames=0, mesh=None, method=None, gpu=None, force=False, force_3d=False):
+    """Runs the scene file `path` headless, as `mbi run` does, writing its outputs into the folder
+    `out` (default out/<scene name>). frames: 0 = the scene's; mesh: a dense model replacing the
+    scene's; method: "bi", "modified-bi" or "phong" replacing the scene's; gpu: "auto", "on" or
+    "off" (None: the scene's). Returns the run's summary, a dict: scene, out_dir, frames (completed),
+    failed and message (a simulation step that failed: outputs up to the last good frame are kept),
+    evaluator, outside_points, warnings, last_disc (the last frame's discontinuity table) and
+    metrics (metrics.json as the run wrote it, or None when the scene writes none).
+    Bad input raises mbi.Error (mbi.FileError for a file) before anything is written."""
+    r = _mbi._run_scene(os.fspath(path), None if out is None else os.fspath(out), frames,
+                        None if mesh is None else os.fspath(mesh), method, gpu, force, force_3d)
+    r["last_disc"] = table_dict(r.pop("last_table"))
+    metrics = os.path.join(r["out_dir"], "metrics.json")
+    r["metrics"] = None
+    if os.path.isfile(metrics):
+        with open(metrics, encoding="utf-8") as f:
+            r["metrics"] = json.load(f)
+    return r
