@@ -1,4 +1,5 @@
-// `mbi view MODEL` under Xvfb: the built-in models, every real model ($MBI_MODELS_DIR) and a
+// `mbi view MODEL` under Xvfb: the built-in models, every real model ($MBI_MODELS_DIR), a multi-part
+// glTF, a scene of several [[dense]] models and a
 // generated flat one start paused, take a scripted poke and close cleanly; a scripted drop
 // loads a model (and a bad one is said, the session going on); --video writes a video that
 // ffprobe reads with the frames and size asked for (so does the o key's), and is refused at once
@@ -96,6 +97,34 @@ TEST_CASE("mbi view MODEL: a flat model (a sheet) is poked in 3D", "[viewer][xvf
     }
   obj.close();
   view_and_poke(q(dir / "sheet.obj"), dir);
+}
+
+TEST_CASE("mbi view: a multi-part glTF and a scene of several [[dense]] models show every part", "[viewer][xvfb]") {
+  TempDir dir("view-parts");
+  const fs::path data = fs::path(source_dir()) / "tests";
+  fs::copy_file(data / "gltf" / "data" / "parts.glb", dir / "parts.glb");
+  fs::copy_file(data / "data" / "vtu" / "sphere.obj", dir / "sphere.obj");
+  const long long parts = mbi::io::read_surface(dir / "parts.glb").V.rows();
+  const long long sphere = mbi::io::read_surface(dir / "sphere.obj").V.rows();
+  // the glTF's parts as one model
+  nlohmann::json frames = view_and_poke(q(dir / "parts.glb"), dir);
+  CHECK(frames.back()["dense_points"].get<long long>() == parts);
+  // both files in one control mesh, as a scene
+  const std::string cage = "cd " + q(dir.path()) + " && \"" + MBI_EXE + "\" cage parts.glb sphere.obj -n 80 -o two > /dev/null";
+  REQUIRE(std::system(cage.c_str()) == 0);
+  std::ofstream(dir / "two.toml") << "name = \"two\"\n[[dense]]\npath = \"parts.glb\"\n[[dense]]\npath = \"sphere.obj\"\n"
+                                     "[control]\npath = \"two.node\"\n[simulation]\ndt = 0.04\ngravity = [0, -9.81, 0]\n"
+                                     "[[constraints]]\ntype = \"fixed\"\n"
+                                     "select = { box_relative = { min = [0, 0.9, 0], max = [1, 1, 1] } }\n";
+  const mbi::test::ViewRun r =
+      mbi::test::view(q(dir / "two.toml") + kSmall + " --report " + q(dir / "two.json"), dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  frames = mbi::test::read_report(dir / "two.json");
+  REQUIRE(frames.size() == 16);
+  CHECK(frames.back()["dense_points"].get<long long>() == parts + sphere);
+  CHECK(frames.back()["finite"].get<bool>());
+  CHECK(frames.back()["max_displacement"].get<double>() > 0);  // it sags under gravity
 }
 
 TEST_CASE("mbi view: a scripted drop loads the model, a bad one is said and the session goes on", "[viewer][xvfb]") {
