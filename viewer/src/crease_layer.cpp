@@ -1,5 +1,7 @@
 #include "crease_layer.hpp"
 
+#include "gl_program.hpp"
+
 #include <epoxy/gl.h>
 
 #include <algorithm>
@@ -9,7 +11,7 @@ namespace mbi::viewer {
 namespace {
 
 // gpu::Renderer's mesh shaders with a colour per vertex.
-const char* kVertex = R"(#version 330 core
+const char* kVertex = R"(
 layout(location = 0) in vec3 rest;
 layout(location = 1) in vec3 displacement;
 layout(location = 2) in vec3 normal;
@@ -23,7 +25,7 @@ void main() {
   gl_Position = view_projection * vec4(rest + displacement, 1.0);
 }
 )";
-const char* kFragment = R"(#version 330 core
+const char* kFragment = R"(
 in vec3 v_normal;
 in vec3 v_color;
 uniform vec3 eye_direction;
@@ -34,42 +36,12 @@ void main() {
 }
 )";
 
-GLuint shader(GLenum kind, const char* source) {
-  const GLuint s = glCreateShader(kind);
-  glShaderSource(s, 1, &source, nullptr);
-  glCompileShader(s);
-  GLint ok = 0;
-  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    char log[1024] = {};
-    glGetShaderInfoLog(s, sizeof log, nullptr, log);
-    glDeleteShader(s);
-    throw ViewerError(std::string("crease colours: shader: ") + log);
-  }
-  return s;
-}
-
-GLuint program() {
-  const GLuint vs = shader(GL_VERTEX_SHADER, kVertex), fs = shader(GL_FRAGMENT_SHADER, kFragment);
-  const GLuint p = glCreateProgram();
-  glAttachShader(p, vs);
-  glAttachShader(p, fs);
-  glLinkProgram(p);
-  glDeleteShader(vs);
-  glDeleteShader(fs);
-  GLint ok = 0;
-  glGetProgramiv(p, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    glDeleteProgram(p);
-    throw ViewerError("crease colours: the shaders do not link");
-  }
-  return p;
-}
-
 }  // namespace
 
 CreaseLayer::CreaseLayer(const Stage& stage)
-    : creases_(stage.U, stage.T), near_(creases_.near_faces(stage.pipe.embedding())), program_(program()) {
+    : creases_(stage.U, stage.T),
+      near_(creases_.near_faces(stage.pipe.embedding())),
+      program_(link_program("crease colours", kVertex, kFragment)) {
   glGenVertexArrays(1, &vao_);
   glGenBuffers(1, &index_);
   glGenBuffers(1, &colors_);
