@@ -6,15 +6,17 @@
 #   bash scripts/test.sh --sanitizers [CTEST ARGS...]  debug preset, ASan + UBSan (build/debug):
 #       the same suite with every sanitizer report fatal; real-model tests skip
 #       (MBI_MODELS_DIR is unset for this pass: the release pass runs them, and under ASan they
-#       take many minutes), and so does "scene large runs" (9 minutes under ASan, the long pole
-#       of the pass; the release pass runs it). LeakSanitizer is on, except in the four test programs that make
+#       take many minutes), and so do the cases tagged [long]: numerical properties over many
+#       steps or frames ("scene large runs" alone takes 9 minutes under ASan) whose code the
+#       shorter cases run under the sanitizers too; the release pass runs them all.
+#       LeakSanitizer is on, except in the four test programs that make
 #       OpenGL contexts (test_gpu, test_scenes, test_app, test_viewer, and bad-input cases of
 #       mbi run / view without --gpu off: Mesa's driver leaks
 #       small blocks and is unloaded before exit, so the reports cannot be attributed or
 #       suppressed); those run in a second ctest pass with detect_leaks=0. Leaks of the readers
-#       are also caught by the fuzz targets (scripts/fuzz.sh). The Python tests (label python)
-#       run against the ASan-built module with the ASan runtime preloaded into the interpreter
-#       and detect_leaks=0 (set by python/CMakeLists.txt).
+#       are also caught by the fuzz targets (scripts/fuzz.sh). The debug preset builds neither
+#       mbi-bench nor the Python module (their run is the release pass's); a module built with the
+#       sanitizers by hand runs its tests with the ASan runtime preloaded (python/CMakeLists.txt).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ "${1:-}" = "--sanitizers" ]; then
@@ -23,10 +25,22 @@ if [ "${1:-}" = "--sanitizers" ]; then
   cmake --preset debug >/dev/null
   cmake --build --preset debug -j "${MBI_JOBS:-$(nproc)}"
   export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
-  # test numbers of the OpenGL programs (gl) and of the others (rest), for ctest -I
+  # test numbers of the OpenGL programs (gl) and of the others (rest), for ctest -I; the cases
+  # tagged [long] in neither
   lists=$(ctest --preset debug --show-only=json-v1 | python3 -c '
-import json, os, sys
+import json, os, subprocess, sys
 tests = json.load(sys.stdin)["tests"]
+catch = {t["command"][0] for t in tests
+         if t.get("command") and os.path.basename(t["command"][0]).startswith("test_")}
+long = set()
+for program in catch:
+    listed = subprocess.run([program, "--list-test-names-only", "[long]"], capture_output=True,
+                            text=True)
+    if listed.returncode < 0:  # Catch2 exits with the number of cases listed; a signal is a failure
+        sys.exit(f"{program} --list-test-names-only: killed by signal {-listed.returncode}")
+    names = listed.stdout
+    long.update(n.strip() for n in names.splitlines() if n.strip())
+tests = [t if t["name"] not in long else None for t in tests]
 gl_programs = {"test_gpu", "test_scenes", "test_app", "test_viewer"}
 def uses_gl(t):
     cmd = t.get("command") or ["?"]
@@ -35,15 +49,15 @@ def uses_gl(t):
     # bad-input cases: mbi run / view without --gpu off may make a context
     args = [a[len("-DARGS="):] for a in cmd if a.startswith("-DARGS=")]
     return bool(args) and args[0].split(";")[0] in ("run", "view") and "--gpu;off" not in args[0]
-gl = [i + 1 for i, t in enumerate(tests) if uses_gl(t)]
-rest = [i + 1 for i, t in enumerate(tests) if i + 1 not in gl]
+gl = [i + 1 for i, t in enumerate(tests) if t and uses_gl(t)]
+rest = [i + 1 for i, t in enumerate(tests) if t and i + 1 not in gl]
 print(",".join(map(str, [0, 0, 0] + gl)), ",".join(map(str, [0, 0, 0] + rest)))')
   read -r gl rest <<<"$lists"
   status=0
   env -u MBI_MODELS_DIR ASAN_OPTIONS="detect_leaks=1${ASAN_OPTIONS:+:$ASAN_OPTIONS}" \
     ctest --preset debug -j "${MBI_JOBS:-$(nproc)}" -I "$rest" "$@" || status=1
   env -u MBI_MODELS_DIR ASAN_OPTIONS="detect_leaks=0${ASAN_OPTIONS:+:$ASAN_OPTIONS}" \
-    ctest --preset debug -j "${MBI_JOBS:-$(nproc)}" -I "$gl" -E '^scene large runs$' "$@" || status=1
+    ctest --preset debug -j "${MBI_JOBS:-$(nproc)}" -I "$gl" "$@" || status=1
   exit $status
 fi
 if [ -z "${MBI_MODELS_DIR:-}" ] && [ -d ../shared/models ]; then

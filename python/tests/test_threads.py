@@ -11,6 +11,8 @@ import pytest
 import mbi
 import meshes
 
+SMALL = os.environ.get("MBI_SANITIZED") == "1"  # ASan is far slower: fewer points there
+
 
 def run_threads(work, count=2):
     results, errors = [None] * count, []
@@ -32,7 +34,7 @@ def run_threads(work, count=2):
 
 def test_two_threads_run_at_once_and_agree():
     U, T = meshes.box(4, 3, 3)
-    P = meshes.points(U, 30_000 if os.environ.get("MBI_SANITIZED") else 300_000)  # ASan is far slower
+    P = meshes.points(U, 30_000 if SMALL else 300_000)
     poses = [meshes.pose(U, seed=s) for s in range(6)]
     deformers = [mbi.Deformer(U, T, P, threads=1) for _ in range(2)]
     expect = [deformers[0].deform(X) for X in poses]
@@ -59,8 +61,9 @@ def test_two_threads_run_at_once_and_agree():
 
 def test_one_object_shared_by_threads():
     U, T = meshes.jittered(3)
-    P = meshes.points(U, 20_000)
-    deformer = mbi.Deformer(U, T, P, rest_normals=np.tile([0.0, 0.0, 1.0], (20_000, 1)))
+    n = 2_000 if SMALL else 20_000
+    P = meshes.points(U, n)
+    deformer = mbi.Deformer(U, T, P, rest_normals=np.tile([0.0, 0.0, 1.0], (n, 1)))
     solver = mbi.ModifiedBI(U, T)
     fast = mbi.FastEvaluator(deformer.embedding)
     poses = [meshes.pose(U, seed=s) for s in range(5)]
@@ -81,7 +84,7 @@ def test_one_object_shared_by_threads():
 
 def test_set_threads_changes_the_count_not_the_results():
     U, T = meshes.box(3, 3, 3)
-    P = meshes.points(U, 100_000)
+    P = meshes.points(U, 10_000 if SMALL else 100_000)
     X = meshes.pose(U)
     before = mbi.threads()
     try:

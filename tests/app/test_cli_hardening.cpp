@@ -493,7 +493,7 @@ TEST_CASE("a flat 3-coordinate model is 2D everywhere unless --force-3d", "[cli]
 
 // --------------------------------------------------------------------------- relative pokes
 
-TEST_CASE("poke offset_relative: a small and a large model are poked alike", "[cli][hardening][poke]") {
+TEST_CASE("poke offset_relative: a small and a large model are poked alike", "[cli][hardening][poke][long]") {
   TempDir dir("hard");
   box_obj(dir / "small.obj", Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.05, 0.15, 0.05));
   box_obj(dir / "large.obj", Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(2.0, 6.0, 2.0));

@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 
 #include "common/grid_meshes.hpp"
+#include "common/sanitizers.hpp"
 #include "threads.hpp"
 
 #include <mbi/interp.hpp>
@@ -57,7 +58,7 @@ int process_threads() {
 }
 
 // Everything a frame computes, at 1,331 control vertices (a factor large enough for the threaded
-// sweeps) and 100K points, on the library's current thread count.
+// sweeps) and 100K points (10K under the sanitizers), on the library's current thread count.
 struct Frame {
   Embedding emb;
   Eigen::MatrixXd pd;
@@ -70,7 +71,7 @@ Frame frame() {
   const mbi::test::Mesh C = mbi::test::box_tet_mesh(10, 10, 10, Eigen::Vector3d(10, 10, 10));
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> uni(0.01, 9.99);
-  Eigen::MatrixXd P(100003, 3);  // not a multiple of any block: every tail runs
+  Eigen::MatrixXd P(mbi::test::sized(100003), 3);  // not a multiple of any block: every tail runs
   for (Eigen::Index i = 0; i < P.rows(); ++i) P.row(i) << uni(rng), uni(rng), uni(rng);
   Frame f;
   f.emb = embed(C.U, C.T, P);

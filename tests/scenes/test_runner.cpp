@@ -160,7 +160,7 @@ TEST_CASE("scene cantilever runs", "[runner]") { check_run("cantilever", 4); }
 TEST_CASE("scene poke runs", "[runner]") { check_run("poke", 4); }
 TEST_CASE("scene drag runs", "[runner]") { check_run("drag", 4); }
 TEST_CASE("scene image-warp runs", "[runner]") { check_run("image-warp", 3); }
-TEST_CASE("scene large runs", "[runner]") { check_run("large", 2); }
+TEST_CASE("scene large runs", "[runner][long]") { check_run("large", 2); }
 
 TEST_CASE("outputs are not overwritten without force", "[runner]") {
   mbi::test::TempDir dir("run");
@@ -517,7 +517,7 @@ TEST_CASE("an output folder that is not empty, or a file, is a SceneError naming
 // Tolerance 5%: the numbers are rounded, and a different but equally valid linear solver or
 // time stepping moves them by far less than that. Changing the scene or the method changes
 // them more; then update the caption together with this test.
-TEST_CASE("twist-bar: the last frame's discontinuity ratios that the README quotes", "[runner][readme]") {
+TEST_CASE("twist-bar: the last frame's discontinuity ratios that the README quotes", "[runner][readme][long]") {
   mbi::test::TempDir dir("run");
   const Scene sc = load_scene(source_dir() / "scenes" / "twist-bar.toml");
   RunOptions o;

@@ -37,7 +37,7 @@ double mesh_volume(const mbi::test::Mesh& M, const Eigen::MatrixXd& X, double* l
 }  // namespace
 
 TEST_CASE("twisting a bar by 180 degrees keeps its volume, linear FEM does not",
-          "[sim][dynamics][twist]") {
+          "[sim][dynamics][twist][long]") {
   const double L = 1.0, h = 0.1;  // L / h = 10
   const auto M = mbi::test::bar(20, 2, 2, L, h);
   const Material mat{1e5, 0.45, 1000};
@@ -356,7 +356,7 @@ TEST_CASE("simulator rejects bad input with a clear error", "[sim][errors]") {
 
 TEST_CASE("PCG and LDLT give the same trajectory, Auto falls back to LDLT when PCG cannot "
           "converge",
-          "[sim][solver]") {
+          "[sim][solver][long]") {
   const auto M = mbi::test::bar(12, 3, 3, 1.0, 0.25);  // 13 x 4 x 4 nodes = 624 nodes
   const Material mat{1e5, 0.45, 1000};
   Parameters p;
@@ -412,7 +412,7 @@ TEST_CASE("PCG and LDLT give the same trajectory, Auto falls back to LDLT when P
 }
 
 TEST_CASE("Newton iterations solve the backward Euler equations, substeps equal smaller steps",
-          "[sim][integrator]") {
+          "[sim][integrator][long]") {
   auto M = mbi::test::bar(8, 2, 2, 1.0, 0.25);
   const Material mat{2e4, 0.4, 1000};  // soft: large deformation within a few steps
   SECTION("converged Newton satisfies M (v+ - v) = h (f(x+) + m g)") {

@@ -86,7 +86,7 @@ TEST_CASE("patch test: a linear field imposed on the boundary is reproduced insi
 
 TEST_CASE("cantilever under gravity converges toward Euler-Bernoulli, co-rotational equals "
           "linear at small load",
-          "[sim][static][cantilever]") {
+          "[sim][static][cantilever][long]") {
   // L = 1 m, h = 0.1 m, E = 1e9 Pa: tip deflection ~1.5e-3 L (small load).
   //
   // Limit: Euler-Bernoulli plus Timoshenko shear, w_s / w_b = E h^2 / (3 k G L^2) ~ 0.01 for
@@ -120,7 +120,7 @@ TEST_CASE("cantilever under gravity converges toward Euler-Bernoulli, co-rotatio
 }
 
 TEST_CASE("scale robustness: 1 mm and 100 m cantilevers give the same relative deflection",
-          "[sim][static][scale]") {
+          "[sim][static][scale][long]") {
   // E proportional to L keeps the relative deflection q L^3 / (8 E I) fixed.
   const BeamResult small = cantilever(2, 1e-3, 1e6);
   const BeamResult big = cantilever(2, 100.0, 1e11);

@@ -140,7 +140,7 @@ TEST_CASE("mbi view: a scripted poke pulls the grabbed material point toward the
   CHECK(differing(poked_img, plain) > 0.005);
 }
 
-TEST_CASE("mbi view: a violent poke (far off screen, flicked every frame) stays bounded and recovers", "[viewer][xvfb]") {
+TEST_CASE("mbi view: a violent poke (far off screen, flicked every frame) stays bounded and recovers", "[viewer][xvfb][long]") {
   TempDir dir("view");
   const std::string scene = q(fs::path(source_dir()) / "scenes" / "cantilever.toml");
   std::ofstream(dir / "flick.txt") << [] {

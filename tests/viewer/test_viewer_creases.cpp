@@ -57,7 +57,7 @@ Shown view_creases(const TempDir& dir, const std::string& name, const std::strin
 }  // namespace
 
 TEST_CASE("mbi view --creases: BI glows at the control faces where the table says it jumps more, modified-BI does not",
-          "[viewer][xvfb][creases]") {
+          "[viewer][xvfb][creases][long]") {
   TempDir dir("view");
   const Shown s = view_creases(dir, "lit", "--creases --frames 40");
   const nlohmann::json& c = s.frame["creases"];

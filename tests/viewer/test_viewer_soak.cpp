@@ -31,7 +31,7 @@ namespace fs = std::filesystem;
 using mbi::test::quoted;
 
 TEST_CASE("mbi view soak: 10,000 frames of pokes, method switches and alpha changes in bounded memory",
-          "[viewer][xvfb][soak]") {
+          "[viewer][xvfb][soak][long]") {
   mbi::test::TempDir dir("soak");
   {
     // every 100 frames a poke (the right view's middle in a 320 x 240 window, pulled for 30
