@@ -93,7 +93,7 @@ TEST_CASE("creases: the colour scale grows hotter (red minus blue) from 0 to 1",
 }
 
 TEST_CASE("mbi run with output.creases: BI's panel glows where the table says it jumps more, off: the usual pictures",
-          "[creases][runner]") {
+          "[creases][runner][long]") {
   mbi::test::TempDir dir("creases");
   const RunResult on = run_twist(dir / "on", 30, true);
   const RunResult off = run_twist(dir / "off", 30, false);
