@@ -1,7 +1,5 @@
 #include "deform_parts.hpp"
 
-#include <Eigen/Geometry>
-
 #include <stdexcept>
 
 namespace mbi::cli {
@@ -13,23 +11,6 @@ std::string DenseParts::names() const {
 }
 
 namespace {
-
-// Area-weighted unit vertex normals of a surface's triangles; +z where a vertex has no area.
-Eigen::MatrixXd area_normals(const io::SurfaceMesh& s) {
-  Eigen::MatrixXd N = Eigen::MatrixXd::Zero(s.V.rows(), 3);
-  for (Eigen::Index f = 0; f < s.F.rows(); ++f) {
-    const Eigen::Vector3d a = s.V.row(s.F(f, 0)), b = s.V.row(s.F(f, 1)), c = s.V.row(s.F(f, 2));
-    const Eigen::Vector3d ab = b - a, ac = c - a;
-    const Eigen::RowVector3d n = ab.cross(ac).transpose();
-    for (int k = 0; k < 3; ++k) N.row(s.F(f, k)) += n;
-  }
-  for (Eigen::Index i = 0; i < N.rows(); ++i) {
-    const double len = N.row(i).norm();
-    if (len > 0) N.row(i) /= len;
-    else N.row(i) = Eigen::RowVector3d(0, 0, 1);
-  }
-  return N;
-}
 
 bool has_normals(const DensePart& p) { return p.surface && p.surface->N.rows() == p.rows && p.surface->N.cols() == 3; }
 
@@ -44,7 +25,7 @@ Eigen::MatrixXd DenseParts::normals() const {
   Eigen::MatrixXd N(P.rows(), 3);
   for (const DensePart& p : parts) {
     if (has_normals(p)) N.middleRows(p.first, p.rows) = p.surface->N;
-    else if (p.surface) N.middleRows(p.first, p.rows) = area_normals(*p.surface);
+    else if (p.surface) N.middleRows(p.first, p.rows) = io::vertex_normals(p.surface->V, p.surface->F);
     else N.middleRows(p.first, p.rows).rowwise() = Eigen::RowVector3d(0, 0, 1);
   }
   return N;

@@ -1,6 +1,7 @@
 // Per-vertex coloured surfaces and the legend of `output.creases` pictures.
 #include "crease_pictures.hpp"
 
+#include <mbi/io/io.hpp>
 #include <mbi/scenes/creases.hpp>
 
 #include <Eigen/Geometry>
@@ -44,17 +45,6 @@ double edge(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double x, double
 
 std::uint8_t to_byte(double v) { return static_cast<std::uint8_t>(std::clamp(std::lround(v * 255.0), 0L, 255L)); }
 
-Eigen::MatrixXd vertex_normals(const Eigen::Ref<const Eigen::MatrixXd>& V, const Eigen::Ref<const Eigen::MatrixXi>& F) {
-  Eigen::MatrixXd N = Eigen::MatrixXd::Zero(V.rows(), 3);
-  for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    const Eigen::Vector3d a = V.row(F(f, 0)), b = V.row(F(f, 1)), c = V.row(F(f, 2));
-    const Eigen::RowVector3d n = (b - a).cross(c - a).transpose();
-    for (int k = 0; k < 3; ++k) N.row(F(f, k)) += n;
-  }
-  N.rowwise().normalize();
-  return N;
-}
-
 // 3 x 5 glyphs of the legend's numbers, rows top to bottom, 3 bits a row (left bit first).
 const char* glyph(char c) {
   static const char* digits[10] = {"111101101101111", "010110010010111", "111001111100111", "111001111001111",
@@ -89,7 +79,7 @@ io::Image render_colored(const Eigen::Ref<const Eigen::MatrixXd>& V, const Eigen
                          const Eigen::Ref<const Eigen::MatrixXd>& C, const raster::View& view, int width, int height) {
   io::Image img(width, height, {255, 255, 255});
   const Projector proj(view, width, height);
-  const Eigen::MatrixXd N = vertex_normals(V, F);
+  const Eigen::MatrixXd N = io::vertex_normals(V, F);
   std::vector<Eigen::Vector3d> S(static_cast<size_t>(V.rows()));
   for (Eigen::Index i = 0; i < V.rows(); ++i) S[static_cast<size_t>(i)] = proj(V.row(i).transpose());
   std::vector<double> depth(static_cast<size_t>(width) * height, std::numeric_limits<double>::infinity());

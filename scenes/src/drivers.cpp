@@ -3,6 +3,7 @@
 #include "format.hpp"
 
 #include <mbi/interp.hpp>
+#include <mbi/io/io.hpp>
 #include <mbi/scenes/runner.hpp>
 #include <mbi/sim/simulator.hpp>
 
@@ -137,22 +138,6 @@ std::unique_ptr<pipeline::Driver> drag_driver(const Scene& sc, const SceneModels
   return std::make_unique<pipeline::HandleDriver>(m.U, m.T, vertices, co, targets);
 }
 
-// Area-weighted vertex normals of a triangle surface (rest normals for the GPU's shading).
-Eigen::MatrixXd vertex_normals(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F) {
-  Eigen::MatrixXd N = Eigen::MatrixXd::Zero(V.rows(), 3);
-  for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    const Eigen::Vector3d a = V.row(F(f, 0)), b = V.row(F(f, 1)), c = V.row(F(f, 2));
-    const Eigen::RowVector3d n = (b - a).cross(c - a).transpose();
-    for (int k = 0; k < 3; ++k) N.row(F(f, k)) += n;
-  }
-  for (Eigen::Index i = 0; i < N.rows(); ++i) {
-    const double len = N.row(i).norm();
-    if (len > 0) N.row(i) /= len;
-    else N.row(i) << 0, 0, 1;  // a vertex no face uses
-  }
-  return N;
-}
-
 }  // namespace
 
 std::unique_ptr<pipeline::Driver> make_driver(const Scene& sc, const SceneModels& m) {
@@ -172,7 +157,7 @@ pipeline::FramePipeline make_pipeline(const Scene& sc, const SceneModels& m,
   const bool file_normals = m.dim() == 3 && m.dense.N.rows() == m.dense.V.rows() && m.dense.N.cols() == 3;
   po.normals = file_normals;
   const Eigen::MatrixXd normals = file_normals ? m.dense.N
-                                  : m.dim() == 3 && m.dense.F.rows() > 0 ? vertex_normals(m.dense.V, m.dense.F)
+                                  : m.dim() == 3 && m.dense.F.rows() > 0 ? io::vertex_normals(m.dense.V, m.dense.F)
                                                                          : Eigen::MatrixXd();
   return pipeline::FramePipeline(m.U, m.T, std::move(embedding), std::move(driver), po,
                                  std::move(evaluator), normals);

@@ -63,25 +63,26 @@ bool unit_vector(Eigen::RowVector3d& v) {
 
 // Far-out coordinates (up to the readers' 1e300) overflow the area weights: such a vertex gets
 // the sum of its faces' unit normals instead, so the normals are always finite.
-void complete_normals(SurfaceMesh& m, std::vector<char> have) {
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(m.V.rows(), 3), U = A;
-  for (Eigen::Index f = 0; f < m.F.rows(); ++f) {
+void complete_normals(const Eigen::Ref<const Eigen::MatrixXd>& V, const Eigen::Ref<const Eigen::MatrixXi>& F,
+                      Eigen::MatrixXd& N, const std::vector<char>& have) {
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(V.rows(), 3), U = A;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
     // edges from halves: no overflow for coordinates below the largest double / 2
-    const Eigen::RowVector3d a = 0.5 * m.V.row(m.F(f, 0)), e1 = 0.5 * m.V.row(m.F(f, 1)) - a,
-                             e2 = 0.5 * m.V.row(m.F(f, 2)) - a;
+    const Eigen::RowVector3d a = 0.5 * V.row(F(f, 0)), e1 = 0.5 * V.row(F(f, 1)) - a,
+                             e2 = 0.5 * V.row(F(f, 2)) - a;
     const Eigen::RowVector3d n = 4.0 * e1.cross(e2);
     const double s = std::max(e1.cwiseAbs().maxCoeff(), e2.cwiseAbs().maxCoeff());
     Eigen::RowVector3d u = s > 0 ? Eigen::RowVector3d((e1 / s).cross(e2 / s)) : Eigen::RowVector3d::Zero();
     if (!unit_vector(u)) u.setZero();
     for (int k = 0; k < 3; ++k) {
-      A.row(m.F(f, k)) += n;
-      U.row(m.F(f, k)) += u;
+      A.row(F(f, k)) += n;
+      U.row(F(f, k)) += u;
     }
   }
-  for (Eigen::Index i = 0; i < m.N.rows(); ++i) {
-    Eigen::RowVector3d n = m.N.row(i);
-    if (have[static_cast<std::size_t>(i)] && unit_vector(n)) {
-      m.N.row(i) = n;
+  for (Eigen::Index i = 0; i < N.rows(); ++i) {
+    Eigen::RowVector3d n = N.row(i);
+    if (static_cast<std::size_t>(i) < have.size() && have[static_cast<std::size_t>(i)] && unit_vector(n)) {
+      N.row(i) = n;
       continue;
     }
     n = A.row(i);
@@ -89,9 +90,12 @@ void complete_normals(SurfaceMesh& m, std::vector<char> have) {
       n = U.row(i);
       if (!unit_vector(n)) n << 0, 0, 1;
     }
-    m.N.row(i) = n;
+    N.row(i) = n;
   }
 }
+
+void complete_normals(SurfaceMesh& m, const std::vector<char>& have) { complete_normals(m.V, m.F, m.N, have); }
+
 
 void put_vertex_lines(std::FILE* f, const SurfaceOutput& out, bool with_normals) {
   const auto& V = out.V;
@@ -112,3 +116,13 @@ void put_counted_faces(std::FILE* f, const SurfaceOutput& out) {
 }
 
 }  // namespace mbi::io::detail
+
+namespace mbi::io {
+
+Eigen::MatrixXd vertex_normals(const Eigen::Ref<const Eigen::MatrixXd>& V, const Eigen::Ref<const Eigen::MatrixXi>& F) {
+  Eigen::MatrixXd N(V.rows(), 3);
+  detail::complete_normals(V, F, N, {});
+  return N;
+}
+
+}  // namespace mbi::io

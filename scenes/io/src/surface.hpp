@@ -62,9 +62,12 @@ Polygons faces_of(const SurfaceMesh& mesh, const Eigen::Ref<const Eigen::MatrixX
 void set_vertices(SurfaceMesh& m, const std::vector<std::array<double, 3>>& v);
 /// m.F from m.polygons, each fan-triangulated (v0, vk, vk+1).
 void fan(SurfaceMesh& m);
-/// Area-weighted vertex normals of the triangles F, written into the rows of N where `have` is
-/// false; every row of N is then made unit length ((0, 0, 1) for a vertex without area).
-void complete_normals(SurfaceMesh& m, std::vector<char> have);
+/// Area-weighted vertex normals of the triangles F (as io::vertex_normals), written into the rows
+/// of N where `have` is false; every row of N is then made unit length.
+void complete_normals(SurfaceMesh& m, const std::vector<char>& have);
+/// The same on V, F and N (V.rows() x 3); `have` may be empty (every row computed).
+void complete_normals(const Eigen::Ref<const Eigen::MatrixXd>& V, const Eigen::Ref<const Eigen::MatrixXi>& F,
+                      Eigen::MatrixXd& N, const std::vector<char>& have);
 
 /// The ASCII lines OFF and PLY share: "x y z" per vertex (then "nx ny nz" when
 /// `with_normals`), and "k i0 .. ik-1" per face.

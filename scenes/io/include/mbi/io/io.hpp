@@ -119,6 +119,11 @@ struct SurfaceMesh {
 /// appearance (STL stores float32).
 SurfaceMesh read_surface(const std::filesystem::path& file);
 
+/// Area-weighted unit vertex normals (n x 3) of the triangles F (t x 3, 0-based) of V (n x 3);
+/// finite for any finite coordinates (a far-out vertex gets the sum of its faces' unit normals),
+/// (0, 0, 1) for a vertex without area. The readers complete missing normals with the same.
+Eigen::MatrixXd vertex_normals(const Eigen::Ref<const Eigen::MatrixXd>& V, const Eigen::Ref<const Eigen::MatrixXi>& F);
+
 /// ascii / binary: as named (binary: PLY keeps the endianness of a binary file it was read
 /// from, little endian otherwise). as_read: the encoding of the file the mesh was read from
 /// when it has the output's format, ASCII otherwise.
