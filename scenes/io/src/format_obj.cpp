@@ -219,3 +219,11 @@ void write_obj(std::FILE* f, const SurfaceOutput& out) {
 }
 
 }  // namespace mbi::io::detail
+
+namespace mbi::io {
+
+SurfaceMesh parse_obj_text(std::string_view text, const std::filesystem::path& name) {
+  return detail::parse_obj(text, name);
+}
+
+}  // namespace mbi::io
