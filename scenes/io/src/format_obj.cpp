@@ -6,6 +6,8 @@
 // non-manifold faces.
 #include "surface.hpp"
 
+#include <mbi/io/obj_text.hpp>
+
 #include <array>
 
 namespace mbi::io::detail {

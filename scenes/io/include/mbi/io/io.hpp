@@ -32,7 +32,6 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
-#include <string_view>
 #include <vector>
 
 namespace mbi::io {
@@ -119,9 +118,6 @@ struct SurfaceMesh {
 /// vertices: the corners of its triangles are merged when bitwise equal, in order of first
 /// appearance (STL stores float32).
 SurfaceMesh read_surface(const std::filesystem::path& file);
-/// The text of an OBJ file, read as read_surface reads a .obj (`name` names it in messages): for
-/// a model that comes from elsewhere than a file, e.g. one dropped on the browser page.
-SurfaceMesh parse_obj_text(std::string_view text, const std::filesystem::path& name);
 
 /// ascii / binary: as named (binary: PLY keeps the endianness of a binary file it was read
 /// from, little endian otherwise). as_read: the encoding of the file the mesh was read from
