@@ -6,7 +6,8 @@
 //     neighbouring dense triangles, against the rest shape, is several times larger for BI);
 //   - the page's positions equal the native build's for the same calls (the page's journal
 //     replayed by mbi-web-twin) to float round-off;
-//   - the other draw path draws too (the 2D canvas fallback when WebGL2 ran).
+//   - the other draw path draws too (the 2D canvas fallback when WebGL2 ran);
+//   - an OBJ file given to the page loads in a control mesh generated there, and runs.
 // It says which draw path ran. Usage:
 //   node browser.mjs --page <build/web/page> --twin <mbi-web-twin> [--out <dir>] [--bench]
 // --bench adds the numbers of the bench report (wasm ms per frame, fps, solve at 448).
@@ -16,6 +17,7 @@ import { createServer } from 'node:http';
 import { mkdtempSync, readFileSync, writeFileSync, existsSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join, extname } from 'node:path';
+import { fileURLToPath } from 'node:url';
 
 const arg = (name, fallback) => {
   const i = process.argv.indexOf('--' + name);
@@ -145,6 +147,15 @@ async function main() {
             `the 2D canvas fallback draws the bar (${(100 * drawn).toFixed(1)} % of its view)`);
       await flat.close();
     }
+
+    // a user's OBJ: read in the page, its control mesh generated there
+    const own = await open(browser, base + '?scene=1&play=0');
+    await own.setInputFiles('#file', fileURLToPath(new URL('../../tests/data/vtu/sphere.obj', import.meta.url)));
+    await own.waitForFunction(() => mbiPage.api.description().startsWith('your model'), null, { timeout: 30000 });
+    for (let k = 0; k < 3; ++k) await own.keyboard.press('s');
+    const loadedObj = await own.evaluate(() => [mbiPage.api.description(), mbiPage.state.frame]);
+    check(loadedObj[1] === 3, `an OBJ given to the page runs: ${loadedObj[0]}, frame ${loadedObj[1]}`);
+    await own.close();
   } finally {
     await browser.close();
     server.close();
