@@ -55,7 +55,9 @@ extern "C" {
 int mbi_load_builtin(int scene) {
   g_error.clear();
   try {
-    return loaded(PageModel::builtin(scene == 1 ? mbi::web::SceneKind::Poke : mbi::web::SceneKind::TwistBar));
+    using mbi::web::SceneKind;
+    return loaded(PageModel::builtin(scene == 2 ? SceneKind::DenseSphere
+                                     : scene == 1 ? SceneKind::Poke : SceneKind::TwistBar));
   } catch (const std::exception& e) {
     g_error = e.what();
   }
@@ -128,6 +130,34 @@ int mbi_triangle_count(void) { return static_cast<int>(g_triangles.rows()); }
 const int* mbi_triangles(void) { return g_triangles.data(); }
 const float* mbi_positions(int view) { return g_model ? g_model->positions(view_of(view)).data() : nullptr; }
 const double* mbi_times(void) { return g_times; }
+
+int mbi_set_cpu_evaluation(int on) {
+  return guarded([on] { return g_model->set_cpu_evaluation(on != 0), 1; }, 0);
+}
+
+double mbi_evaluate_cpu(int view) {
+  return guarded([view] { return g_model->evaluate_cpu(view_of(view)); }, -1.0);
+}
+
+const int* mbi_point_elements(void) { return g_model ? g_model->point_elements().data() : nullptr; }
+const float* mbi_point_bary(void) { return g_model ? g_model->point_bary().data() : nullptr; }
+const float* mbi_rest_positions(void) { return g_model ? g_model->rest_positions().data() : nullptr; }
+
+const float* mbi_bezier_texels(int view) {
+  return guarded([view] { return g_model->bezier_texels(view_of(view)).data(); }, static_cast<const float*>(nullptr));
+}
+
+int mbi_bezier_rows(void) {
+  if (!g_model) return 0;
+  const Eigen::MatrixXi& T = g_model->control_elements();  // K = (d + 1)(d + 2) / 2 per element
+  return static_cast<int>(T.rows() * T.cols() * (T.cols() + 1) / 2);
+}
+
+double mbi_update_creases(void) {
+  return guarded([] { return g_model->update_creases(); }, -1.0);
+}
+
+const float* mbi_crease_colors(int view) { return g_model ? g_model->crease_colors(view_of(view)).data() : nullptr; }
 
 double mbi_bench_solve(int repeats) {
   Eigen::MatrixXd U, X;

@@ -34,6 +34,7 @@ bool call(const std::string& line) {
   else if (f == "grab") mbi_grab(i(0), a[1], a[2], a[3], a[4], a[5], a[6]);
   else if (f == "move") mbi_move(a[0], a[1], a[2], a[3], a[4], a[5]);
   else if (f == "release") mbi_release();
+  else if (f == "set_cpu_evaluation") ok = mbi_set_cpu_evaluation(i(0)) == 1;
   else if (!f.empty()) {
     std::fprintf(stderr, "mbi-web-twin: unknown call '%s'\n", f.c_str());
     return false;

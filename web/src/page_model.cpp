@@ -4,9 +4,12 @@
 #include <mbi/base/timer.hpp>
 #include <mbi/error.hpp>
 #include <mbi/interp/embed.hpp>
+#include <mbi/interp/evaluate.hpp>
+#include <mbi/scenes/creases.hpp>
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -53,7 +56,28 @@ pipeline::Method method_of(View view) {
   return view == View::BI ? pipeline::Method::BI : pipeline::Method::ModifiedBI;
 }
 
+// floats of the doubles a (rows x cols, row-major out)
+std::vector<float> floats(const Eigen::MatrixXd& a) {
+  std::vector<float> out(static_cast<std::size_t>(a.size()));
+  for (Eigen::Index i = 0; i < a.rows(); ++i)
+    for (Eigen::Index c = 0; c < a.cols(); ++c) out[static_cast<std::size_t>(i * a.cols() + c)] = static_cast<float>(a(i, c));
+  return out;
+}
+
 }  // namespace
+
+// The crease faces keep references to U and T: both live here, on the heap, so that moving the
+// model moves neither.
+struct PageModel::CreaseState {
+  CreaseState(const Eigen::MatrixXd& u, const Eigen::MatrixXi& t) : U(u), T(t), creases(U, T) {}
+  Eigen::MatrixXd U;
+  Eigen::MatrixXi T;
+  scenes::Creases creases;
+};
+
+PageModel::~PageModel() = default;
+PageModel::PageModel(PageModel&&) noexcept = default;
+PageModel& PageModel::operator=(PageModel&&) noexcept = default;
 
 PageModel::PageModel(Eigen::MatrixXd U, Eigen::MatrixXi T, Surface dense, sim::Simulator simulator,
                      double alpha, std::string description)
@@ -66,24 +90,83 @@ PageModel::PageModel(Eigen::MatrixXd U, Eigen::MatrixXi T, Surface dense, sim::S
   pipe_ = std::make_unique<pipeline::FramePipeline>(U_, T_, interp::embed(U_, T_, rest_.V),
                                                     std::move(driver), po);
   size_ = (rest_.V.colwise().maxCoeff() - rest_.V.colwise().minCoeff()).norm();
+  const interp::Embedding& emb = pipe_->embedding();
+  gpu_.elements.assign(emb.element.data(), emb.element.data() + emb.element.size());
+  gpu_.bary.assign(4 * gpu_.elements.size(), 0.0f);
+  for (Eigen::Index i = 0; i < emb.bary.rows(); ++i)
+    for (Eigen::Index k = 0; k < emb.bary.cols(); ++k)
+      gpu_.bary[static_cast<std::size_t>(4 * i + k)] = static_cast<float>(emb.bary(i, k));
+  gpu_.rest = floats(rest_.V);
+  gpu_.rest_bezier = interp::bezier_bi(U_, T_);
   step();
 }
 
 bool PageModel::step() {
-  const pipeline::FrameResult r = pipe_->step();
+  const pipeline::FrameResult r = pipe_->step(cpu_);
   message_ = r.message;
-  const pipeline::Method own = pipe_->method();
-  for (View v : {View::BI, View::ModifiedBI}) {
-    if (method_of(v) != own) continue;
-    views_[static_cast<int>(v)] = pipe_->positions();
-    publish(v, views_[static_cast<int>(v)]);
+  fresh_[0] = fresh_[1] = false;
+  other_ms_ = 0;
+  if (cpu_) {
+    const View own = pipe_->method() == pipeline::Method::BI ? View::BI : View::ModifiedBI;
+    positions(own);  // the pipeline's evaluation, as floats
+    const auto t0 = Clock::now();
+    positions(own == View::BI ? View::ModifiedBI : View::BI);
+    other_ms_ = ms_since(t0);
   }
-  const auto t0 = Clock::now();
-  const View other = own == pipeline::Method::BI ? View::ModifiedBI : View::BI;
-  pipe_->evaluate_with(method_of(other), views_[static_cast<int>(other)]);
-  publish(other, views_[static_cast<int>(other)]);
-  other_ms_ = ms_since(t0);
   return r.ok;
+}
+
+const std::vector<float>& PageModel::positions(View view) {
+  const int v = static_cast<int>(view);
+  if (!fresh_[v]) {
+    pipe_->evaluate_with(method_of(view), views_[v]);
+    publish(view, views_[v]);
+    fresh_[v] = true;
+  }
+  return drawn_[v];
+}
+
+double PageModel::evaluate_cpu(View view) {
+  const int v = static_cast<int>(view);
+  const interp::BezierPoints B = pipe_->bezier_with(method_of(view));
+  const auto t0 = Clock::now();
+  interp::evaluate<double>(B, pipe_->embedding(), views_[v]);
+  const double ms = ms_since(t0);
+  publish(view, views_[v]);
+  fresh_[v] = true;
+  return ms;
+}
+
+const std::vector<float>& PageModel::bezier_texels(View view) {
+  const interp::BezierPoints B = pipe_->bezier_with(method_of(view));
+  const interp::BezierPoints& R = gpu_.rest_bezier;
+  std::vector<float>& out = gpu_.texels[static_cast<int>(view)];
+  out.assign(static_cast<std::size_t>(4 * B.rows()), 0.0f);
+  for (Eigen::Index r = 0; r < B.rows(); ++r)
+    for (Eigen::Index c = 0; c < B.cols(); ++c)
+      out[static_cast<std::size_t>(4 * r + c)] = static_cast<float>(B(r, c) - R(r, c));
+  return out;
+}
+
+double PageModel::update_creases() {
+  if (!creases_) creases_ = std::make_unique<CreaseState>(U_, T_);
+  const scenes::Creases& c = creases_->creases;
+  Eigen::VectorXd jumps[2];
+  double top = 0;
+  for (View v : {View::BI, View::ModifiedBI}) {
+    jumps[static_cast<int>(v)] = c.face_jumps(*pipe_, method_of(v));
+    if (jumps[static_cast<int>(v)].size()) top = std::max(top, jumps[static_cast<int>(v)].maxCoeff());
+  }
+  const double scale = scenes::crease_scale(top);
+  for (int v = 0; v < 2; ++v) {
+    const Eigen::VectorXd values = c.point_values(pipe_->embedding(), jumps[v]);
+    colors_[v].resize(static_cast<std::size_t>(3 * values.size()));
+    for (Eigen::Index q = 0; q < values.size(); ++q) {
+      const Eigen::Vector3d rgb = scenes::crease_color(values(q) / scale);
+      for (int i = 0; i < 3; ++i) colors_[v][static_cast<std::size_t>(3 * q + i)] = static_cast<float>(rgb(i));
+    }
+  }
+  return top;
 }
 
 void PageModel::publish(View view, const Eigen::MatrixXd& P) {
@@ -111,6 +194,7 @@ void PageModel::set_alpha(double alpha) {
 }
 
 bool PageModel::grab(View view, const Ray& ray) {
+  positions(view);  // the CPU's positions of this frame (the GPU's stay on the GPU)
   const std::optional<Hit> hit = cast(ray, views_[static_cast<int>(view)], rest_.F);
   if (!hit) return false;
   // the material point under the cursor: its rest position, then its control element

@@ -1,5 +1,6 @@
-// The page's scenes: the settings of scenes/twist-bar.toml and scenes/poke.toml, built from
-// mbi::generate's shapes and its voxel mesher (the page reads no scene file).
+// The page's scenes: the settings of scenes/twist-bar.toml and scenes/poke.toml (poke's also for a
+// dense generated sphere), built from mbi::generate's shapes and its voxel mesher (the page reads
+// no scene file).
 #include <mbi/web/page_model.hpp>
 
 #include <mbi/generate/cage.hpp>
@@ -43,6 +44,13 @@ PageModel PageModel::builtin(SceneKind kind) {
   Surface dense;
   Eigen::MatrixXd U;
   Eigen::MatrixXi T;
+  if (kind == SceneKind::DenseSphere) {  // 252,152 points: the evaluators side by side
+    generate::bumpy_sphere(1.0, 205, 0.05, dense.V, dense.F);
+    generate::CageResult cage = generate::make_cage(dense.V, dense.F, {.target_vertices = 150});
+    sim::Simulator s = poke_simulator(cage.U, cage.T);
+    std::string what = "dense sphere: " + counts(dense.V, cage.U);
+    return PageModel(cage.U, cage.T, std::move(dense), std::move(s), 0.1, std::move(what));
+  }
   if (kind == SceneKind::Poke) {
     generate::cylinder_surface(0.5, 4.0, 96, 192, 12, dense.V, dense.F);
     generate::CageResult cage = generate::make_cage(dense.V, dense.F, {.target_vertices = 150});
