@@ -1,5 +1,6 @@
 // A view drawn on a 2D canvas, for browsers without WebGL2: the triangles facing the camera,
-// projected in script, sorted back to front and filled flat-shaded.
+// projected in script, sorted back to front and filled flat-shaded in the view's tint or the
+// crease colours (a face's mean of its corners').
 import { sub, cross, dot, unit } from './camera.js';
 
 export class CanvasView {
@@ -11,7 +12,9 @@ export class CanvasView {
 
   setTriangles(triangles) { this.triangles = Uint32Array.from(triangles); }
 
-  draw(positions, camera) {
+  // frame: { positions, colors }: x y z floats per vertex; RGB floats per vertex or null.
+  draw(frame, camera) {
+    const positions = frame.positions, colors = frame.colors;
     const ctx = this.ctx, w = ctx.canvas.width, h = ctx.canvas.height;
     const m = camera.matrix(w, h), eye = camera.eye();
     const n = positions.length / 3;
@@ -38,7 +41,9 @@ export class CanvasView {
       const nrm = unit(cross(sub(b, a), sub(c, a)));
       const d = Math.abs(dot(nrm, unit(sub(eye, a))));
       const k = 0.2 + 0.8 * d;
-      ctx.fillStyle = `rgb(${255 * this.tint[0] * k | 0},${255 * this.tint[1] * k | 0},${255 * this.tint[2] * k | 0})`;
+      const tint = colors ? [0, 1, 2].map((i) => (colors[3 * t[f] + i] + colors[3 * t[f + 1] + i] + colors[3 * t[f + 2] + i]) / 3)
+        : this.tint;
+      ctx.fillStyle = `rgb(${255 * tint[0] * k | 0},${255 * tint[1] * k | 0},${255 * tint[2] * k | 0})`;
       ctx.strokeStyle = ctx.fillStyle;
       ctx.beginPath();
       ctx.moveTo(sx[t[f]], sy[t[f]]);

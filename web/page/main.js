@@ -1,5 +1,7 @@
 // The page: the WebAssembly module (mbi-web.js, the C API of web/api/api.h), two views (BI,
 // modified-BI) drawn with WebGL2 or, without it, a 2D canvas, mouse pokes and the controls.
+// The dense points are evaluated on the GPU (WebGL2 transform feedback, gpu_evaluator.js) where
+// the pass builds, else (or when asked: ?eval=cpu, the evaluator switch) on the CPU in wasm.
 // window.mbiPage exposes the state to the browser test (web/test).
 import createMbi from './mbi-web.js';
 import { Camera } from './camera.js';
@@ -22,6 +24,7 @@ const api = {
   reset: call('reset', 'number', 0), setMethod: call('set_method', 'number', 1),
   setAlpha: call('set_alpha', 'number', 1), grab: call('grab', 'number', 7),
   move: call('move', null, 6), release: call('release', null, 0),
+  setCpuEvaluation: call('set_cpu_evaluation', 'number', 1),
   error: M.cwrap('mbi_error', 'string', []), description: M.cwrap('mbi_description', 'string', []),
 };
 const TINTS = [[0.85, 0.55, 0.35], [0.35, 0.6, 0.85]];
@@ -32,13 +35,44 @@ let views = params.get('draw') === '2d' ? [null, null] : canvases.map((c, k) => 
 const drawPath = views.every((v) => v) ? 'WebGL2' : '2D canvas';
 if (drawPath !== 'WebGL2') views = canvases.map((c, k) => new CanvasView(c, TINTS[k]));
 
+// Evaluation: the GPU pass (its GLSL body shared with the native build) where it builds.
+let gpuProblem = 'no WebGL2';
+if (drawPath === 'WebGL2') {
+  const body = await (await fetch('evaluate.glsl')).text();
+  gpuProblem = views.map((v) => v.enableGpu(body)).find((e) => e) || '';
+}
+const gpuAvailable = gpuProblem === '';
+
 const state = { playing: params.get('play') !== '0', dirty: true, camera: null, up: [0, 0, 1],
                 poking: false, drag: null, frame: 0, wasm: [], phases: null, fps: 0, drawn: [],
-                sums: [0, 0, 0, 0, 0], steps: 0 };
+                sums: [0, 0, 0, 0, 0], steps: 0, gpu: false, gpuMs: 0, creases: false, creaseTop: 0 };
 
 function positions(view) {
   const n = 3 * M._mbi_vertex_count();
   return new Float32Array(M.HEAPF32.buffer, M._mbi_positions(view), n);
+}
+
+function floats(ptr, n) { return new Float32Array(M.HEAPF32.buffer, ptr, n); }
+
+// The GPU pass of both views for the current frame (ms in all, for the status line).
+function runGpu() {
+  const t0 = performance.now(), rows = M._mbi_bezier_rows();
+  views.forEach((v, k) => v.gpu.evaluate(floats(M._mbi_bezier_texels(k), 4 * rows)));
+  state.gpuMs = performance.now() - t0;
+}
+
+// After a new frame: the GPU pass, the crease colours, a redraw.
+function frameChanged() {
+  if (state.gpu) runGpu();
+  if (state.creases) state.creaseTop = M._mbi_update_creases();
+  state.dirty = true;
+}
+
+function setEvaluator(gpu) {
+  state.gpu = gpu && gpuAvailable;
+  api.setCpuEvaluation(state.gpu ? 0 : 1);
+  $('evaluator').value = state.gpu ? 'gpu' : 'cpu';
+  frameChanged();
 }
 
 function triangles() {
@@ -49,6 +83,11 @@ function triangles() {
 function loaded(up) {
   const t = triangles();
   views.forEach((v) => v.setTriangles(t));
+  if (gpuAvailable) {
+    const n = M._mbi_vertex_count(), rest = floats(M._mbi_rest_positions(), 3 * n);
+    const elements = new Int32Array(M.HEAP32.buffer, M._mbi_point_elements(), n);
+    views.forEach((v) => v.gpu.setPoints(elements, floats(M._mbi_point_bary(), 4 * n), rest, M._mbi_bezier_rows()));
+  }
   const p = positions(1), lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
   for (let i = 0; i < p.length; ++i) {
     lo[i % 3] = Math.min(lo[i % 3], p[i]);
@@ -64,7 +103,8 @@ function restart() {
   state.wasm = [];
   state.sums.fill(0);
   state.steps = 0;
-  state.dirty = true;
+  api.setCpuEvaluation(state.gpu ? 0 : 1);
+  frameChanged();
 }
 
 function loadBuiltin(scene) {
@@ -96,11 +136,14 @@ function step() {
   state.phases = Array.from(new Float64Array(M.HEAPF64.buffer, M._mbi_times(), 5));
   state.phases.forEach((x, k) => { state.sums[k] += x; });
   state.steps++;
-  state.dirty = true;
+  frameChanged();
 }
 
 function draw() {
-  views.forEach((v, k) => v.draw(positions(k), state.camera));
+  views.forEach((v, k) => v.draw({
+    gpu: state.gpu, positions: state.gpu ? null : positions(k),
+    colors: state.creases ? floats(M._mbi_crease_colors(k), 3 * M._mbi_vertex_count()) : null,
+  }, state.camera));
   state.dirty = false;
   const now = performance.now();
   state.drawn.push(now);
@@ -112,9 +155,13 @@ const ms = (x) => x.toFixed(2) + ' ms';
 function status() {
   const p = state.phases;
   const mean = state.wasm.length ? state.wasm.reduce((a, b) => a + b, 0) / state.wasm.length : 0;
+  const evaluation = state.gpu ? `GPU (WebGL2 transform feedback), both views ${ms(state.gpuMs)}`
+    : 'CPU (wasm)' + (gpuAvailable ? '' : `: the GPU pass is unavailable (${gpuProblem})`);
   return `${api.description()}\ndrawing: ${drawPath}    frame ${state.frame}    ${state.fps.toFixed(0)} fps\n` +
+    `evaluation: ${evaluation}` + (state.creases ? `    creases: red at a gradient jump of ${state.creaseTop.toPrecision(3)}` : '') + '\n' +
     (p ? `last frame in wasm: simulation ${ms(p[0])}, solve ${ms(p[1])}, Bezier ${ms(p[2])}, ` +
-         `evaluation ${ms(p[3])} (sum ${ms(p[0] + p[1] + p[2] + p[3])}); the other view ${ms(p[4])}\n` : '') +
+         `evaluation ${state.gpu ? 'on the GPU' : ms(p[3])} (sum ${ms(p[0] + p[1] + p[2] + p[3])}); ` +
+         `the other view ${state.gpu ? 'on the GPU' : ms(p[4])}\n` : '') +
     `mean step in wasm over the last ${state.wasm.length} frames (both views): ${ms(mean)}`;
 }
 let note = '';
@@ -165,6 +212,8 @@ const setPlaying = (on) => { state.playing = on; $('play').textContent = on ? 'p
 $('play').onclick = () => setPlaying(!state.playing);
 $('step').onclick = () => { setPlaying(false); step(); };
 $('reset').onclick = () => { api.reset(); restart(); };
+$('evaluator').onchange = (e) => setEvaluator(e.target.value === 'gpu');
+$('creases').onchange = (e) => { state.creases = e.target.checked; frameChanged(); };
 $('scene').onchange = (e) => loadBuiltin(Number(e.target.value));
 $('method').onchange = (e) => { if (!api.setMethod(Number(e.target.value))) show(api.error()); };
 $('alpha').onchange = (e) => { if (!api.setAlpha(Number(e.target.value))) show(api.error()); else show(''); };
@@ -187,8 +236,50 @@ document.addEventListener('drop', (e) => {
 });
 
 // For the browser test: the state, the journal, the views' positions and pixels.
+// The two evaluators at the current frame: the largest difference of GPU (read back through
+// transform feedback) and CPU positions over both views, and the model's size.
+function compareEvaluators() {
+  const n = 3 * M._mbi_vertex_count(), rest = floats(M._mbi_rest_positions(), n).slice();  // wasm may grow
+  let worst = 0, size = 0;
+  views.forEach((v, k) => {
+    const g = v.gpu.positions(rest), c = positions(k);
+    for (let i = 0; i < n; ++i) {
+      worst = Math.max(worst, Math.abs(g[i] - c[i]));
+      size = Math.max(size, Math.abs(c[i]));
+    }
+  });
+  return { worst, size, points: n / 3 };
+}
+
+// The modified-BI view's evaluation at the current frame, `repeats` times each, in ms: the GPU
+// pass (upload of the Bezier texels, pass, waiting for it) and the wasm CPU path.
+function benchEvaluators(repeats) {
+  const v = views[1], rows = M._mbi_bezier_rows(), texels = floats(M._mbi_bezier_texels(1), 4 * rows);
+  const mean = (f) => {
+    f();  // one untimed
+    const t0 = performance.now();
+    for (let r = 0; r < repeats; ++r) f();
+    return (performance.now() - t0) / repeats;
+  };
+  const gpu = mean(() => { v.gpu.evaluate(texels); v.gpu.read(3); });
+  let inWasm = 0;  // the evaluation alone, without the Bezier points and the copy to floats
+  const cpu = mean(() => { inWasm += M._mbi_evaluate_cpu(1); });
+  return { gpu, cpu, wasm: inWasm / (repeats + 1), points: M._mbi_vertex_count(), renderer: v.renderer() };
+}
+
 window.mbiPage = {
-  drawPath, journal, state, api,
+  drawPath, journal, state, api, gpuAvailable, gpuProblem, compareEvaluators, benchEvaluators,
+  evaluator: () => (state.gpu ? 'gpu' : 'cpu'),
+  setEvaluator: (name) => setEvaluator(name === 'gpu'),
+  setCreases: (on) => { $('creases').checked = on; state.creases = on; frameChanged(); },
+  // a view's crease colours: the mean of red minus blue over its vertices ("hotter" is larger)
+  creaseHeat(view) {
+    const n = M._mbi_vertex_count(), c = floats(M._mbi_crease_colors(view), 3 * n);
+    let sum = 0;
+    for (let i = 0; i < n; ++i) sum += c[3 * i] - c[3 * i + 2];
+    return sum / n;
+  },
+  status: () => $('status').textContent,
   renderer: drawPath === 'WebGL2' ? views[0].renderer() : '',
   benchSolve: (repeats) => M._mbi_bench_solve(repeats),
   positions: (view) => Array.from(positions(view)),
@@ -216,6 +307,9 @@ window.mbiPage = {
 };
 
 setPlaying(state.playing);
+$('evaluator').querySelector('[value=gpu]').disabled = !gpuAvailable;
+state.gpu = gpuAvailable && params.get('eval') !== 'cpu';
+$('evaluator').value = state.gpu ? 'gpu' : 'cpu';
 loadBuiltin(Number(params.get('scene') || 0));
 $('scene').value = params.get('scene') || '0';
 requestAnimationFrame(loop);

@@ -7,10 +7,14 @@
 //   - the page's positions equal the native build's for the same calls (the page's journal
 //     replayed by mbi-web-twin) to float round-off;
 //   - the other draw path draws too (the 2D canvas fallback when WebGL2 ran);
-//   - an OBJ file given to the page loads in a control mesh generated there, and runs.
-// It says which draw path ran. Usage:
+//   - an OBJ file given to the page loads in a control mesh generated there, and runs;
+//   - with WebGL2: the GPU evaluator (transform feedback, read back) gives the CPU's positions
+//     to float round-off on the bar and on a generated sphere of 252,152 points, poked; the
+//     switch to the CPU evaluator works; the crease colours are hotter for BI.
+// It says which draw path and which evaluator ran (and when WebGL2 is missing). Usage:
 //   node browser.mjs --page <build/web/page> --twin <mbi-web-twin> [--out <dir>] [--bench]
-// --bench adds the numbers of the bench report (wasm ms per frame, fps, solve at 448).
+// --bench adds the numbers of the bench report (wasm ms per frame, fps, solve at 448, the two
+// evaluators on 252K points).
 import { chromium } from 'playwright-core';
 import { execFileSync } from 'node:child_process';
 import { createServer } from 'node:http';
@@ -102,6 +106,9 @@ async function main() {
     const path = await page.evaluate(() => mbiPage.drawPath);
     const renderer = await page.evaluate(() => mbiPage.renderer);
     console.log(`draw path: ${path}${renderer ? ' (' + renderer + ')' : ''}`);
+    const gpu = await page.evaluate(() => [mbiPage.gpuAvailable, mbiPage.gpuProblem, mbiPage.evaluator()]);
+    console.log(gpu[0] ? `evaluator: ${gpu[2]} (the GPU pass builds: WebGL2 transform feedback)`
+      : `evaluator: ${gpu[2]}; the GPU pass is unavailable (${gpu[1]}): GPU == CPU is not checked`);
     const triangles = await page.evaluate(() => mbiPage.triangles());
     const rest = await page.evaluate(() => mbiPage.positions(1));
     for (let k = 0; k < 30; ++k) await page.keyboard.press('s');  // 30 degrees of twist
@@ -112,6 +119,11 @@ async function main() {
     const creaseBI = creaseChange(triangles, rest, twisted[0]), creaseMBI = creaseChange(triangles, rest, twisted[1]);
     check(creaseBI > 3 * creaseMBI, `creases after 30 degrees of twist: BI ${creaseBI.toFixed(2)} deg, ` +
           `modified-BI ${creaseMBI.toFixed(2)} deg (BI at least 3 times larger)`);
+    if (gpu[0]) await gpuChecks(page, 'the twisting bar');
+    const heat = await page.evaluate(() => { mbiPage.setCreases(true); return [mbiPage.creaseHeat(0), mbiPage.creaseHeat(1)]; });
+    check(heat[0] > heat[1] + 0.02, `crease colours (mean red minus blue): BI ${heat[0].toFixed(3)}, ` +
+          `modified-BI ${heat[1].toFixed(3)} (BI hotter)`);
+    await page.evaluate(() => mbiPage.setCreases(false));
 
     check(await poke(page, 1, 15), 'a scripted mouse drag poked the bar (grab, move, release)');
     const after = await page.evaluate(() => mbiPage.pixels(1));
@@ -136,7 +148,13 @@ async function main() {
           `page vs native positions after ${journal.split('\n').length - 1} calls: largest difference ` +
           `${worst.toExponential(2)} m (model size ${size.toFixed(1)} m; float round-off allowed: 1e-5 of it)`);
     if (bench) await measure(page);
+    if (gpu[0]) {
+      await page.selectOption('#evaluator', 'cpu');
+      const cpu = await page.evaluate(() => [mbiPage.evaluator(), mbiPage.status()]);
+      check(cpu[0] === 'cpu' && cpu[1].includes('evaluation: CPU (wasm)'), 'the switch to the CPU evaluator: the page says so');
+    }
     await page.close();
+    if (gpu[0]) await dense(browser, base);
 
     // the other path: the 2D canvas fallback (when WebGL2 ran above)
     if (path === 'WebGL2') {
@@ -164,9 +182,38 @@ async function main() {
   process.exit(failures ? 1 : 0);
 }
 
-// The bench report's numbers: the bar playing for 120 frames (wasm ms per phase, fps), the
-// solve at 448 control vertices.
+// GPU == CPU at the current frame (both views), the GPU's positions read back from the
+// transform feedback buffer.
+async function gpuChecks(page, what) {
+  const c = await page.evaluate(() => mbiPage.compareEvaluators());
+  check(c.worst <= 1e-5 * c.size, `GPU == CPU on ${what} (${c.points} points, both views): largest difference ` +
+        `${c.worst.toExponential(2)} (model size ${c.size.toFixed(2)}; float round-off allowed: 1e-5 of it)`);
+}
+
+// The generated sphere of 252,152 points, poked through the API (a ray down the z axis) for a
+// few frames on the GPU: GPU == CPU, and the two evaluators side by side.
+async function dense(browser, base) {
+  const t0 = Date.now();
+  const page = await open(browser, base + '?scene=2&play=0');
+  await page.waitForFunction(() => mbiPage.api.description().startsWith('dense sphere'), null, { timeout: 60000 });
+  const hit = await page.evaluate(() => mbiPage.api.grab(1, 0, 0, 5, 0, 0, -1) === 1 &&
+                                        (mbiPage.api.move(0.6, 0.4, 5, 0, 0, -1), true));
+  for (let k = 0; k < 4; ++k) await page.keyboard.press('s');
+  check(hit && (await page.evaluate(() => mbiPage.evaluator())) === 'gpu', 'the dense sphere poked, on the GPU evaluator');
+  await gpuChecks(page, 'the dense sphere');
+  const b = await page.evaluate((n) => mbiPage.benchEvaluators(n), bench ? 20 : 3);
+  const f = (x) => x.toFixed(2);
+  console.log(`${bench ? 'bench' : 'evaluators'}: ${b.points} points, modified-BI view, ms per evaluation: GPU pass ` +
+              `${f(b.gpu)} (upload, pass, wait; ${b.renderer}), wasm CPU ${f(b.cpu)} (of which the evaluation ` +
+              `${f(b.wasm)}); mean of ${bench ? 20 : 3}`);
+  await page.close();
+  console.log(`(the dense sphere's checks took ${((Date.now() - t0) / 1000).toFixed(1)} s)`);
+}
+
+// The bench report's numbers: the bar playing for 120 frames on the CPU evaluator (wasm ms per
+// phase, fps), the solve at 448 control vertices.
 async function measure(page) {
+  await page.evaluate(() => mbiPage.setEvaluator('cpu'));  // the wasm phases, evaluation included
   await page.keyboard.press('r');
   await page.keyboard.press(' ');
   await page.waitForFunction(() => mbiPage.state.frame >= 120, null, { timeout: 120000, polling: 100 });
