@@ -128,7 +128,9 @@ void mbi_release(void) {
 int mbi_vertex_count(void) { return g_model ? g_model->vertices() : 0; }
 int mbi_triangle_count(void) { return static_cast<int>(g_triangles.rows()); }
 const int* mbi_triangles(void) { return g_triangles.data(); }
-const float* mbi_positions(int view) { return g_model ? g_model->positions(view_of(view)).data() : nullptr; }
+const float* mbi_positions(int view) {
+  return guarded([view] { return g_model->positions(view_of(view)).data(); }, static_cast<const float*>(nullptr));
+}
 const double* mbi_times(void) { return g_times; }
 
 int mbi_set_cpu_evaluation(int on) {
