@@ -237,18 +237,20 @@ document.addEventListener('drop', (e) => {
 
 // For the browser test: the state, the journal, the views' positions and pixels.
 // The two evaluators at the current frame: the largest difference of GPU (read back through
-// transform feedback) and CPU positions over both views, and the model's size.
+// transform feedback) and CPU positions over both views, the model's size, the largest
+// displacement.
 function compareEvaluators() {
   const n = 3 * M._mbi_vertex_count(), rest = floats(M._mbi_rest_positions(), n).slice();  // wasm may grow
-  let worst = 0, size = 0;
+  let worst = 0, size = 0, moved = 0;
   views.forEach((v, k) => {
     const g = v.gpu.positions(rest), c = positions(k);
     for (let i = 0; i < n; ++i) {
       worst = Math.max(worst, Math.abs(g[i] - c[i]));
       size = Math.max(size, Math.abs(c[i]));
+      moved = Math.max(moved, Math.abs(c[i] - rest[i]));
     }
   });
-  return { worst, size, points: n / 3 };
+  return { worst, size, moved, points: n / 3 };
 }
 
 // The modified-BI view's evaluation at the current frame, `repeats` times each, in ms: the GPU
@@ -279,7 +281,7 @@ window.mbiPage = {
     for (let i = 0; i < n; ++i) sum += c[3 * i] - c[3 * i + 2];
     return sum / n;
   },
-  status: () => $('status').textContent,
+  status: () => status(),
   renderer: drawPath === 'WebGL2' ? views[0].renderer() : '',
   benchSolve: (repeats) => M._mbi_bench_solve(repeats),
   positions: (view) => Array.from(positions(view)),
