@@ -54,7 +54,8 @@ function positions(view) {
 
 function floats(ptr, n) { return new Float32Array(M.HEAPF32.buffer, ptr, n); }
 
-// The GPU pass of both views for the current frame (ms in all, for the status line).
+// The GPU pass of both views for the current frame (the ms to issue them, for the status line:
+// the GPU runs them later).
 function runGpu() {
   const t0 = performance.now(), rows = M._mbi_bezier_rows();
   views.forEach((v, k) => v.gpu.evaluate(floats(M._mbi_bezier_texels(k), 4 * rows)));
@@ -155,7 +156,7 @@ const ms = (x) => x.toFixed(2) + ' ms';
 function status() {
   const p = state.phases;
   const mean = state.wasm.length ? state.wasm.reduce((a, b) => a + b, 0) / state.wasm.length : 0;
-  const evaluation = state.gpu ? `GPU (WebGL2 transform feedback), both views ${ms(state.gpuMs)}`
+  const evaluation = state.gpu ? `GPU (WebGL2 transform feedback), both views' passes issued in ${ms(state.gpuMs)}`
     : 'CPU (wasm)' + (gpuAvailable ? '' : `: the GPU pass is unavailable (${gpuProblem})`);
   return `${api.description()}\ndrawing: ${drawPath}    frame ${state.frame}    ${state.fps.toFixed(0)} fps\n` +
     `evaluation: ${evaluation}` + (state.creases ? `    creases: red at a gradient jump of ${state.creaseTop.toPrecision(3)}` : '') + '\n' +

@@ -121,6 +121,7 @@ async function main() {
           `modified-BI ${creaseMBI.toFixed(2)} deg (BI at least 3 times larger)`);
     if (gpu[0]) await gpuChecks(page, 'the twisting bar');
     const heat = await page.evaluate(() => { mbiPage.setCreases(true); return [mbiPage.creaseHeat(0), mbiPage.creaseHeat(1)]; });
+    await page.screenshot({ path: join(out, 'web-creases.png') });
     check(heat[0] > heat[1] + 0.02, `crease colours (mean red minus blue): BI ${heat[0].toFixed(3)}, ` +
           `modified-BI ${heat[1].toFixed(3)} (BI hotter)`);
     await page.evaluate(() => mbiPage.setCreases(false));
