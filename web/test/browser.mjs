@@ -160,10 +160,12 @@ async function main() {
     // the other path: the 2D canvas fallback (when WebGL2 ran above)
     if (path === 'WebGL2') {
       const flat = await open(browser, base + '?scene=0&play=0&draw=2d');
-      const seen = await flat.evaluate(() => [mbiPage.drawPath, mbiPage.pixels(1)]);
+      const seen = await flat.evaluate(() => [mbiPage.drawPath, mbiPage.pixels(1), mbiPage.evaluator(), mbiPage.status()]);
       const drawn = seen[1].filter((g) => g < 200).length / seen[1].length;
       check(seen[0] === '2D canvas' && drawn > 0.02,
             `the 2D canvas fallback draws the bar (${(100 * drawn).toFixed(1)} % of its view)`);
+      check(seen[2] === 'cpu' && seen[3].includes('evaluation: CPU (wasm): the GPU pass is unavailable (no WebGL2)'),
+            'without WebGL2 the page evaluates on the CPU and says why');
       await flat.close();
     }
 
