@@ -1,11 +1,14 @@
-# mbi_add_library(<name> [HEADER_ONLY] [INSTALL] [PUBLIC <deps>...] [PRIVATE <deps>...])
+# mbi_add_library(<name> [HEADER_ONLY] [INSTALL] [PUBLIC <deps>...] [PRIVATE <deps>...]
+#                 [ONLY <files>...] [EXCLUDE <files>...])
 #
 # The one way an mbi library target is defined: target mbi_<name>, alias mbi::<name>, sources
-# src/*.cpp of the calling folder, public headers include/ (installed as include/mbi/...), C++20,
-# the project's warnings. INSTALL exports it in mbiTargets (find_package(mbi)); only libraries
-# whose dependencies a consumer can find (Eigen, Threads) are installed.
+# src/*.cpp of the calling folder (ONLY: just these; EXCLUDE: all but these; paths relative to
+# the folder: a build configured without a dependency leaves out the files that need it), public
+# headers include/ (installed as include/mbi/...), C++20, the project's warnings. INSTALL exports
+# it in mbiTargets (find_package(mbi)); only libraries whose dependencies a consumer can find
+# (Eigen, Threads) are installed.
 function(mbi_add_library name)
-  cmake_parse_arguments(L "HEADER_ONLY;INSTALL" "" "PUBLIC;PRIVATE" ${ARGN})
+  cmake_parse_arguments(L "HEADER_ONLY;INSTALL" "" "PUBLIC;PRIVATE;ONLY;EXCLUDE" ${ARGN})
   set(target mbi_${name})
   if(L_HEADER_ONLY)
     add_library(${target} INTERFACE)
@@ -16,6 +19,15 @@ function(mbi_add_library name)
     target_link_libraries(${target} INTERFACE ${L_PUBLIC})
   else()
     file(GLOB sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/src/*.cpp)
+    if(L_ONLY)
+      set(sources)
+      foreach(f IN LISTS L_ONLY)
+        list(APPEND sources ${CMAKE_CURRENT_SOURCE_DIR}/${f})
+      endforeach()
+    endif()
+    foreach(f IN LISTS L_EXCLUDE)
+      list(REMOVE_ITEM sources ${CMAKE_CURRENT_SOURCE_DIR}/${f})
+    endforeach()
     if(NOT sources)
       message(FATAL_ERROR "mbi_add_library(${name}): no sources in ${CMAKE_CURRENT_SOURCE_DIR}/src")
     endif()

@@ -31,26 +31,32 @@ run_packages=(
 # the Python package (python/: pybind11, the headers, numpy, pytest, PyTorch for its autograd
 # wrapper, venv for the install test, Dask's distributed scheduler for the batch recipe and its
 # test on a LocalCluster); meshio (the VTK XML fixtures' writer, tests/data/vtu); ffmpeg (the
-# viewer's --video pipes frames to it at run time, optional; its tests use ffprobe).
+# viewer's --video pipes frames to it at run time, optional; its tests use ffprobe); Emscripten
+# (the web preset; its linker needs Debian's acorn) and Chromium (the page's browser test).
 test_packages=(
   catch2 xvfb xauth python3
   libbenchmark-dev python3-matplotlib git
   clang libclang-rt-14-dev
   pybind11-dev python3-dev python3-numpy python3-pytest python3-torch python3-venv python3-setuptools
   python3-meshio python3-distributed ffmpeg
+  emscripten node-acorn chromium
 )
-# The glTF tests check our files with the Khronos validator and three.js (node packages pinned by
-# tests/gltf/node/package-lock.json, installed by `npm ci` below): node and npm from Debian where
+# The glTF tests check our files with the Khronos validator and three.js, the browser test drives
+# chromium with playwright-core (node packages pinned by tests/gltf/node/package-lock.json and
+# web/test/package-lock.json, installed by `npm ci` below): node and npm from Debian where
 # no npm is installed already (a NodeSource node brings its own).
 if ! command -v npm >/dev/null 2>&1; then test_packages+=(nodejs npm); fi
 
-# The node packages of the glTF tests, into tests/gltf/node/node_modules (git-ignored).
+# The node packages of the glTF tests and of the browser test (playwright-core, web/test), into
+# their node_modules (git-ignored).
 install_node_packages() {
-  local dir
-  dir="$(cd "$(dirname "$0")/.." && pwd)/tests/gltf/node"
-  if [ -d "$dir/node_modules/three" ] && [ -d "$dir/node_modules/gltf-validator" ]; then return 0; fi
-  echo "install-deps: npm ci in tests/gltf/node"
-  (cd "$dir" && npm ci --no-audit --no-fund)
+  local root dir
+  root="$(cd "$(dirname "$0")/.." && pwd)"
+  for dir in "$root/tests/gltf/node" "$root/web/test"; do
+    if [ -d "$dir/node_modules" ]; then continue; fi
+    echo "install-deps: npm ci in ${dir#"$root"/}"
+    (cd "$dir" && npm ci --no-audit --no-fund)
+  done
 }
 
 case "${1:-test}" in

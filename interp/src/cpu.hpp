@@ -3,8 +3,10 @@
 // code: where it is defined, functions compiled for AVX2/FMA or AVX-512 with
 // __attribute__((target(...))) (never per-file flags: Eigen templates compiled wider would leave
 // copies the linker may keep for every CPU) are picked at run time with have_avx2_fma() and
-// have_avx512(); other CPUs run portable loops.
-#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+// have_avx512(); other CPUs run portable loops, as does a build configured with
+// MBI_WITH_X86_KERNELS=OFF (MBI_INTERP_PORTABLE).
+#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__)) && \
+    !defined(MBI_INTERP_PORTABLE)
 #define MBI_INTERP_X86 1
 #include <immintrin.h>
 

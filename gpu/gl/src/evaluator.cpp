@@ -77,7 +77,7 @@ void GpuEvaluator::set_points(const pipeline::PointSet& ps) {
     origin_.head(d) = 0.5 * (lo + hi);
   }
 
-  program_ = detail::program("#define D " + std::to_string(d) + "\n", shaders::evaluate_vs, nullptr,
+  program_ = detail::program("#define D " + std::to_string(d) + "\n", shaders::evaluate_vs.c_str(), nullptr,
                              {"tf_displacement", "tf_normal"});
   glGenVertexArrays(1, &vao_);
   glBindVertexArray(vao_);

@@ -1,66 +1,20 @@
 #pragma once
 // GLSL sources of mbi::gpu (GLSL 3.30 core: transform feedback, integer attributes and texture
 // buffers, no compute shaders). "#version" and "#define D <dim>" are prepended.
+#include "evaluate_glsl.hpp"  // generated from gpu/gl/shaders/evaluate.glsl (CMakeLists.txt)
+
+#include <string>
+
 namespace mbi::gpu::shaders {
 
-// Evaluation pass: displacement and normal of one dense point from its element's quadratic
-// Bezier simplex (K = (D+1)(D+2)/2 control points: the D+1 vertices, then the edges in the
-// order of interp::bezier_edges). Same arithmetic as interp/src/evaluate.cpp.
-inline const char* evaluate_vs = R"(
-const int K = (D + 1) * (D + 2) / 2;
-const int E = D * (D + 1) / 2;
-layout(location = 0) in int element;
-layout(location = 1) in vec4 bary;
-layout(location = 2) in vec3 rest_normal;
+// Evaluation pass: its body is gpu/gl/shaders/evaluate.glsl (shared with the browser page),
+// embedded at configure time as evaluate_glsl; before it, the fetches from texture buffers.
+inline const std::string evaluate_vs = R"(
 uniform samplerBuffer bezier;     // displacement control points, K per element
 uniform samplerBuffer gradients;  // barycentric basis gradients, D + 1 per element
-uniform int with_normals;
-out vec3 tf_displacement;
-out vec3 tf_normal;
-#if D == 3
-const ivec2 edges[6] = ivec2[6](ivec2(0, 1), ivec2(0, 2), ivec2(0, 3), ivec2(1, 2), ivec2(1, 3), ivec2(2, 3));
-#else
-const ivec2 edges[3] = ivec2[3](ivec2(0, 1), ivec2(0, 2), ivec2(1, 2));
-#endif
-void main() {
-  float b[D + 1];
-  for (int k = 0; k <= D; ++k) b[k] = bary[k];
-  vec3 x = vec3(0.0);
-  vec3 g[D + 1];
-  int base = element * K;
-  for (int k = 0; k <= D; ++k) {
-    vec3 p = texelFetch(bezier, base + k).xyz;
-    x += b[k] * b[k] * p;
-    g[k] = 2.0 * b[k] * p;
-  }
-  for (int s = 0; s < E; ++s) {
-    int i = edges[s].x, j = edges[s].y;
-    vec3 q = texelFetch(bezier, base + D + 1 + s).xyz;
-    x += 2.0 * b[i] * b[j] * q;
-    g[i] += 2.0 * b[j] * q;
-    g[j] += 2.0 * b[i] * q;
-  }
-  tf_displacement = x;
-  tf_normal = vec3(0.0);
-  if (with_normals != 0) {
-    // J = I + sum_k g_k a_k^T (the rest map is the identity); n' ~ cof(J) n
-    mat3 J = mat3(1.0);
-    for (int k = 0; k <= D; ++k) {
-      vec3 a = texelFetch(gradients, element * (D + 1) + k).xyz;
-      J += outerProduct(g[k], a);
-    }
-#if D == 3
-    vec3 o = mat3(cross(J[1], J[2]), cross(J[2], J[0]), cross(J[0], J[1])) * rest_normal;
-#else
-    vec3 o = vec3(J[1][1] * rest_normal.x - J[0][1] * rest_normal.y,
-                  -J[1][0] * rest_normal.x + J[0][0] * rest_normal.y, 0.0);
-#endif
-    float len = length(o);
-    tf_normal = len > 0.0 ? o / len : vec3(0.0);
-  }
-  gl_Position = vec4(0.0, 0.0, 0.0, 1.0);
-}
-)";
+vec3 bezier_point(int i) { return texelFetch(bezier, i).xyz; }
+vec3 basis_gradient(int i) { return texelFetch(gradients, i).xyz; }
+)" + std::string(evaluate_glsl);
 
 // Renderer: the dense mesh from the evaluator's buffers (rest + displacement, GPU normals),
 // orthographic camera, headlight Lambert + ambient shading (creases show as shading jumps).

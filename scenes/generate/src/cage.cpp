@@ -1,10 +1,11 @@
 // Control-mesh generation: voxel envelope + Kuhn subdivision, or its boundary meshed by TetGen
-// (see cage.hpp).
+// (see cage.hpp; TetGen itself is called in tetrahedralize.cpp).
 #include <mbi/interp/embed.hpp>
 #include <mbi/generate/cage.hpp>
 
+#include "tetrahedralize.hpp"
+
 #include <Eigen/Dense>
-#include <tetgen.h>
 
 #include <algorithm>
 #include <array>
@@ -372,24 +373,6 @@ bool tetgen_envelope(const Grid& g, const std::string& switches, Eigen::MatrixXd
   Eigen::MatrixXd X;
   std::vector<std::array<int, 3>> B;
   const int nb = envelope_boundary(g, &X, &B);
-  tetgenio in, out;
-  in.firstnumber = 0;
-  in.numberofpoints = nb;
-  in.pointlist = new REAL[static_cast<std::size_t>(3 * nb)];
-  for (int v = 0; v < nb; ++v)
-    for (int c = 0; c < 3; ++c) in.pointlist[3 * v + c] = X(v, c);
-  in.numberoffacets = static_cast<int>(B.size());
-  in.facetlist = new tetgenio::facet[B.size()];
-  for (std::size_t t = 0; t < B.size(); ++t) {
-    tetgenio::facet& f = in.facetlist[t];
-    tetgenio::init(&f);
-    f.numberofpolygons = 1;
-    f.polygonlist = new tetgenio::polygon[1];
-    tetgenio::init(&f.polygonlist[0]);
-    f.polygonlist[0].numberofvertices = 3;
-    f.polygonlist[0].vertexlist = new int[3];
-    for (int c = 0; c < 3; ++c) f.polygonlist[0].vertexlist[c] = B[t][static_cast<std::size_t>(c)];
-  }
   // TetGen's fence: what reaches it is checked first (finite, normalised coordinates, distinct
   // in-range facet corners, facets of non-zero area), so its internal assertions cannot fire on
   // our input; and whatever it throws becomes a reason here.
@@ -398,38 +381,24 @@ bool tetgen_envelope(const Grid& g, const std::string& switches, Eigen::MatrixXd
     why = "TetGen input refused: " + bad;
     return false;
   }
-  std::vector<char> sw(switches.begin(), switches.end());
-  sw.push_back('\0');
-  try {
-    tetrahedralize(sw.data(), &in, &out);
-  } catch (int code) {
-    why = "TetGen -" + switches + " failed with code " + std::to_string(code);
-    return false;
-  } catch (const std::bad_alloc&) {
-    why = "TetGen -" + switches + " ran out of memory";
-    return false;
-  } catch (const std::exception& e) {
-    why = "TetGen -" + switches + " failed: " + e.what();
-    return false;
-  } catch (...) {
-    why = "TetGen -" + switches + " failed with an unknown exception";
-    return false;
-  }
-  if (out.numberofpoints < nb || out.numberoftetrahedra <= 0 || out.numberofcorners != 4) {
+  Eigen::MatrixXd points;
+  Eigen::MatrixXi tets;
+  if (!detail::tetrahedralize(X, B, switches, points, tets, why)) return false;
+  if (points.rows() < nb || tets.rows() <= 0) {
     why = "TetGen -" + switches + " returned no tetrahedra";
     return false;
   }
   for (int v = 0; v < nb; ++v)
     for (int c = 0; c < 3; ++c)
-      if (out.pointlist[3 * v + c] != X(v, c)) {
+      if (points(v, c) != X(v, c)) {
         why = "TetGen -" + switches + " moved a boundary vertex";
         return false;
       }
   // Keep only the vertices used by tetrahedra (in TetGen's order).
-  std::vector<int> map(static_cast<std::size_t>(out.numberofpoints), -1);
-  for (long long e = 0; e < 4LL * out.numberoftetrahedra; ++e) {
-    const int v = out.tetrahedronlist[e];
-    if (v < 0 || v >= out.numberofpoints) {
+  std::vector<int> map(static_cast<std::size_t>(points.rows()), -1);
+  for (Eigen::Index e = 0; e < 4 * tets.rows(); ++e) {
+    const int v = tets(e / 4, e % 4);
+    if (v < 0 || v >= points.rows()) {
       why = "TetGen -" + switches + " returned a bad vertex index";
       return false;
     }
@@ -439,13 +408,11 @@ bool tetgen_envelope(const Grid& g, const std::string& switches, Eigen::MatrixXd
   for (auto& m : map)
     if (m == 0) m = n++;
   U.resize(n, 3);
-  for (int v = 0; v < out.numberofpoints; ++v)
-    if (map[static_cast<std::size_t>(v)] >= 0)
-      for (int c = 0; c < 3; ++c) U(map[static_cast<std::size_t>(v)], c) = out.pointlist[3 * v + c];
-  T.resize(out.numberoftetrahedra, 4);
-  for (int e = 0; e < out.numberoftetrahedra; ++e)
-    for (int c = 0; c < 4; ++c)
-      T(e, c) = map[static_cast<std::size_t>(out.tetrahedronlist[4 * e + c])];
+  for (Eigen::Index v = 0; v < points.rows(); ++v)
+    if (map[static_cast<std::size_t>(v)] >= 0) U.row(map[static_cast<std::size_t>(v)]) = points.row(v);
+  T.resize(tets.rows(), 4);
+  for (Eigen::Index e = 0; e < tets.rows(); ++e)
+    for (int c = 0; c < 4; ++c) T(e, c) = map[static_cast<std::size_t>(tets(e, c))];
   for (Eigen::Index e = 0; e < T.rows(); ++e) {
     const double vol = simplex_volume(U, T, e);
     if (vol == 0.0) {
@@ -698,6 +665,8 @@ CageResult make_cage(const Eigen::Ref<const Eigen::MatrixXd>& V,
                         " out of range");
   if (options.search_steps < 0 || options.search_steps > 10000)
     throw CageError("search_steps out of range [0, 10000]");
+  if (options.mesher == Mesher::TetGen && !detail::have_tetgen())
+    throw CageError("this build has no TetGen (MBI_WITH_TETGEN=OFF): use the voxel mesher");
 
   const double zspan = V.col(2).maxCoeff() - V.col(2).minCoeff();
   const bool tetgen = options.mesher == Mesher::TetGen;

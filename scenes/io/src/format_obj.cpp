@@ -6,6 +6,8 @@
 // non-manifold faces.
 #include "surface.hpp"
 
+#include <mbi/io/obj_text.hpp>
+
 #include <array>
 
 namespace mbi::io::detail {
@@ -219,3 +221,11 @@ void write_obj(std::FILE* f, const SurfaceOutput& out) {
 }
 
 }  // namespace mbi::io::detail
+
+namespace mbi::io {
+
+SurfaceMesh parse_obj_text(std::string_view text, const std::filesystem::path& name) {
+  return detail::parse_obj(text, name);
+}
+
+}  // namespace mbi::io

@@ -11,6 +11,7 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <system_error>
@@ -143,13 +144,38 @@ std::vector<Line> tokenize(std::string_view text, char comment, std::string_view
   return lines;
 }
 
+namespace {
+// std::from_chars for double. A standard library without it (libc++ before 17, the browser
+// build's) gets strtod on a copy, held to from_chars' grammar: no leading space, no hex.
+std::from_chars_result double_from_chars(const char* b, const char* e, double& x) {
+#if defined(__cpp_lib_to_chars)
+  return std::from_chars(b, e, x);
+#else
+  const std::string text(b, e);
+  const std::size_t digits = text.find_first_not_of("+-");
+  if (text.empty() || std::isspace(static_cast<unsigned char>(text[0])) ||
+      (digits != std::string::npos && text.compare(digits, 2, "0x") == 0) ||
+      (digits != std::string::npos && text.compare(digits, 2, "0X") == 0))
+    return {b, std::errc::invalid_argument};
+  errno = 0;
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (end == text.c_str()) return {b, std::errc::invalid_argument};
+  const char* ptr = b + (end - text.c_str());
+  if (errno == ERANGE) return {ptr, std::errc::result_out_of_range};
+  x = v;
+  return {ptr, std::errc()};
+#endif
+}
+}  // namespace
+
 double to_double(std::string_view s, const std::filesystem::path& file, int line,
                  const std::string& field) {
   double x = 0.0;
   const char* b = s.data();
   const char* e = s.data() + s.size();
   if (s.size() > 1 && *b == '+' && b[1] != '-' && b[1] != '+') ++b;  // "+1", never "+-1"
-  const auto r = std::from_chars(b, e, x);
+  const auto r = double_from_chars(b, e, x);
   if (r.ec == std::errc::result_out_of_range)
     fail(file, line, field + ": number out of range '" + std::string(s) + "'");
   if (r.ec != std::errc() || r.ptr != e)

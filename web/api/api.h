@@ -1,0 +1,71 @@
+#pragma once
+// The page module's C API (the functions the page calls through Emscripten's cwrap; the
+// native twin calls the same ones). One model at a time. Functions that can fail return 0 or
+// -1 and leave the reason in mbi_error(). Pointers stay valid until the next call that changes
+// the model (load, step, reset). Views: 0 BI, 1 modified-BI. Methods: 0 BI, 1 modified-BI.
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/// Loads a built-in scene (0: the twisting bar, 1: the poke cylinder, 2: a dense sphere of
+/// 252,152 points) at frame 0; 1 on success.
+int mbi_load_builtin(int scene);
+/// Loads an OBJ model from its text (`bytes` long) in a generated voxel cage of about
+/// `control_vertices` vertices; 1 on success.
+int mbi_load_obj(const char* text, int bytes, int control_vertices);
+/// Why the last call failed ("" when it did not).
+const char* mbi_error(void);
+/// One line about the loaded scene.
+const char* mbi_description(void);
+
+/// Computes the next frame; its number, or -1 (the simulation failed: mbi_error()).
+int mbi_step(void);
+/// Back to frame 0.
+int mbi_reset(void);
+int mbi_set_method(int method);
+int mbi_set_alpha(double alpha);
+
+/// Starts a poke where the ray (origin, direction; model coordinates) hits the view's surface;
+/// 1 when it hit.
+int mbi_grab(int view, double ox, double oy, double oz, double dx, double dy, double dz);
+/// Moves the poke's target to where the ray meets the plane through the grabbed point that
+/// faces it.
+void mbi_move(double ox, double oy, double oz, double dx, double dy, double dz);
+void mbi_release(void);
+
+int mbi_vertex_count(void);
+int mbi_triangle_count(void);
+/// Triangles as 3 vertex indices each.
+const int* mbi_triangles(void);
+/// A view's dense positions, x y z per vertex.
+const float* mbi_positions(int view);
+/// Milliseconds of the last frame: drive (simulation), solve, Bezier, evaluate (the
+/// pipeline's method), then the other view's evaluation.
+const double* mbi_times(void);
+
+/// 1: mbi_step evaluates the dense points on the CPU (at first); 0: the page evaluates them on
+/// the GPU from mbi_bezier_texels, and mbi_positions evaluates a view on the CPU when asked.
+int mbi_set_cpu_evaluation(int on);
+/// Evaluates a view's dense points of the current frame on the CPU now; the milliseconds.
+double mbi_evaluate_cpu(int view);
+/// The GPU pass's inputs (gpu/gl/shaders/evaluate.glsl): per dense vertex its control element,
+/// its barycentric coordinates (4 floats) and its rest position (3 floats); per view the current
+/// Bezier control points minus the rest shape's, x y z 0 floats, mbi_bezier_rows() of them.
+const int* mbi_point_elements(void);
+const float* mbi_point_bary(void);
+const float* mbi_rest_positions(void);
+const float* mbi_bezier_texels(int view);
+int mbi_bezier_rows(void);
+/// The native viewer's crease colours for both views of the current frame (one scale); the
+/// largest gradient jump (the scale's top), -1 on failure.
+double mbi_update_creases(void);
+/// A view's crease colours, RGB floats per dense vertex (after mbi_update_creases).
+const float* mbi_crease_colors(int view);
+
+/// Milliseconds per modified-BI solve at 448 control vertices (a 7 x 7 x 6 box cage, twisted),
+/// the mean of `repeats` solves after one untimed.
+double mbi_bench_solve(int repeats);
+
+#ifdef __cplusplus
+}
+#endif

@@ -1,0 +1,88 @@
+// The page module's native twin: the same C API (api.cpp) in a native build, for the browser
+// test and the bench report.
+//   mbi-web-twin replay <journal> <out.bin>   replays the page's calls (one a line: the
+//       function's name without mbi_, then its numbers), then writes both views' positions
+//       (float32, BI then modified-BI)
+//   mbi-web-twin frames <scene> <n>           n frames of a built-in scene (0 bar, 1 poke): mean ms
+//                                             per phase
+//   mbi-web-twin solve <n>                    ms per modified-BI solve at 448 control vertices
+#include "api.h"
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+// Replays one journal line; false (with a message) when the call failed.
+bool call(const std::string& line) {
+  std::istringstream in(line);
+  std::string f;
+  in >> f;
+  std::vector<double> a;
+  for (double x; in >> x;) a.push_back(x);
+  a.resize(7, 0.0);
+  const auto i = [&](int k) { return static_cast<int>(a[static_cast<std::size_t>(k)]); };
+  bool ok = true;
+  if (f == "load_builtin") ok = mbi_load_builtin(i(0)) == 1;
+  else if (f == "step") ok = mbi_step() >= 0;
+  else if (f == "reset") ok = mbi_reset() == 1;
+  else if (f == "set_method") ok = mbi_set_method(i(0)) == 1;
+  else if (f == "set_alpha") ok = mbi_set_alpha(a[0]) == 1;
+  else if (f == "grab") mbi_grab(i(0), a[1], a[2], a[3], a[4], a[5], a[6]);
+  else if (f == "move") mbi_move(a[0], a[1], a[2], a[3], a[4], a[5]);
+  else if (f == "release") mbi_release();
+  else if (f == "set_cpu_evaluation") ok = mbi_set_cpu_evaluation(i(0)) == 1;
+  else if (!f.empty()) {
+    std::fprintf(stderr, "mbi-web-twin: unknown call '%s'\n", f.c_str());
+    return false;
+  }
+  if (!ok) std::fprintf(stderr, "mbi-web-twin: %s: %s\n", line.c_str(), mbi_error());
+  return ok;
+}
+
+int replay(const char* journal, const char* out) {
+  std::ifstream in(journal);
+  if (!in) return std::fprintf(stderr, "mbi-web-twin: cannot read %s\n", journal), 1;
+  int calls = 0;
+  for (std::string line; std::getline(in, line); ++calls)
+    if (!call(line)) return 1;
+  std::FILE* f = std::fopen(out, "wb");
+  if (!f) return std::fprintf(stderr, "mbi-web-twin: cannot write %s\n", out), 1;
+  const std::size_t n = 3 * static_cast<std::size_t>(mbi_vertex_count());
+  const bool ok = std::fwrite(mbi_positions(0), sizeof(float), n, f) == n &&
+                  std::fwrite(mbi_positions(1), sizeof(float), n, f) == n;
+  if (std::fclose(f) != 0 || !ok) return std::fprintf(stderr, "mbi-web-twin: cannot write %s\n", out), 1;
+  std::printf("replayed %d calls: %s\n", calls, mbi_description());
+  return 0;
+}
+
+int frames(int scene, int n) {
+  if (mbi_load_builtin(scene) != 1) return std::fprintf(stderr, "mbi-web-twin: %s\n", mbi_error()), 1;
+  double sum[5] = {0, 0, 0, 0, 0};
+  for (int k = 0; k < n; ++k) {
+    if (mbi_step() < 0) return std::fprintf(stderr, "mbi-web-twin: %s\n", mbi_error()), 1;
+    for (int p = 0; p < 5; ++p) sum[p] += mbi_times()[p];
+  }
+  std::printf("%s, %d frames: ms per frame: drive %.3f solve %.3f bezier %.3f evaluate %.3f "
+              "(pipeline %.3f), other view %.3f\n",
+              mbi_description(), n, sum[0] / n, sum[1] / n, sum[2] / n, sum[3] / n,
+              (sum[0] + sum[1] + sum[2] + sum[3]) / n, sum[4] / n);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string what = argc > 1 ? argv[1] : "";
+  if (what == "replay" && argc == 4) return replay(argv[2], argv[3]);
+  if (what == "frames" && argc == 4) return frames(std::stoi(argv[2]), std::stoi(argv[3]));
+  if (what == "solve" && argc == 3) {
+    std::printf("modified-BI solve at 448 control vertices: %.4f ms\n", mbi_bench_solve(std::stoi(argv[2])));
+    return 0;
+  }
+  std::fprintf(stderr, "usage: mbi-web-twin replay <journal> <out.bin> | frames <scene> <n> | solve <n>\n");
+  return 2;
+}

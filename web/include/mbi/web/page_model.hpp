@@ -1,0 +1,138 @@
+#pragma once
+// The browser page's model: a scene on the one frame pipeline (mbi::pipeline), the dense
+// positions of BI and modified-BI for the page's two views, and mouse pokes as in `mbi view`.
+// Plain C++ without Emscripten: the page's module and its native twin compile the same code
+// (web/api). Scenes: the paper's twisting bar (scenes/twist-bar.toml), the poke cylinder
+// (scenes/poke.toml, without its scripted pokes), a dense sphere (about 250K points, for the
+// evaluators' comparison) and a user's surface in a generated voxel cage.
+//
+// Two evaluators of the dense points: the CPU (here, double) and the page's WebGL2 pass
+// (web/page/gpu_evaluator.js) from bezier_texels(); with the GPU one, step() leaves the CPU
+// positions to be evaluated on demand (positions(), picking).
+#include <mbi/pipeline/driver.hpp>
+#include <mbi/pipeline/frame_pipeline.hpp>
+
+#include <Eigen/Core>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace mbi::web {
+
+enum class SceneKind { TwistBar, Poke, DenseSphere };
+
+/// A half-line in model coordinates (m); direction need not be unit length.
+struct Ray {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();
+};
+
+/// The two views: BI (left) and modified-BI (right).
+enum class View { BI = 0, ModifiedBI = 1 };
+
+class PageModel {
+ public:
+  ~PageModel();
+  PageModel(PageModel&&) noexcept;
+  PageModel& operator=(PageModel&&) noexcept;
+
+  /// A built-in scene, at frame 0.
+  static PageModel builtin(SceneKind kind);
+  /// A dense surface (V n x 3, F t x 3, y up) in a voxel cage of about `control_vertices`
+  /// vertices, its bottom tenth in y held, as `mbi run scenes/poke.toml --mesh` sets it up.
+  /// Throws mbi::Error on a bad surface or cage.
+  static PageModel surface(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
+                           int control_vertices);
+
+  /// Computes the next frame: the pipeline's step with its method, then the other view's
+  /// method on the same control positions. False (message()) when the simulation failed.
+  bool step();
+  /// Back to frame 0, pokes released.
+  void reset();
+  /// The pipeline's method (BI or modified-BI), the one the phase times measure.
+  void set_method(pipeline::Method method);
+  /// alpha > 0 of modified-BI (refactors; throws mbi::Error otherwise).
+  void set_alpha(double alpha);
+
+  /// Starts a poke where `ray` first hits the dense surface as drawn in `view`: a spring from
+  /// the material point under the cursor to a target at the hit point. False on a miss.
+  bool grab(View view, const Ray& ray);
+  /// Moves the poke's target to where `ray` meets the plane through the grabbed point facing
+  /// the ray, kept within half the model's size of that point.
+  void move(const Ray& ray);
+  void release();
+
+  /// Whether step() evaluates the dense points on the CPU (on at first).
+  void set_cpu_evaluation(bool on) { cpu_ = on; }
+  bool cpu_evaluation() const { return cpu_; }
+  /// Evaluates a view's dense points of the current frame on the CPU now; the milliseconds.
+  double evaluate_cpu(View view);
+
+  int vertices() const { return static_cast<int>(rest_.V.rows()); }
+  const Eigen::MatrixXi& triangles() const { return rest_.F; }
+  /// Dense positions of a view as x, y, z floats per vertex (vertices() x 3), evaluated on the
+  /// CPU now if step() left them to the GPU.
+  const std::vector<float>& positions(View view);
+
+  // The GPU pass's inputs (gpu/gl/shaders/evaluate.glsl): per dense point its element and its
+  // barycentric coordinates (4 floats), its rest position (3 floats); per frame and view the
+  // Bezier control points minus those of the rest shape, x y z 0 floats, K = 10 per element.
+  const std::vector<int>& point_elements() const { return gpu_.elements; }
+  const std::vector<float>& point_bary() const { return gpu_.bary; }
+  const std::vector<float>& rest_positions() const { return gpu_.rest; }
+  const std::vector<float>& bezier_texels(View view);
+
+  /// The crease colours of the native viewer (scenes/creases.hpp) for both views of the current
+  /// frame, one scale for both: RGB floats per dense vertex (crease_colors()). Returns the
+  /// largest gradient jump, the scale's top.
+  double update_creases();
+  const std::vector<float>& crease_colors(View view) const { return colors_[static_cast<int>(view)]; }
+  /// Control positions (n x 3) of the current frame.
+  const Eigen::MatrixXd& control_positions() const { return pipe_->control_positions(); }
+  const Eigen::MatrixXi& control_elements() const { return T_; }
+  /// The pipeline's phases of the last frame, then the other view's evaluation (ms).
+  const pipeline::FrameTimings& timings() const { return pipe_->timings(); }
+  double other_view_ms() const { return other_ms_; }
+  int frame() const { return pipe_->frame(); }
+  const std::string& message() const { return message_; }
+  /// One line: the scene, its vertex counts.
+  const std::string& description() const { return description_; }
+
+ private:
+  struct Surface {
+    Eigen::MatrixXd V;
+    Eigen::MatrixXi F;
+  };
+  struct Poke {
+    int handle = -1;
+    Eigen::Vector3d grabbed = Eigen::Vector3d::Zero();
+  };
+  PageModel(Eigen::MatrixXd U, Eigen::MatrixXi T, Surface dense, sim::Simulator simulator,
+            double alpha, std::string description);
+  struct GpuInputs {
+    std::vector<int> elements;
+    std::vector<float> bary, rest, texels[2];
+    interp::BezierPoints rest_bezier;
+  };
+  struct CreaseState;  // crease faces of (U, T), built on first use
+  void publish(View view, const Eigen::MatrixXd& P);
+
+  Eigen::MatrixXd U_;
+  Eigen::MatrixXi T_;
+  Surface rest_;
+  pipeline::SimulatorDriver* sim_ = nullptr;  // owned by pipe_
+  std::unique_ptr<pipeline::FramePipeline> pipe_;
+  Eigen::MatrixXd views_[2];         // dense positions per view (double, for picking)
+  std::vector<float> drawn_[2];      // the same as floats for the page
+  double other_ms_ = 0, size_ = 1;
+  Poke poke_;
+  bool cpu_ = true;
+  bool fresh_[2] = {false, false};   // views_ and drawn_ hold the current frame
+  GpuInputs gpu_;
+  std::unique_ptr<CreaseState> creases_;
+  std::vector<float> colors_[2];
+  std::string message_, description_;
+};
+
+}  // namespace mbi::web

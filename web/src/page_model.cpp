@@ -1,0 +1,231 @@
+// The page's model: frames, the two views, pokes (see page_model.hpp).
+#include <mbi/web/page_model.hpp>
+
+#include <mbi/base/timer.hpp>
+#include <mbi/error.hpp>
+#include <mbi/interp/embed.hpp>
+#include <mbi/interp/evaluate.hpp>
+#include <mbi/scenes/creases.hpp>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+namespace mbi::web {
+namespace {
+
+// The natural period (s) of a poke's spring on the mass it pulls: `mbi view`'s default.
+constexpr double kPokePeriod = 0.15;
+
+struct Hit {
+  int face = -1;
+  Eigen::Vector3d bary;  // of the face's corners
+  Eigen::Vector3d point;
+};
+
+// The first triangle of (P, F) that the ray hits (Moller-Trumbore), if any.
+std::optional<Hit> cast(const Ray& ray, const Eigen::MatrixXd& P, const Eigen::MatrixXi& F) {
+  std::optional<Hit> best;
+  double best_t = std::numeric_limits<double>::infinity();
+  const Eigen::Vector3d& o = ray.origin;
+  const Eigen::Vector3d& d = ray.direction;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const Eigen::Vector3d a = P.row(F(f, 0)).transpose(), e1 = P.row(F(f, 1)).transpose() - a,
+                          e2 = P.row(F(f, 2)).transpose() - a;
+    const Eigen::Vector3d p = d.cross(e2);
+    const double det = e1.dot(p);
+    if (std::abs(det) < 1e-300) continue;
+    const Eigen::Vector3d s = o - a;
+    const double u = s.dot(p) / det;
+    if (u < 0 || u > 1) continue;
+    const Eigen::Vector3d q = s.cross(e1);
+    const double v = d.dot(q) / det;
+    if (v < 0 || u + v > 1) continue;
+    const double t = e2.dot(q) / det;
+    if (t <= 0 || t >= best_t) continue;
+    best_t = t;
+    best = Hit{static_cast<int>(f), Eigen::Vector3d(1 - u - v, u, v), o + t * d};
+  }
+  return best;
+}
+
+pipeline::Method method_of(View view) {
+  return view == View::BI ? pipeline::Method::BI : pipeline::Method::ModifiedBI;
+}
+
+// floats of the doubles a (rows x cols, row-major out)
+std::vector<float> floats(const Eigen::MatrixXd& a) {
+  std::vector<float> out(static_cast<std::size_t>(a.size()));
+  for (Eigen::Index i = 0; i < a.rows(); ++i)
+    for (Eigen::Index c = 0; c < a.cols(); ++c) out[static_cast<std::size_t>(i * a.cols() + c)] = static_cast<float>(a(i, c));
+  return out;
+}
+
+}  // namespace
+
+// The crease faces keep references to U and T: both live here, on the heap, so that moving the
+// model moves neither.
+struct PageModel::CreaseState {
+  CreaseState(const Eigen::MatrixXd& u, const Eigen::MatrixXi& t) : U(u), T(t), creases(U, T) {}
+  Eigen::MatrixXd U;
+  Eigen::MatrixXi T;
+  scenes::Creases creases;
+};
+
+PageModel::~PageModel() = default;
+PageModel::PageModel(PageModel&&) noexcept = default;
+PageModel& PageModel::operator=(PageModel&&) noexcept = default;
+
+PageModel::PageModel(Eigen::MatrixXd U, Eigen::MatrixXi T, Surface dense, sim::Simulator simulator,
+                     double alpha, std::string description)
+    : U_(std::move(U)), T_(std::move(T)), rest_(std::move(dense)), description_(std::move(description)) {
+  auto driver = std::make_unique<pipeline::SimulatorDriver>(std::move(simulator));
+  sim_ = driver.get();
+  pipeline::PipelineOptions po;
+  po.method = pipeline::Method::ModifiedBI;
+  po.interp.alpha = alpha;
+  pipe_ = std::make_unique<pipeline::FramePipeline>(U_, T_, interp::embed(U_, T_, rest_.V),
+                                                    std::move(driver), po);
+  size_ = (rest_.V.colwise().maxCoeff() - rest_.V.colwise().minCoeff()).norm();
+  const interp::Embedding& emb = pipe_->embedding();
+  gpu_.elements.assign(emb.element.data(), emb.element.data() + emb.element.size());
+  gpu_.bary.assign(4 * gpu_.elements.size(), 0.0f);
+  for (Eigen::Index i = 0; i < emb.bary.rows(); ++i)
+    for (Eigen::Index k = 0; k < emb.bary.cols(); ++k)
+      gpu_.bary[static_cast<std::size_t>(4 * i + k)] = static_cast<float>(emb.bary(i, k));
+  gpu_.rest = floats(rest_.V);
+  gpu_.rest_bezier = interp::bezier_bi(U_, T_);
+  step();
+}
+
+bool PageModel::step() {
+  const pipeline::FrameResult r = pipe_->step(cpu_);
+  message_ = r.message;
+  fresh_[0] = fresh_[1] = false;
+  other_ms_ = 0;
+  if (cpu_) {
+    const View own = pipe_->method() == pipeline::Method::BI ? View::BI : View::ModifiedBI;
+    positions(own);  // the pipeline's evaluation, as floats
+    const auto t0 = Clock::now();
+    positions(own == View::BI ? View::ModifiedBI : View::BI);
+    other_ms_ = ms_since(t0);
+  }
+  return r.ok;
+}
+
+const std::vector<float>& PageModel::positions(View view) {
+  const int v = static_cast<int>(view);
+  if (!fresh_[v]) {
+    pipe_->evaluate_with(method_of(view), views_[v]);
+    publish(view, views_[v]);
+    fresh_[v] = true;
+  }
+  return drawn_[v];
+}
+
+double PageModel::evaluate_cpu(View view) {
+  const int v = static_cast<int>(view);
+  const interp::BezierPoints B = pipe_->bezier_with(method_of(view));
+  const auto t0 = Clock::now();
+  interp::evaluate<double>(B, pipe_->embedding(), views_[v]);
+  const double ms = ms_since(t0);
+  publish(view, views_[v]);
+  fresh_[v] = true;
+  return ms;
+}
+
+const std::vector<float>& PageModel::bezier_texels(View view) {
+  const interp::BezierPoints B = pipe_->bezier_with(method_of(view));
+  const interp::BezierPoints& R = gpu_.rest_bezier;
+  std::vector<float>& out = gpu_.texels[static_cast<int>(view)];
+  out.assign(static_cast<std::size_t>(4 * B.rows()), 0.0f);
+  for (Eigen::Index r = 0; r < B.rows(); ++r)
+    for (Eigen::Index c = 0; c < B.cols(); ++c)
+      out[static_cast<std::size_t>(4 * r + c)] = static_cast<float>(B(r, c) - R(r, c));
+  return out;
+}
+
+double PageModel::update_creases() {
+  if (!creases_) creases_ = std::make_unique<CreaseState>(U_, T_);
+  const scenes::Creases& c = creases_->creases;
+  Eigen::VectorXd jumps[2];
+  double top = 0;
+  for (View v : {View::BI, View::ModifiedBI}) {
+    jumps[static_cast<int>(v)] = c.face_jumps(*pipe_, method_of(v));
+    if (jumps[static_cast<int>(v)].size()) top = std::max(top, jumps[static_cast<int>(v)].maxCoeff());
+  }
+  const double scale = scenes::crease_scale(top);
+  for (int v = 0; v < 2; ++v) {
+    const Eigen::VectorXd values = c.point_values(pipe_->embedding(), jumps[v]);
+    colors_[v].resize(static_cast<std::size_t>(3 * values.size()));
+    for (Eigen::Index q = 0; q < values.size(); ++q) {
+      const Eigen::Vector3d rgb = scenes::crease_color(values(q) / scale);
+      for (int i = 0; i < 3; ++i) colors_[v][static_cast<std::size_t>(3 * q + i)] = static_cast<float>(rgb(i));
+    }
+  }
+  return top;
+}
+
+void PageModel::publish(View view, const Eigen::MatrixXd& P) {
+  std::vector<float>& out = drawn_[static_cast<int>(view)];
+  out.resize(static_cast<std::size_t>(3 * P.rows()));
+  for (Eigen::Index i = 0; i < P.rows(); ++i)
+    for (int c = 0; c < 3; ++c) out[static_cast<std::size_t>(3 * i + c)] = static_cast<float>(P(i, c));
+}
+
+void PageModel::reset() {
+  release();
+  pipe_->reset();
+  step();
+}
+
+void PageModel::set_method(pipeline::Method method) {
+  if (method != pipeline::Method::BI && method != pipeline::Method::ModifiedBI)
+    throw mbi::Error("the page shows BI and modified-BI only");
+  pipe_->set_method(method);
+}
+
+void PageModel::set_alpha(double alpha) {
+  if (!(alpha > 0) || !std::isfinite(alpha)) throw mbi::Error("alpha must be a positive number");
+  pipe_->set_alpha(alpha);
+}
+
+bool PageModel::grab(View view, const Ray& ray) {
+  positions(view);  // the CPU's positions of this frame (the GPU's stay on the GPU)
+  const std::optional<Hit> hit = cast(ray, views_[static_cast<int>(view)], rest_.F);
+  if (!hit) return false;
+  // the material point under the cursor: its rest position, then its control element
+  Eigen::Vector3d rest = Eigen::Vector3d::Zero();
+  for (int k = 0; k < 3; ++k) rest += hit->bary(k) * rest_.V.row(rest_.F(hit->face, k)).transpose();
+  const interp::Embedding e = interp::embed(U_, T_, rest.transpose());
+  const int element = e.element(0);
+  sim::Simulator& sim = sim_->simulator();
+  double mass = 0;
+  for (int k = 0; k < 4; ++k) mass += sim.masses()(T_(element, k));
+  const double w = 2 * std::acos(-1.0) / kPokePeriod;
+  release();
+  poke_.handle = sim.add_poke(element, e.bary.row(0).transpose(), hit->point, mass * w * w);
+  poke_.grabbed = hit->point;
+  return true;
+}
+
+void PageModel::move(const Ray& ray) {
+  const Eigen::Vector3d& o = ray.origin;
+  const Eigen::Vector3d& d = ray.direction;
+  if (poke_.handle < 0 || !o.allFinite() || !d.allFinite() || !(d.squaredNorm() > 0)) return;
+  Eigen::Vector3d to = o + ((poke_.grabbed - o).dot(d) / d.squaredNorm()) * d - poke_.grabbed;
+  const double reach = 0.5 * size_;
+  if (to.norm() > reach) to *= reach / to.norm();
+  sim_->simulator().set_poke_target(poke_.handle, poke_.grabbed + to);
+}
+
+void PageModel::release() {
+  sim::Simulator& sim = sim_->simulator();
+  if (poke_.handle >= 0 && sim.has_handle(poke_.handle)) sim.remove(poke_.handle);
+  poke_.handle = -1;
+}
+
+}  // namespace mbi::web

@@ -1,0 +1,237 @@
+// The page in a real browser: headless Chromium (Debian's, driven by playwright-core) loads the
+// built page from a local http server, pokes the twisting bar with scripted mouse events and
+// checks that
+//   - the picture changes where the poked bar moves;
+//   - BI creases and modified-BI does not (the largest change of a dihedral angle between
+//     neighbouring dense triangles, against the rest shape, is several times larger for BI);
+//   - the page's positions equal the native build's for the same calls (the page's journal
+//     replayed by mbi-web-twin) to float round-off;
+//   - the other draw path draws too (the 2D canvas fallback when WebGL2 ran);
+//   - an OBJ file given to the page loads in a control mesh generated there, and runs;
+//   - with WebGL2: the GPU evaluator (transform feedback, read back) gives the CPU's positions
+//     to float round-off on the bar and on a generated sphere of 252,152 points, poked; the
+//     switch to the CPU evaluator works; the crease colours are hotter for BI.
+// It says which draw path and which evaluator ran (and when WebGL2 is missing). Usage:
+//   node browser.mjs --page <build/web/page> --twin <mbi-web-twin> [--out <dir>] [--bench]
+// --bench adds the numbers of the bench report (wasm ms per frame, fps, solve at 448, the two
+// evaluators on 252K points).
+import { chromium } from 'playwright-core';
+import { execFileSync } from 'node:child_process';
+import { createServer } from 'node:http';
+import { mkdtempSync, readFileSync, writeFileSync, existsSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join, extname } from 'node:path';
+import { fileURLToPath } from 'node:url';
+
+const arg = (name, fallback) => {
+  const i = process.argv.indexOf('--' + name);
+  return i > 0 ? process.argv[i + 1] : fallback;
+};
+const pageDir = arg('page'), twin = arg('twin'), out = arg('out', mkdtempSync(join(tmpdir(), 'mbi-web-')));
+const bench = process.argv.includes('--bench');
+let failures = 0;
+const check = (ok, what) => {
+  console.log(`${ok ? 'ok  ' : 'FAIL'} ${what}`);
+  if (!ok) failures++;
+};
+
+// A static file server for the built page.
+const types = { '.html': 'text/html', '.js': 'text/javascript', '.wasm': 'application/wasm', '.css': 'text/css' };
+function serve(dir) {
+  const server = createServer((req, res) => {
+    const file = join(dir, decodeURIComponent(new URL(req.url, 'http://x').pathname));
+    if (!file.startsWith(dir) || !existsSync(file)) return res.writeHead(404).end();
+    res.writeHead(200, { 'content-type': types[extname(file)] || 'application/octet-stream' });
+    res.end(readFileSync(file));
+  });
+  return new Promise((ok) => server.listen(0, '127.0.0.1', () => ok(server)));
+}
+
+async function open(browser, url) {
+  const page = await browser.newPage({ viewport: { width: 1200, height: 900 } });
+  page.on('pageerror', (e) => check(false, 'page error: ' + e.message));
+  await page.goto(url);
+  await page.waitForFunction(() => window.mbiPage !== undefined, null, { timeout: 30000 });
+  return page;
+}
+
+// Largest change of the angle between neighbouring triangles' normals from `rest` to `now`, over
+// the edges that are smooth at rest (the bar's own edges, 90 degrees, are left out).
+function creaseChange(triangles, rest, now) {
+  const normal = (p, f) => {
+    const v = (k) => [0, 1, 2].map((c) => p[3 * triangles[3 * f + k] + c]);
+    const a = v(0), b = v(1), c = v(2);
+    const e = [b[0] - a[0], b[1] - a[1], b[2] - a[2]], g = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    const n = [e[1] * g[2] - e[2] * g[1], e[2] * g[0] - e[0] * g[2], e[0] * g[1] - e[1] * g[0]];
+    const l = Math.hypot(...n);
+    return n.map((x) => x / l);
+  };
+  const angle = (p, f, g) => {
+    const a = normal(p, f), b = normal(p, g);
+    return Math.acos(Math.max(-1, Math.min(1, a[0] * b[0] + a[1] * b[1] + a[2] * b[2])));
+  };
+  const edges = new Map();
+  let worst = 0;
+  for (let f = 0; f < triangles.length / 3; ++f)
+    for (let k = 0; k < 3; ++k) {
+      const i = triangles[3 * f + k], j = triangles[3 * f + (k + 1) % 3];
+      const key = Math.min(i, j) * 1e7 + Math.max(i, j);
+      if (!edges.has(key)) { edges.set(key, f); continue; }
+      const g = edges.get(key), before = angle(rest, f, g);
+      if (before < 0.35) worst = Math.max(worst, Math.abs(angle(now, f, g) - before));  // not the box's edges
+    }
+  return worst * 180 / Math.PI;
+}
+
+const changed = (a, b) => a.filter((x, i) => Math.abs(x - b[i]) > 24).length / a.length;
+
+// The poke: press on the bar's axis at 3/4 of its length (the ray there meets its surface),
+// drag sideways, step with the keyboard while holding, release.
+async function poke(page, view, frames) {
+  const [x, y] = await page.evaluate((v) => mbiPage.screenOf(v, [0, 0, 4.5]), view);
+  await page.mouse.move(x, y);
+  await page.mouse.down();
+  await page.mouse.move(x + 90, y - 20, { steps: 6 });
+  for (let k = 0; k < frames; ++k) await page.keyboard.press('s');
+  await page.mouse.up();
+  return page.evaluate(() => mbiPage.journal.includes('release'));
+}
+
+async function main() {
+  const server = await serve(pageDir);
+  const base = `http://127.0.0.1:${server.address().port}/index.html`;
+  const browser = await chromium.launch({ executablePath: '/usr/bin/chromium', args: ['--no-sandbox'] });
+  try {
+    const page = await open(browser, base + '?scene=0&play=0');
+    const path = await page.evaluate(() => mbiPage.drawPath);
+    const renderer = await page.evaluate(() => mbiPage.renderer);
+    console.log(`draw path: ${path}${renderer ? ' (' + renderer + ')' : ''}`);
+    const gpu = await page.evaluate(() => [mbiPage.gpuAvailable, mbiPage.gpuProblem, mbiPage.evaluator()]);
+    console.log(gpu[0] ? `evaluator: ${gpu[2]} (the GPU pass builds: WebGL2 transform feedback)`
+      : `evaluator: ${gpu[2]}; the GPU pass is unavailable (${gpu[1]}): GPU == CPU is not checked`);
+    const triangles = await page.evaluate(() => mbiPage.triangles());
+    const rest = await page.evaluate(() => mbiPage.positions(1));
+    for (let k = 0; k < 30; ++k) await page.keyboard.press('s');  // 30 degrees of twist
+    const before = await page.evaluate(() => mbiPage.pixels(1));
+    const twisted = [0, 1].map(() => null);
+    twisted[0] = await page.evaluate(() => mbiPage.positions(0));
+    twisted[1] = await page.evaluate(() => mbiPage.positions(1));
+    const creaseBI = creaseChange(triangles, rest, twisted[0]), creaseMBI = creaseChange(triangles, rest, twisted[1]);
+    check(creaseBI > 3 * creaseMBI, `creases after 30 degrees of twist: BI ${creaseBI.toFixed(2)} deg, ` +
+          `modified-BI ${creaseMBI.toFixed(2)} deg (BI at least 3 times larger)`);
+    if (gpu[0]) await gpuChecks(page, 'the twisting bar');
+    const heat = await page.evaluate(() => { mbiPage.setCreases(true); return [mbiPage.creaseHeat(0), mbiPage.creaseHeat(1)]; });
+    await page.screenshot({ path: join(out, 'web-creases.png') });
+    check(heat[0] > heat[1] + 0.02, `crease colours (mean red minus blue): BI ${heat[0].toFixed(3)}, ` +
+          `modified-BI ${heat[1].toFixed(3)} (BI hotter)`);
+    await page.evaluate(() => mbiPage.setCreases(false));
+
+    check(await poke(page, 1, 15), 'a scripted mouse drag poked the bar (grab, move, release)');
+    const after = await page.evaluate(() => mbiPage.pixels(1));
+    const moved = changed(before, after);
+    check(moved > 0.005, `the poked bar moved: ${(100 * moved).toFixed(2)} % of the modified-BI view changed`);
+    await page.screenshot({ path: join(out, 'web-page.png') });
+
+    // the same calls in the native build
+    const journal = await page.evaluate(() => mbiPage.journal.join('\n') + '\n');
+    writeFileSync(join(out, 'journal.txt'), journal);
+    execFileSync(twin, ['replay', join(out, 'journal.txt'), join(out, 'native.bin')], { stdio: 'inherit' });
+    const bytes = readFileSync(join(out, 'native.bin'));
+    const native = new Float32Array(bytes.buffer, bytes.byteOffset, bytes.length / 4);
+    const page0 = await page.evaluate(() => mbiPage.positions(0)), page1 = await page.evaluate(() => mbiPage.positions(1));
+    const n = page0.length;
+    let worst = 0, size = 0;
+    for (let i = 0; i < n; ++i) {
+      worst = Math.max(worst, Math.abs(page0[i] - native[i]), Math.abs(page1[i] - native[n + i]));
+      size = Math.max(size, Math.abs(native[i]));
+    }
+    check(native.length === 2 * n && worst <= 1e-5 * size,
+          `page vs native positions after ${journal.split('\n').length - 1} calls: largest difference ` +
+          `${worst.toExponential(2)} m (model size ${size.toFixed(1)} m; float round-off allowed: 1e-5 of it)`);
+    if (bench) await measure(page);
+    if (gpu[0]) {
+      await page.selectOption('#evaluator', 'cpu');
+      const cpu = await page.evaluate(() => [mbiPage.evaluator(), mbiPage.status()]);
+      check(cpu[0] === 'cpu' && cpu[1].includes('evaluation: CPU (wasm)'), 'the switch to the CPU evaluator: the page says so');
+    }
+    await page.close();
+    if (gpu[0]) await dense(browser, base);
+
+    // the other path: the 2D canvas fallback (when WebGL2 ran above)
+    if (path === 'WebGL2') {
+      const flat = await open(browser, base + '?scene=0&play=0&draw=2d');
+      const seen = await flat.evaluate(() => [mbiPage.drawPath, mbiPage.pixels(1), mbiPage.evaluator(), mbiPage.status()]);
+      const drawn = seen[1].filter((g) => g < 200).length / seen[1].length;
+      check(seen[0] === '2D canvas' && drawn > 0.02,
+            `the 2D canvas fallback draws the bar (${(100 * drawn).toFixed(1)} % of its view)`);
+      check(seen[2] === 'cpu' && seen[3].includes('evaluation: CPU (wasm): the GPU pass is unavailable (no WebGL2)'),
+            'without WebGL2 the page evaluates on the CPU and says why');
+      await flat.close();
+    }
+
+    // a user's OBJ: read in the page, its control mesh generated there
+    const own = await open(browser, base + '?scene=1&play=0');
+    await own.setInputFiles('#file', fileURLToPath(new URL('../../tests/data/vtu/sphere.obj', import.meta.url)));
+    await own.waitForFunction(() => mbiPage.api.description().startsWith('your model'), null, { timeout: 30000 });
+    for (let k = 0; k < 3; ++k) await own.keyboard.press('s');
+    const loadedObj = await own.evaluate(() => [mbiPage.api.description(), mbiPage.state.frame]);
+    check(loadedObj[1] === 3, `an OBJ given to the page runs: ${loadedObj[0]}, frame ${loadedObj[1]}`);
+    await own.close();
+  } finally {
+    await browser.close();
+    server.close();
+  }
+  console.log(failures ? `${failures} check(s) failed` : `all checks passed (draw path above; files in ${out})`);
+  process.exit(failures ? 1 : 0);
+}
+
+// GPU == CPU at the current frame (both views), the GPU's positions read back from the
+// transform feedback buffer.
+async function gpuChecks(page, what) {
+  const c = await page.evaluate(() => mbiPage.compareEvaluators());
+  check(c.worst <= 1e-5 * c.size && c.moved > 1e-3 * c.size,
+        `GPU == CPU on ${what} (${c.points} points, both views, moved up to ${c.moved.toFixed(3)}): largest ` +
+        `difference ${c.worst.toExponential(2)} (model size ${c.size.toFixed(2)}; float round-off allowed: 1e-5 of it)`);
+}
+
+// The generated sphere of 252,152 points, poked through the API (a ray down the z axis) for a
+// few frames on the GPU: GPU == CPU, and the two evaluators side by side.
+async function dense(browser, base) {
+  const t0 = Date.now();
+  const page = await open(browser, base + '?scene=2&play=0');
+  await page.waitForFunction(() => mbiPage.api.description().startsWith('dense sphere'), null, { timeout: 60000 });
+  const hit = await page.evaluate(() => mbiPage.api.grab(1, 0, 0, 5, 0, 0, -1) === 1 &&
+                                        (mbiPage.api.move(0.6, 0.4, 5, 0, 0, -1), true));
+  for (let k = 0; k < 4; ++k) await page.keyboard.press('s');
+  check(hit && (await page.evaluate(() => mbiPage.evaluator())) === 'gpu', 'the dense sphere poked, on the GPU evaluator');
+  await gpuChecks(page, 'the dense sphere');
+  const b = await page.evaluate((n) => mbiPage.benchEvaluators(n), bench ? 20 : 3);
+  const f = (x) => x.toFixed(2);
+  console.log(`${bench ? 'bench' : 'evaluators'}: ${b.points} points, modified-BI view, ms per evaluation: GPU pass ` +
+              `${f(b.gpu)} (upload, pass, wait; ${b.renderer}), wasm CPU ${f(b.cpu)} (of which the evaluation ` +
+              `${f(b.wasm)}); mean of ${bench ? 20 : 3}`);
+  await page.close();
+  console.log(`(the dense sphere's checks took ${((Date.now() - t0) / 1000).toFixed(1)} s)`);
+}
+
+// The bench report's numbers: the bar playing for 120 frames on the CPU evaluator (wasm ms per
+// phase, fps), the solve at 448 control vertices.
+async function measure(page) {
+  await page.evaluate(() => mbiPage.setEvaluator('cpu'));  // the wasm phases, evaluation included
+  await page.keyboard.press('r');
+  await page.keyboard.press(' ');
+  await page.waitForFunction(() => mbiPage.state.frame >= 120, null, { timeout: 120000, polling: 100 });
+  await page.keyboard.press(' ');
+  const r = await page.evaluate(() => ({ fps: mbiPage.state.fps, wasm: mbiPage.state.wasm,
+                                          sums: mbiPage.state.sums, steps: mbiPage.state.steps }));
+  const mean = r.wasm.reduce((a, b) => a + b, 0) / r.wasm.length;
+  const p = r.sums.map((x) => x / r.steps), f = (x) => x.toFixed(3);
+  console.log(`bench: twisting bar, ${r.steps} frames in wasm, ms per frame: simulation ${f(p[0])}, solve ` +
+              `${f(p[1])}, Bezier ${f(p[2])}, evaluation ${f(p[3])}: ${f(p[0] + p[1] + p[2] + p[3])} in all; the ` +
+              `other view ${f(p[4])}; a whole step seen from script ${f(mean)} (last ${r.wasm.length} frames)`);
+  console.log(`bench: headless Chromium (software rendering) ${r.fps.toFixed(1)} fps`);
+  const solve = await page.evaluate(() => mbiPage.benchSolve(200));
+  console.log(`bench: wasm modified-BI solve at 448 control vertices ${solve.toFixed(4)} ms`);
+}
+
+main().catch((e) => { console.error(e); process.exit(1); });
