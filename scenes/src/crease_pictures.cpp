@@ -2,7 +2,7 @@
 #include "crease_pictures.hpp"
 
 #include <mbi/io/io.hpp>
-#include <mbi/scenes/creases.hpp>
+#include <mbi/pipeline/creases.hpp>
 
 #include <Eigen/Geometry>
 
@@ -113,10 +113,10 @@ io::Image render_colored(const Eigen::Ref<const Eigen::MatrixXd>& V, const Eigen
 io::Image crease_legend(int width, double top) {
   const int px = 2, h = 5 * px + 18;
   io::Image img(std::max(width, 1), h, {255, 255, 255});
-  const std::string hi = crease_number(top);
+  const std::string hi = pipeline::crease_number(top);
   const int bar0 = 8 + 4 * px + 6, bar1 = std::max(bar0 + 1, std::min(width - 8 - 4 * px * static_cast<int>(hi.size()) - 6, bar0 + 320));
   for (int x = bar0; x < bar1; ++x) {
-    const Eigen::Vector3d c = crease_color(static_cast<double>(x - bar0) / std::max(bar1 - bar0 - 1, 1));
+    const Eigen::Vector3d c = pipeline::crease_color(static_cast<double>(x - bar0) / std::max(bar1 - bar0 - 1, 1));
     for (int y = 6; y < h - 6; ++y)
       for (int k = 0; k < 3; ++k) img.at(x, y)[k] = to_byte(c[k]);
   }

@@ -51,7 +51,7 @@ Pictures3D::Pictures3D(const Scene& sc, const SceneModels& m, const fs::path& di
   if (m.dim() != 3 || !sc.output.image) return;  // 2D pictures are written as the frames come
   lo_ = m.U.colwise().minCoeff().transpose();
   hi_ = m.U.colwise().maxCoeff().transpose();
-  if (sc.output.creases) creases_ = std::make_unique<Creases>(m.U, m.T);
+  if (sc.output.creases) creases_ = std::make_unique<pipeline::Creases>(m.U, m.T);
   if (context_ && !creases_) {
     renderer_ = std::make_unique<gpu::Renderer>(*context_);
     renderer_->set_faces(m.dense.F);
@@ -164,7 +164,7 @@ void Pictures3D::write(pipeline::FramePipeline& pipe) {
       }
     }
     io::Image picture = raster::side_by_side(panels);
-    if (creases_) picture = stack(picture, crease_legend(picture.width, crease_scale(top_)));
+    if (creases_) picture = stack(picture, crease_legend(picture.width, pipeline::crease_scale(top_)));
     io::write_png(io::frame_path(dir_ / "frame", f, ".png"), picture);
   }
 }
@@ -174,9 +174,9 @@ io::Image Pictures3D::crease_panel(pipeline::FramePipeline& pipe, const interp::
   Eigen::MatrixXd V;
   interp::evaluate<double>(B, pipe.embedding(), V);
   const Eigen::VectorXd v = creases_->point_values(pipe.embedding(), jumps);
-  const double top = crease_scale(top_);
+  const double top = pipeline::crease_scale(top_);
   Eigen::MatrixXd C(v.size(), 3);
-  for (Eigen::Index q = 0; q < v.size(); ++q) C.row(q) = crease_color(v(q) / top).transpose();
+  for (Eigen::Index q = 0; q < v.size(); ++q) C.row(q) = pipeline::crease_color(v(q) / top).transpose();
   return render_colored(V, m_.dense.F, C, view, w, h);
 }
 

@@ -7,7 +7,7 @@
 #include <mbi/io/scratch_file.hpp>
 #include <mbi/pipeline/frame_pipeline.hpp>
 #include <mbi/raster/raster.hpp>
-#include <mbi/scenes/creases.hpp>
+#include <mbi/pipeline/creases.hpp>
 #include <mbi/scenes/runner.hpp>
 
 #include <Eigen/Core>
@@ -72,7 +72,7 @@ class Pictures3D {
   Eigen::Vector3d lo_, hi_, lo_before_, hi_before_;  // bounds, and before the last add()
   std::unique_ptr<io::ScratchFile> stored_;          // made at the first add()
   long last_at_ = 0;                                 // where the last frame stored starts
-  std::unique_ptr<Creases> creases_;                 // output.creases only
+  std::unique_ptr<pipeline::Creases> creases_;                 // output.creases only
   double top_ = 0, top_before_ = 0;                  // the largest face jump stored, and before the last add()
 };
 

@@ -1,20 +1,16 @@
-// The creases in colour (mbi/scenes/creases.hpp) and `mbi run`'s pictures with output.creases:
-// the per-face jumps are the discontinuity table's energies per area; BI's panel is hotter than
-// modified-BI's where the table says BI jumps more; at rest nothing glows (negative control);
-// with the option off the pictures are the usual ones.
+// `mbi run`'s pictures with output.creases (the colours: tests/pipeline/test_creases.cpp): BI's
+// panel is hotter than modified-BI's where the table says BI jumps more; at rest nothing glows
+// (negative control); with the option off the pictures are the usual ones.
 #include <catch2/catch.hpp>
 
-#include <mbi/interp.hpp>
 #include <mbi/io/io.hpp>
-#include <mbi/scenes/creases.hpp>
+#include <mbi/pipeline/creases.hpp>
 #include <mbi/scenes/runner.hpp>
 
 #include "common/files.hpp"
-#include "common/grid_meshes.hpp"
 #include "common/temp_dir.hpp"
 
 #include <cmath>
-#include <fstream>
 
 namespace fs = std::filesystem;
 using namespace mbi::scenes;
@@ -53,45 +49,6 @@ RunResult run_twist(const fs::path& out, int frames, bool creases) {
 
 }  // namespace
 
-TEST_CASE("creases: the face jumps are the discontinuity energies per area, a point on a face takes its jump",
-          "[creases]") {
-  const mbi::test::Mesh m = mbi::test::box_tet_mesh(2, 2, 2, Eigen::Vector3d(1, 1, 1));
-  Eigen::MatrixXd X = m.U;
-  for (Eigen::Index i = 0; i < X.rows(); ++i) X(i, 0) += 0.3 * std::sin(3 * m.U(i, 1)) * m.U(i, 2);  // a bend
-  const mbi::interp::VertexMatrices Z = mbi::interp::VertexMatrices::Zero(X.size(), 3);
-  const Creases creases(m.U, m.T);
-  const Eigen::VectorXd j = creases.face_jumps(X, Z);
-  const Eigen::VectorXd E = mbi::interp::face_discontinuity(m.U, m.T, X, Z);
-  const Eigen::MatrixXi F = mbi::interp::interior_faces(m.T);
-  REQUIRE(j.size() == F.rows());
-  REQUIRE(j.maxCoeff() > 0);
-  for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    const Eigen::Vector3d a = m.U.row(F(f, 0)), b = m.U.row(F(f, 1)), c = m.U.row(F(f, 2));
-    CHECK(j(f) * j(f) * 0.5 * (b - a).cross(c - a).norm() == Approx(E(f)).epsilon(1e-12).margin(1e-15));
-  }
-  // dense points: the centroid of face 0 (on it), and an element's centroid (away from every face)
-  const int e = F(0, 3);
-  Eigen::MatrixXd P(2, 3);
-  P.row(0) = (m.U.row(F(0, 0)) + m.U.row(F(0, 1)) + m.U.row(F(0, 2))) / 3;
-  P.row(1) = (m.U.row(m.T(e, 0)) + m.U.row(m.T(e, 1)) + m.U.row(m.T(e, 2)) + m.U.row(m.T(e, 3))) / 4;
-  const mbi::interp::Embedding emb = mbi::interp::embed(m.U, m.T, P);
-  const Eigen::VectorXd v = creases.point_values(emb, j);
-  CHECK(v(0) >= j(0) * (1 - 1e-9));  // on face 0: at least its jump (the largest of the faces it meets)
-  CHECK(v(1) == 0);                   // barycentric 1/4 > kCreaseBand from every face
-  CHECK(creases.near_faces(emb) == std::vector<bool>{true, false});
-}
-
-TEST_CASE("creases: the colour scale grows hotter (red minus blue) from 0 to 1", "[creases]") {
-  double last = -2;
-  for (int i = 0; i <= 20; ++i) {
-    const Eigen::Vector3d c = crease_color(i / 20.0);
-    CHECK(c(0) - c(2) > last);
-    last = c(0) - c(2);
-  }
-  CHECK(crease_number(0) == "0");
-  CHECK(crease_number(0.33896) == "0.339");
-}
-
 TEST_CASE("mbi run with output.creases: BI's panel glows where the table says it jumps more, off: the usual pictures",
           "[creases][runner][long]") {
   mbi::test::TempDir dir("creases");
@@ -116,7 +73,7 @@ TEST_CASE("mbi run with output.creases: BI's panel glows where the table says it
   int x = lit.width - 1;
   while (x > 0 && !(lit.at(x, y)[0] > 200 && lit.at(x, y)[2] < 60)) --x;  // the bar's hot end, left of its value
   REQUIRE(x > x0 + 100);
-  const Eigen::Vector3d c0 = crease_color(0) * 255, c1 = crease_color(1) * 255;
+  const Eigen::Vector3d c0 = mbi::pipeline::crease_color(0) * 255, c1 = mbi::pipeline::crease_color(1) * 255;
   for (int k = 0; k < 3; ++k) {
     CHECK(std::abs(cold[k] - c0(k)) < 12);
     CHECK(std::abs(lit.at(x, y)[k] - c1(k)) < 12);

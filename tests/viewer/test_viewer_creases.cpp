@@ -5,7 +5,7 @@
 #include <catch2/catch.hpp>
 
 #include <mbi/io/io.hpp>
-#include <mbi/scenes/creases.hpp>
+#include <mbi/pipeline/creases.hpp>
 #include <mbi/scenes/runner.hpp>
 
 #include "viewer_run.hpp"
@@ -88,7 +88,7 @@ TEST_CASE("mbi view --creases: BI glows at the control faces where the table say
   REQUIRE(lw > 100);
   const std::uint8_t* cold = s.shot.at(static_cast<int>(lx + 3), static_cast<int>(ly + lh / 2));
   const std::uint8_t* hot = s.shot.at(static_cast<int>(lx + lw - 4), static_cast<int>(ly + lh / 2));
-  const Eigen::Vector3d c0 = mbi::scenes::crease_color(0) * 255, c1 = mbi::scenes::crease_color(1) * 255;
+  const Eigen::Vector3d c0 = mbi::pipeline::crease_color(0) * 255, c1 = mbi::pipeline::crease_color(1) * 255;
   for (int k = 0; k < 3; ++k) {
     CHECK(std::abs(cold[k] - c0(k)) < 12);
     CHECK(std::abs(hot[k] - c1(k)) < 12);

@@ -69,7 +69,7 @@ void CreaseLayer::update(Stage& stage) {
     jumps.push_back(creases_.face_jumps(stage.pipe, m));
     if (jumps.back().size()) top_ = std::max(top_, jumps.back().maxCoeff());
   }
-  const double top = scenes::crease_scale(top_);
+  const double top = pipeline::crease_scale(top_);
   views_.resize(jumps.size());
   for (size_t k = 0; k < jumps.size(); ++k) {
     const Eigen::VectorXd v = creases_.point_values(stage.pipe.embedding(), jumps[k]);
@@ -79,7 +79,7 @@ void CreaseLayer::update(Stage& stage) {
     double near_sum = 0;
     long near_count = 0;
     for (Eigen::Index q = 0; q < v.size(); ++q) {
-      const Eigen::Vector3d c = scenes::crease_color(v(q) / top);
+      const Eigen::Vector3d c = pipeline::crease_color(v(q) / top);
       for (int i = 0; i < 3; ++i) cv.rgb[static_cast<size_t>(3 * q + i)] = static_cast<float>(c(i));
       if (near_[static_cast<size_t>(q)]) near_sum += std::min(v(q) / top, 1.0), ++near_count;
     }

@@ -1,11 +1,11 @@
 #pragma once
 // The creases in colour in the viewer (internal): while the toggle is on, each frame computes
-// every view's face jumps on the CPU (scenes/creases.hpp), one scale for all views, and draws the
+// every view's face jumps on the CPU (mbi/pipeline/creases.hpp), one scale for all views, and draws the
 // dense surface from the evaluator's buffers with a colour per vertex. Nothing runs while off.
 #include "stage.hpp"
 
 #include <mbi/gpu/evaluator.hpp>
-#include <mbi/scenes/creases.hpp>
+#include <mbi/pipeline/creases.hpp>
 
 #include <vector>
 
@@ -14,7 +14,7 @@ namespace mbi::viewer {
 /// One view's crease colours and what the report says of them.
 struct CreaseView {
   std::vector<float> rgb;  ///< per dense point, 0..1
-  double mean_jump = 0;    ///< mean face jump of the view's method (scenes::Creases::face_jumps)
+  double mean_jump = 0;    ///< mean face jump of the view's method (pipeline::Creases::face_jumps)
   double mean_near = 0;    ///< mean scale position (0..1) of the dense points near interior faces
 };
 
@@ -39,7 +39,7 @@ class CreaseLayer {
   bool shown = false;  ///< updated and drawn this frame (the toggle is on)
 
  private:
-  scenes::Creases creases_;
+  pipeline::Creases creases_;
   std::vector<bool> near_;
   std::vector<CreaseView> views_;
   double top_ = 0;

@@ -153,7 +153,7 @@ void labels(const Stage& stage) {
 }
 
 ImU32 scale_color(double t) {
-  const Eigen::Vector3d c = scenes::crease_color(t);
+  const Eigen::Vector3d c = pipeline::crease_color(t);
   return IM_COL32(static_cast<int>(c(0) * 255 + 0.5), static_cast<int>(c(1) * 255 + 0.5), static_cast<int>(c(2) * 255 + 0.5), 255);
 }
 
@@ -165,7 +165,7 @@ void crease_legend(CreaseLayer& creases, const Layout& layout) {
   const float y = static_cast<float>(first.y + first.h) - 64, bar = y + 20;
   ImDrawList* list = ImGui::GetForegroundDrawList();
   list->AddRectFilled(ImVec2(x - 8, y - 6), ImVec2(x + w + 8, y + 58), IM_COL32(255, 255, 255, 220), 4.0f);
-  list->AddText(ImVec2(x, y), IM_COL32(30, 30, 30, 255), scenes::kCreaseQuantity);
+  list->AddText(ImVec2(x, y), IM_COL32(30, 30, 30, 255), pipeline::kCreaseQuantity);
   const int segments = 32;
   for (int s = 0; s < segments; ++s) {
     const float a = x + w * static_cast<float>(s) / segments, b = x + w * static_cast<float>(s + 1) / segments;
@@ -173,7 +173,7 @@ void crease_legend(CreaseLayer& creases, const Layout& layout) {
                                   scale_color(double(s + 1) / segments), scale_color(double(s + 1) / segments),
                                   scale_color(double(s) / segments));
   }
-  const std::string top = scenes::crease_number(scenes::crease_scale(creases.top()));
+  const std::string top = pipeline::crease_number(pipeline::crease_scale(creases.top()));
   list->AddText(ImVec2(x, bar + 17), IM_COL32(30, 30, 30, 255), "0");
   list->AddText(ImVec2(x + w - ImGui::CalcTextSize(top.c_str()).x, bar + 17), IM_COL32(30, 30, 30, 255), top.c_str());
   creases.legend = {x, bar, w, 14};

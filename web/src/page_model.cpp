@@ -5,7 +5,7 @@
 #include <mbi/error.hpp>
 #include <mbi/interp/embed.hpp>
 #include <mbi/interp/evaluate.hpp>
-#include <mbi/scenes/creases.hpp>
+#include <mbi/pipeline/creases.hpp>
 
 #include <Eigen/Geometry>
 
@@ -72,7 +72,7 @@ struct PageModel::CreaseState {
   CreaseState(const Eigen::MatrixXd& u, const Eigen::MatrixXi& t) : U(u), T(t), creases(U, T) {}
   Eigen::MatrixXd U;
   Eigen::MatrixXi T;
-  scenes::Creases creases;
+  pipeline::Creases creases;
 };
 
 PageModel::~PageModel() = default;
@@ -150,19 +150,19 @@ const std::vector<float>& PageModel::bezier_texels(View view) {
 
 double PageModel::update_creases() {
   if (!creases_) creases_ = std::make_unique<CreaseState>(U_, T_);
-  const scenes::Creases& c = creases_->creases;
+  const pipeline::Creases& c = creases_->creases;
   Eigen::VectorXd jumps[2];
   double top = 0;
   for (View v : {View::BI, View::ModifiedBI}) {
     jumps[static_cast<int>(v)] = c.face_jumps(*pipe_, method_of(v));
     if (jumps[static_cast<int>(v)].size()) top = std::max(top, jumps[static_cast<int>(v)].maxCoeff());
   }
-  const double scale = scenes::crease_scale(top);
+  const double scale = pipeline::crease_scale(top);
   for (int v = 0; v < 2; ++v) {
     const Eigen::VectorXd values = c.point_values(pipe_->embedding(), jumps[v]);
     colors_[v].resize(static_cast<std::size_t>(3 * values.size()));
     for (Eigen::Index q = 0; q < values.size(); ++q) {
-      const Eigen::Vector3d rgb = scenes::crease_color(values(q) / scale);
+      const Eigen::Vector3d rgb = pipeline::crease_color(values(q) / scale);
       for (int i = 0; i < 3; ++i) colors_[v][static_cast<std::size_t>(3 * q + i)] = static_cast<float>(rgb(i));
     }
   }

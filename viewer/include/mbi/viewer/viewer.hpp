@@ -52,7 +52,7 @@ struct ViewerOptions {
   bool split = true;                     ///< BI | the pipeline's method side by side
   bool wireframe = false;                ///< control-mesh edges
   /// 3D: the dense surface coloured by the jump of the deformation gradient across the interior
-  /// control faces (mbi/scenes/creases.hpp), one scale for all views, with a legend
+  /// control faces (mbi/pipeline/creases.hpp), one scale for all views, with a legend
   bool creases = false;
   bool handles = true;                   ///< handle markers (direct mode)
   bool playing = true;

@@ -83,7 +83,7 @@ class PageModel {
   const std::vector<float>& rest_positions() const { return gpu_.rest; }
   const std::vector<float>& bezier_texels(View view);
 
-  /// The crease colours of the native viewer (scenes/creases.hpp) for both views of the current
+  /// The crease colours of the native viewer (mbi/pipeline/creases.hpp) for both views of the current
   /// frame, one scale for both: RGB floats per dense vertex (crease_colors()). Returns the
   /// largest gradient jump, the scale's top.
   double update_creases();

@@ -10,7 +10,7 @@
 
 #include <string>
 
-namespace mbi::scenes {
+namespace mbi::pipeline {
 
 /// What the colours show (the legend's title): the RMS over a face of ||[grad x]||_F, the jump
 /// of the deformation gradient across it, sqrt(E_F / |F|); dimensionless (a strain).
@@ -32,7 +32,7 @@ class Creases {
   Eigen::VectorXd face_jumps(const Eigen::Ref<const Eigen::MatrixXd>& X,
                              const interp::VertexMatrices& M) const;
   /// face_jumps of the pipeline's current frame with `method` (its M solved on demand).
-  Eigen::VectorXd face_jumps(pipeline::FramePipeline& pipe, pipeline::Method method) const;
+  Eigen::VectorXd face_jumps(FramePipeline& pipe, Method method) const;
   /// One entry per dense point of emb (embedded in U, T): the largest of jump_f (1 - b_f / kCreaseBand) over the interior
   /// faces f of its element, b_f its barycentric coordinate of the vertex opposite f (0 on f).
   Eigen::VectorXd point_values(const interp::Embedding& emb, const Eigen::Ref<const Eigen::VectorXd>& jumps) const;
@@ -58,4 +58,4 @@ inline constexpr double kCreaseFloor = 1e-3;
 /// A legend number: 3 significant digits ("0", "0.0423", "1.2e-05").
 std::string crease_number(double v);
 
-}  // namespace mbi::scenes
+}  // namespace mbi::pipeline

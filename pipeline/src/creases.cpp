@@ -1,5 +1,5 @@
 // The creases in colour: per-face gradient jumps carried to the dense points (creases.hpp).
-#include <mbi/scenes/creases.hpp>
+#include <mbi/pipeline/creases.hpp>
 
 #include <mbi/interp/mesh.hpp>
 #include <mbi/interp/metrics.hpp>
@@ -10,7 +10,7 @@
 #include <cmath>
 #include <cstdio>
 
-namespace mbi::scenes {
+namespace mbi::pipeline {
 
 Creases::Creases(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T) : U_(U), T_(T) {
   const int d = static_cast<int>(U.cols());
@@ -46,10 +46,10 @@ Eigen::VectorXd Creases::face_jumps(const Eigen::Ref<const Eigen::MatrixXd>& X,
   return j;
 }
 
-Eigen::VectorXd Creases::face_jumps(pipeline::FramePipeline& pipe, pipeline::Method method) const {
+Eigen::VectorXd Creases::face_jumps(FramePipeline& pipe, Method method) const {
   const Eigen::MatrixXd& X = pipe.control_positions();
-  if (method == pipeline::Method::ModifiedBI) return face_jumps(X, pipe.modified_bi_M());
-  if (method == pipeline::Method::Phong) return face_jumps(X, pipe.phong_M());
+  if (method == Method::ModifiedBI) return face_jumps(X, pipe.modified_bi_M());
+  if (method == Method::Phong) return face_jumps(X, pipe.phong_M());
   const interp::VertexMatrices zero = interp::VertexMatrices::Zero(X.size(), X.cols());  // BI
   return face_jumps(X, zero);
 }
@@ -84,4 +84,4 @@ std::string crease_number(double v) {
   return b;
 }
 
-}  // namespace mbi::scenes
+}  // namespace mbi::pipeline
