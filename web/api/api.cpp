@@ -23,6 +23,7 @@ using mbi::web::View;
 std::optional<PageModel> g_model;
 std::string g_error;
 double g_times[5] = {0, 0, 0, 0, 0};
+double g_table[5] = {0, 0, 0, 0, 0};
 Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor> g_triangles;
 
 // Runs f; on an exception keeps its message and returns `failed`.
@@ -160,6 +161,17 @@ double mbi_update_creases(void) {
 }
 
 const float* mbi_crease_colors(int view) { return g_model ? g_model->crease_colors(view_of(view)).data() : nullptr; }
+
+const double* mbi_discontinuity(void) {
+  return guarded(
+      [] {
+        const mbi::interp::DiscontinuityTable t = g_model->discontinuity();
+        const double table[5] = {t.bi.mean, t.bi.max, t.modified_bi.mean, t.modified_bi.max, double(t.faces)};
+        std::copy(table, table + 5, g_table);
+        return static_cast<const double*>(g_table);
+      },
+      static_cast<const double*>(nullptr));
+}
 
 double mbi_bench_solve(int repeats) {
   Eigen::MatrixXd U, X;

@@ -62,6 +62,10 @@ double mbi_update_creases(void);
 /// A view's crease colours, RGB floats per dense vertex (after mbi_update_creases).
 const float* mbi_crease_colors(int view);
 
+/// The discontinuity table of the current frame (paper Table 2): the mean and largest face
+/// energy E_F of BI, then of modified-BI, then the number of interior faces; null on failure.
+const double* mbi_discontinuity(void);
+
 /// Milliseconds per modified-BI solve at 448 control vertices (a 7 x 7 x 6 box cage, twisted),
 /// the mean of `repeats` solves after one untimed.
 double mbi_bench_solve(int repeats);

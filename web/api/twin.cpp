@@ -2,7 +2,7 @@
 // test and the bench report.
 //   mbi-web-twin replay <journal> <out.bin>   replays the page's calls (one a line: the
 //       function's name without mbi_, then its numbers), then writes both views' positions
-//       (float32, BI then modified-BI)
+//       (float32, BI then modified-BI) and prints the discontinuity table's means
 //   mbi-web-twin frames <scene> <n>           n frames of a built-in scene (0 bar, 1 poke): mean ms
 //                                             per phase
 //   mbi-web-twin solve <n>                    ms per modified-BI solve at 448 control vertices
@@ -56,6 +56,9 @@ int replay(const char* journal, const char* out) {
                   std::fwrite(mbi_positions(1), sizeof(float), n, f) == n;
   if (std::fclose(f) != 0 || !ok) return std::fprintf(stderr, "mbi-web-twin: cannot write %s\n", out), 1;
   std::printf("replayed %d calls: %s\n", calls, mbi_description());
+  const double* table = mbi_discontinuity();
+  if (!table) return std::fprintf(stderr, "mbi-web-twin: %s\n", mbi_error()), 1;
+  std::printf("table: BI mean %.17g modified-BI mean %.17g\n", table[0], table[2]);
   return 0;
 }
 

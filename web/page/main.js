@@ -45,7 +45,8 @@ const gpuAvailable = gpuProblem === '';
 
 const state = { playing: params.get('play') !== '0', dirty: true, camera: null, up: [0, 0, 1],
                 poking: false, drag: null, frame: 0, wasm: [], phases: null, fps: 0, drawn: [],
-                sums: [0, 0, 0, 0, 0], steps: 0, gpu: false, gpuMs: 0, creases: false, creaseTop: 0 };
+                sums: [0, 0, 0, 0, 0], steps: 0, gpu: false, gpuMs: 0, creases: false, creaseTop: 0,
+                table: null };
 
 function positions(view) {
   const n = 3 * M._mbi_vertex_count();
@@ -62,10 +63,20 @@ function runGpu() {
   state.gpuMs = performance.now() - t0;
 }
 
-// After a new frame: the GPU pass, the crease colours, a redraw.
+// The discontinuity table of the current frame (paper Table 2): mean and largest face energy
+// of BI, of modified-BI, the number of interior faces; null where it cannot be computed.
+function table() {
+  const ptr = M._mbi_discontinuity();
+  if (!ptr) return null;
+  const t = new Float64Array(M.HEAPF64.buffer, ptr, 5);
+  return { bi: t[0], biMax: t[1], modifiedBi: t[2], modifiedBiMax: t[3], faces: t[4] };
+}
+
+// After a new frame: the GPU pass, the crease colours, the table, a redraw.
 function frameChanged() {
   if (state.gpu) runGpu();
   if (state.creases) state.creaseTop = M._mbi_update_creases();
+  state.table = table();
   state.dirty = true;
 }
 
@@ -163,7 +174,16 @@ function status() {
     (p ? `last frame in wasm: simulation ${ms(p[0])}, solve ${ms(p[1])}, Bezier ${ms(p[2])}, ` +
          `evaluation ${state.gpu ? 'on the GPU' : ms(p[3])} (sum ${ms(p[0] + p[1] + p[2] + p[3])}); ` +
          `the other view ${state.gpu ? 'on the GPU' : ms(p[4])}\n` : '') +
-    `mean step in wasm over the last ${state.wasm.length} frames (both views): ${ms(mean)}`;
+    `mean step in wasm over the last ${state.wasm.length} frames (both views): ${ms(mean)}` + tableLine();
+}
+
+// The paper's Table 2, as `mbi run` prints it: how much BI creases that modified-BI does not.
+function tableLine() {
+  const t = state.table;
+  if (!t || !t.faces) return '';
+  const e = (x) => x.toExponential(2);
+  return `\nface discontinuity over ${t.faces} interior control faces (paper Table 2), mean E_F: BI ${e(t.bi)}, ` +
+    `modified-BI ${e(t.modifiedBi)}` + (t.modifiedBi > 0 ? ` (${(t.bi / t.modifiedBi).toFixed(1)} times smaller)` : '');
 }
 let note = '';
 function show(text) { note = text; }
@@ -236,6 +256,17 @@ document.addEventListener('drop', (e) => {
   readObj(e.dataTransfer.files[0]);
 });
 
+// A view's canvas as RGBA bytes, drawn first if a frame is waiting.
+function picture(view) {
+  if (state.dirty) draw();
+  const c = canvases[view], copy = document.createElement('canvas');
+  copy.width = c.width;
+  copy.height = c.height;
+  const ctx = copy.getContext('2d');
+  ctx.drawImage(c, 0, 0);
+  return ctx.getImageData(0, 0, c.width, c.height).data;
+}
+
 // For the browser test: the state, the journal, the views' positions and pixels.
 // The two evaluators at the current frame: the largest difference of GPU (read back through
 // transform feedback) and CPU positions over both views, the model's size, the largest
@@ -275,13 +306,6 @@ window.mbiPage = {
   evaluator: () => (state.gpu ? 'gpu' : 'cpu'),
   setEvaluator: (name) => setEvaluator(name === 'gpu'),
   setCreases: (on) => { $('creases').checked = on; state.creases = on; frameChanged(); },
-  // a view's crease colours: the mean of red minus blue over its vertices ("hotter" is larger)
-  creaseHeat(view) {
-    const n = M._mbi_vertex_count(), c = floats(M._mbi_crease_colors(view), 3 * n);
-    let sum = 0;
-    for (let i = 0; i < n; ++i) sum += c[3 * i] - c[3 * i + 2];
-    return sum / n;
-  },
   status: () => status(),
   renderer: drawPath === 'WebGL2' ? views[0].renderer() : '',
   benchSolve: (repeats) => M._mbi_bench_solve(repeats),
@@ -295,17 +319,24 @@ window.mbiPage = {
     const y = (1 - (m[1] * p[0] + m[5] * p[1] + m[9] * p[2] + m[13]) / w) / 2;
     return [r.left + x * r.width, r.top + y * r.height];
   },
+  table: () => state.table,
   // a view's picture as grey levels (0-255), one per pixel
   pixels(view) {
-    if (state.dirty) draw();
-    const c = canvases[view], copy = document.createElement('canvas');
-    copy.width = c.width;
-    copy.height = c.height;
-    const ctx = copy.getContext('2d');
-    ctx.drawImage(c, 0, 0);
-    const d = ctx.getImageData(0, 0, c.width, c.height).data, g = new Uint8Array(d.length / 4);
+    const d = picture(view), g = new Uint8Array(d.length / 4);
     for (let i = 0; i < g.length; ++i) g[i] = (d[4 * i] + d[4 * i + 1] + d[4 * i + 2]) / 3;
     return Array.from(g);
+  },
+  // a view's picture: the mean of red minus blue (0-255) over the model's pixels (not the
+  // near-white background), and how many there are
+  pictureHeat(view) {
+    const d = picture(view);
+    let sum = 0, n = 0;
+    for (let i = 0; i < d.length; i += 4) {
+      if (d[i] > 235 && d[i + 1] > 235 && d[i + 2] > 235) continue;
+      sum += d[i] - d[i + 2];
+      ++n;
+    }
+    return { heat: n ? sum / n : 0, pixels: n };
   },
 };
 

@@ -169,6 +169,10 @@ double PageModel::update_creases() {
   return top;
 }
 
+interp::DiscontinuityTable PageModel::discontinuity() {
+  return interp::discontinuity_table(pipe_->solver(), pipe_->control_positions(), pipe_->modified_bi_M());
+}
+
 void PageModel::publish(View view, const Eigen::MatrixXd& P) {
   std::vector<float>& out = drawn_[static_cast<int>(view)];
   out.resize(static_cast<std::size_t>(3 * P.rows()));

@@ -3,14 +3,16 @@
 // checks that
 //   - the picture changes where the poked bar moves;
 //   - BI creases and modified-BI does not (the largest change of a dihedral angle between
-//     neighbouring dense triangles, against the rest shape, is several times larger for BI);
+//     neighbouring dense triangles, against the rest shape, is several times larger for BI), the
+//     page's discontinuity table says so, and the picture in crease colours shows it (BI's view
+//     hotter);
 //   - the page's positions equal the native build's for the same calls (the page's journal
-//     replayed by mbi-web-twin) to float round-off;
+//     replayed by mbi-web-twin) to float round-off, its discontinuity table the native one's;
 //   - the other draw path draws too (the 2D canvas fallback when WebGL2 ran);
 //   - an OBJ file given to the page loads in a control mesh generated there, and runs;
 //   - with WebGL2: the GPU evaluator (transform feedback, read back) gives the CPU's positions
 //     to float round-off on the bar and on a generated sphere of 252,152 points, poked; the
-//     switch to the CPU evaluator works; the crease colours are hotter for BI.
+//     switch to the CPU evaluator works.
 // It says which draw path and which evaluator ran (and when WebGL2 is missing). Usage:
 //   node browser.mjs --page <build/web/page> --twin <mbi-web-twin> [--out <dir>] [--bench]
 // --bench adds the numbers of the bench report (wasm ms per frame, fps, solve at 448, the two
@@ -111,6 +113,10 @@ async function main() {
       : `evaluator: ${gpu[2]}; the GPU pass is unavailable (${gpu[1]}): GPU == CPU is not checked`);
     const triangles = await page.evaluate(() => mbiPage.triangles());
     const rest = await page.evaluate(() => mbiPage.positions(1));
+    const heatOf = () => page.evaluate(() => [mbiPage.pictureHeat(0), mbiPage.pictureHeat(1)]);
+    await page.evaluate(() => mbiPage.setCreases(true));
+    const cold = await heatOf();  // at rest nothing glows
+    await page.evaluate(() => mbiPage.setCreases(false));
     for (let k = 0; k < 30; ++k) await page.keyboard.press('s');  // 30 degrees of twist
     const before = await page.evaluate(() => mbiPage.pixels(1));
     const twisted = [0, 1].map(() => null);
@@ -120,22 +126,32 @@ async function main() {
     check(creaseBI > 3 * creaseMBI, `creases after 30 degrees of twist: BI ${creaseBI.toFixed(2)} deg, ` +
           `modified-BI ${creaseMBI.toFixed(2)} deg (BI at least 3 times larger)`);
     if (gpu[0]) await gpuChecks(page, 'the twisting bar');
-    const heat = await page.evaluate(() => { mbiPage.setCreases(true); return [mbiPage.creaseHeat(0), mbiPage.creaseHeat(1)]; });
+    // the picture in crease colours (which replace the views' tints) warms from the rest shape's
+    // where the discontinuity table says the method creases: BI's, and far less modified-BI's
+    const t = await page.evaluate(() => mbiPage.table());
+    check(t && t.bi > 10 * t.modifiedBi, `the discontinuity table after 30 degrees: mean E_F BI ` +
+          `${t?.bi.toExponential(2)}, modified-BI ${t?.modifiedBi.toExponential(2)} (BI at least 10 times larger)`);
+    await page.evaluate(() => mbiPage.setCreases(true));
+    const heat = await heatOf(), warmed = heat.map((h, k) => h.heat - cold[k].heat);
     await page.screenshot({ path: join(out, 'web-creases.png') });
-    check(heat[0] > heat[1] + 0.02, `crease colours (mean red minus blue): BI ${heat[0].toFixed(3)}, ` +
-          `modified-BI ${heat[1].toFixed(3)} (BI hotter)`);
+    check(heat.every((h) => h.pixels > 5000) && warmed[0] > 20 && Math.abs(warmed[1]) < warmed[0] / 3,
+          `the picture in crease colours (mean red minus blue of the model's pixels, 0-255), rest -> ` +
+          `30 degrees: BI ${cold[0].heat.toFixed(1)} -> ${heat[0].heat.toFixed(1)}, modified-BI ` +
+          `${cold[1].heat.toFixed(1)} -> ${heat[1].heat.toFixed(1)} (BI warms by 20 or more, modified-BI by a third of that at most)`);
     await page.evaluate(() => mbiPage.setCreases(false));
 
     check(await poke(page, 1, 15), 'a scripted mouse drag poked the bar (grab, move, release)');
     const after = await page.evaluate(() => mbiPage.pixels(1));
     const moved = changed(before, after);
     check(moved > 0.005, `the poked bar moved: ${(100 * moved).toFixed(2)} % of the modified-BI view changed`);
-    await page.screenshot({ path: join(out, 'web-page.png') });
+    await page.screenshot({ path: join(out, 'web-page.png'), fullPage: true });
 
     // the same calls in the native build
     const journal = await page.evaluate(() => mbiPage.journal.join('\n') + '\n');
     writeFileSync(join(out, 'journal.txt'), journal);
-    execFileSync(twin, ['replay', join(out, 'journal.txt'), join(out, 'native.bin')], { stdio: 'inherit' });
+    const said = execFileSync(twin, ['replay', join(out, 'journal.txt'), join(out, 'native.bin')],
+                              { encoding: 'utf8', stdio: ['ignore', 'pipe', 'inherit'] });
+    process.stdout.write(said);
     const bytes = readFileSync(join(out, 'native.bin'));
     const native = new Float32Array(bytes.buffer, bytes.byteOffset, bytes.length / 4);
     const page0 = await page.evaluate(() => mbiPage.positions(0)), page1 = await page.evaluate(() => mbiPage.positions(1));
@@ -148,6 +164,12 @@ async function main() {
     check(native.length === 2 * n && worst <= 1e-5 * size,
           `page vs native positions after ${journal.split('\n').length - 1} calls: largest difference ` +
           `${worst.toExponential(2)} m (model size ${size.toFixed(1)} m; float round-off allowed: 1e-5 of it)`);
+    // the table too: wasm and native compute it in double from the same positions
+    const m = said.match(/table: BI mean (\S+) modified-BI mean (\S+)/), tp = await page.evaluate(() => mbiPage.table());
+    const close = (a, b) => Math.abs(a - b) <= 1e-9 * Math.abs(b);
+    check(m && tp && close(tp.bi, Number(m[1])) && close(tp.modifiedBi, Number(m[2])),
+          `page vs native discontinuity table: BI ${tp?.bi.toExponential(6)} vs ${m && Number(m[1]).toExponential(6)}, ` +
+          `modified-BI ${tp?.modifiedBi.toExponential(6)} vs ${m && Number(m[2]).toExponential(6)} (relative 1e-9)`);
     if (bench) await measure(page);
     if (gpu[0]) {
       await page.selectOption('#evaluator', 'cpu');

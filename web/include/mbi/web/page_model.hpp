@@ -9,6 +9,7 @@
 // Two evaluators of the dense points: the CPU (here, double) and the page's WebGL2 pass
 // (web/page/gpu_evaluator.js) from bezier_texels(); with the GPU one, step() leaves the CPU
 // positions to be evaluated on demand (positions(), picking).
+#include <mbi/interp/metrics.hpp>
 #include <mbi/pipeline/driver.hpp>
 #include <mbi/pipeline/frame_pipeline.hpp>
 
@@ -88,6 +89,9 @@ class PageModel {
   /// largest gradient jump, the scale's top.
   double update_creases();
   const std::vector<float>& crease_colors(View view) const { return colors_[static_cast<int>(view)]; }
+  /// The paper's Table 2 for the current frame, as `mbi run` prints it: the face discontinuity
+  /// energies E_F of BI against modified-BI. Throws interp::OverflowError (positions too large).
+  interp::DiscontinuityTable discontinuity();
   /// Control positions (n x 3) of the current frame.
   const Eigen::MatrixXd& control_positions() const { return pipe_->control_positions(); }
   const Eigen::MatrixXi& control_elements() const { return T_; }
