@@ -3,6 +3,7 @@
 // Positions are rest + displacement: from script (the CPU path: the positions, no displacement)
 // or from the GPU pass's buffers (gpu_evaluator.js), which stay on the GPU.
 import { GpuEvaluator } from './gpu_evaluator.js';
+import { program } from './gl_program.js';
 
 const VS = `#version 300 es
 uniform mat4 mvp;
@@ -29,14 +30,6 @@ void main() {
   color = vec4(tint * (0.2 + 0.8 * d) + vec3(0.25) * pow(d, 40.0), 1.0);
 }`;
 
-function shader(gl, type, text) {
-  const s = gl.createShader(type);
-  gl.shaderSource(s, text);
-  gl.compileShader(s);
-  if (!gl.getShaderParameter(s, gl.COMPILE_STATUS)) throw new Error(gl.getShaderInfoLog(s));
-  return s;
-}
-
 export class GlView {
   // null when the canvas has no WebGL2.
   static create(canvas, tint) {
@@ -47,12 +40,7 @@ export class GlView {
   constructor(gl, tint) {
     this.gl = gl;
     this.tint = tint;
-    const p = gl.createProgram();
-    gl.attachShader(p, shader(gl, gl.VERTEX_SHADER, VS));
-    gl.attachShader(p, shader(gl, gl.FRAGMENT_SHADER, FS));
-    gl.linkProgram(p);
-    if (!gl.getProgramParameter(p, gl.LINK_STATUS)) throw new Error(gl.getProgramInfoLog(p));
-    this.program = p;
+    this.program = program(gl, VS, FS);
     this.vao = gl.createVertexArray();
     this.positions = gl.createBuffer();
     this.colors = gl.createBuffer();

@@ -2,6 +2,8 @@
 // body the same file (evaluate.glsl, fetched beside the page), the per-element Bezier points in
 // a 2D float texture (WebGL2 has no texture buffers). The pass writes the displacement buffer
 // that the view draws (rest + displacement), so nothing comes back to script unless asked.
+import { program } from './gl_program.js';
+
 const PRELUDE = `#version 300 es
 precision highp float;
 precision highp int;
@@ -22,14 +24,6 @@ out vec4 color;
 void main() { color = vec4(0.0); }`;
 const WIDTH = 1024;  // texels per row of the Bezier texture
 
-function compile(gl, type, text) {
-  const s = gl.createShader(type);
-  gl.shaderSource(s, text);
-  gl.compileShader(s);
-  if (!gl.getShaderParameter(s, gl.COMPILE_STATUS)) throw new Error(gl.getShaderInfoLog(s));
-  return s;
-}
-
 function floatTexture(gl, width, height) {
   const t = gl.createTexture();
   gl.bindTexture(gl.TEXTURE_2D, t);
@@ -43,13 +37,7 @@ export class GpuEvaluator {
   // Throws (with the compiler's or linker's message) where the pass cannot be built.
   constructor(gl, body) {
     this.gl = gl;
-    const p = gl.createProgram();
-    gl.attachShader(p, compile(gl, gl.VERTEX_SHADER, PRELUDE + body));
-    gl.attachShader(p, compile(gl, gl.FRAGMENT_SHADER, FS));
-    gl.transformFeedbackVaryings(p, ['tf_displacement'], gl.SEPARATE_ATTRIBS);
-    gl.linkProgram(p);
-    if (!gl.getProgramParameter(p, gl.LINK_STATUS)) throw new Error(gl.getProgramInfoLog(p));
-    this.program = p;
+    this.program = program(gl, PRELUDE + body, FS, ['tf_displacement']);
     this.feedback = gl.createTransformFeedback();
     this.gradients = floatTexture(gl, 1, 1);
     gl.texSubImage2D(gl.TEXTURE_2D, 0, 0, 0, 1, 1, gl.RGBA, gl.FLOAT, new Float32Array(4));

@@ -66,28 +66,19 @@ std::vector<float> floats(const Eigen::MatrixXd& a) {
 
 }  // namespace
 
-// The crease faces keep references to U and T: both live here, on the heap, so that moving the
-// model moves neither.
-struct PageModel::CreaseState {
-  CreaseState(const Eigen::MatrixXd& u, const Eigen::MatrixXi& t) : U(u), T(t), creases(U, T) {}
-  Eigen::MatrixXd U;
-  Eigen::MatrixXi T;
-  pipeline::Creases creases;
-};
-
 PageModel::~PageModel() = default;
 PageModel::PageModel(PageModel&&) noexcept = default;
 PageModel& PageModel::operator=(PageModel&&) noexcept = default;
 
-PageModel::PageModel(Eigen::MatrixXd U, Eigen::MatrixXi T, Surface dense, sim::Simulator simulator,
+PageModel::PageModel(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T, Surface dense, sim::Simulator simulator,
                      double alpha, std::string description)
-    : U_(std::move(U)), T_(std::move(T)), rest_(std::move(dense)), description_(std::move(description)) {
+    : rest_(std::move(dense)), description_(std::move(description)) {
   auto driver = std::make_unique<pipeline::SimulatorDriver>(std::move(simulator));
   sim_ = driver.get();
   pipeline::PipelineOptions po;
   po.method = pipeline::Method::ModifiedBI;
   po.interp.alpha = alpha;
-  pipe_ = std::make_unique<pipeline::FramePipeline>(U_, T_, interp::embed(U_, T_, rest_.V),
+  pipe_ = std::make_unique<pipeline::FramePipeline>(U, T, interp::embed(U, T, rest_.V),
                                                     std::move(driver), po);
   size_ = (rest_.V.colwise().maxCoeff() - rest_.V.colwise().minCoeff()).norm();
   const interp::Embedding& emb = pipe_->embedding();
@@ -97,7 +88,7 @@ PageModel::PageModel(Eigen::MatrixXd U, Eigen::MatrixXi T, Surface dense, sim::S
     for (Eigen::Index k = 0; k < emb.bary.cols(); ++k)
       gpu_.bary[static_cast<std::size_t>(4 * i + k)] = static_cast<float>(emb.bary(i, k));
   gpu_.rest = floats(rest_.V);
-  gpu_.rest_bezier = interp::bezier_bi(U_, T_);
+  gpu_.rest_bezier = interp::bezier_bi(U, T);
   step();
 }
 
@@ -149,8 +140,9 @@ const std::vector<float>& PageModel::bezier_texels(View view) {
 }
 
 double PageModel::update_creases() {
-  if (!creases_) creases_ = std::make_unique<CreaseState>(U_, T_);
-  const pipeline::Creases& c = creases_->creases;
+  // the pipeline's own U and T (heap, so moving the model keeps the references valid)
+  if (!creases_) creases_ = std::make_unique<pipeline::Creases>(pipe_->rest_positions(), pipe_->elements());
+  const pipeline::Creases& c = *creases_;
   Eigen::VectorXd jumps[2];
   double top = 0;
   for (View v : {View::BI, View::ModifiedBI}) {
@@ -204,11 +196,12 @@ bool PageModel::grab(View view, const Ray& ray) {
   // the material point under the cursor: its rest position, then its control element
   Eigen::Vector3d rest = Eigen::Vector3d::Zero();
   for (int k = 0; k < 3; ++k) rest += hit->bary(k) * rest_.V.row(rest_.F(hit->face, k)).transpose();
-  const interp::Embedding e = interp::embed(U_, T_, rest.transpose());
+  const Eigen::MatrixXi& T = pipe_->elements();
+  const interp::Embedding e = interp::embed(pipe_->rest_positions(), T, rest.transpose());
   const int element = e.element(0);
   sim::Simulator& sim = sim_->simulator();
   double mass = 0;
-  for (int k = 0; k < 4; ++k) mass += sim.masses()(T_(element, k));
+  for (int k = 0; k < 4; ++k) mass += sim.masses()(T(element, k));
   const double w = 2 * std::acos(-1.0) / kPokePeriod;
   release();
   poke_.handle = sim.add_poke(element, e.bary.row(0).transpose(), hit->point, mass * w * w);

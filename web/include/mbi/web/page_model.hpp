@@ -10,6 +10,7 @@
 // (web/page/gpu_evaluator.js) from bezier_texels(); with the GPU one, step() leaves the CPU
 // positions to be evaluated on demand (positions(), picking).
 #include <mbi/interp/metrics.hpp>
+#include <mbi/pipeline/creases.hpp>
 #include <mbi/pipeline/driver.hpp>
 #include <mbi/pipeline/frame_pipeline.hpp>
 
@@ -94,7 +95,7 @@ class PageModel {
   interp::DiscontinuityTable discontinuity();
   /// Control positions (n x 3) of the current frame.
   const Eigen::MatrixXd& control_positions() const { return pipe_->control_positions(); }
-  const Eigen::MatrixXi& control_elements() const { return T_; }
+  const Eigen::MatrixXi& control_elements() const { return pipe_->elements(); }
   /// The pipeline's phases of the last frame, then the other view's evaluation (ms).
   const pipeline::FrameTimings& timings() const { return pipe_->timings(); }
   double other_view_ms() const { return other_ms_; }
@@ -112,18 +113,15 @@ class PageModel {
     int handle = -1;
     Eigen::Vector3d grabbed = Eigen::Vector3d::Zero();
   };
-  PageModel(Eigen::MatrixXd U, Eigen::MatrixXi T, Surface dense, sim::Simulator simulator,
+  PageModel(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T, Surface dense, sim::Simulator simulator,
             double alpha, std::string description);
   struct GpuInputs {
     std::vector<int> elements;
     std::vector<float> bary, rest, texels[2];
     interp::BezierPoints rest_bezier;
   };
-  struct CreaseState;  // crease faces of (U, T), built on first use
   void publish(View view, const Eigen::MatrixXd& P);
 
-  Eigen::MatrixXd U_;
-  Eigen::MatrixXi T_;
   Surface rest_;
   pipeline::SimulatorDriver* sim_ = nullptr;  // owned by pipe_
   std::unique_ptr<pipeline::FramePipeline> pipe_;
@@ -134,7 +132,7 @@ class PageModel {
   bool cpu_ = true;
   bool fresh_[2] = {false, false};   // views_ and drawn_ hold the current frame
   GpuInputs gpu_;
-  std::unique_ptr<CreaseState> creases_;
+  std::unique_ptr<pipeline::Creases> creases_;  // built on first use
   std::vector<float> colors_[2];
   std::string message_, description_;
 };
