@@ -2,7 +2,7 @@
 #                 [ONLY <files>...] [EXCLUDE <files>...])
 #
 # The one way an mbi library target is defined: target mbi_<name>, alias mbi::<name>, sources
-# src/*.cpp of the calling folder (ONLY: just these; EXCLUDE: all but these; paths relative to
+# src/**/*.cpp of the calling folder (ONLY: just these; EXCLUDE: all but these; paths relative to
 # the folder: a build configured without a dependency leaves out the files that need it), public
 # headers include/ (installed as include/mbi/...), C++20, the project's warnings. INSTALL exports
 # it in mbiTargets (find_package(mbi)); only libraries whose dependencies a consumer can find
@@ -18,7 +18,7 @@ function(mbi_add_library name)
     target_compile_features(${target} INTERFACE cxx_std_20)
     target_link_libraries(${target} INTERFACE ${L_PUBLIC})
   else()
-    file(GLOB sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/src/*.cpp)
+    file(GLOB_RECURSE sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/src/*.cpp)
     if(L_ONLY)
       set(sources)
       foreach(f IN LISTS L_ONLY)

@@ -537,7 +537,7 @@ def report(data, json_path, wall_s, baseline=None, baseline_path=None):
     if fp and fs:
         w(f"Fitted growth (least squares on log t against log n over all sizes): precompute ~ "
           f"n^{fp[0]:.2f}, solve ~ n^{fs[0]:.2f}. The solve path is the automatic one: below a "
-          "threshold (interp/src/modified_bi.cpp) the precompute also forms the dense operator "
+          "threshold (interp/src/method/modified_bi.cpp) the precompute also forms the dense operator "
           "-H_mm^-1 H_mx, which is why it costs more at 448 vertices relative to its neighbours, "
           "and the solve is one dense product (threaded, AVX2); above it, the solve sweeps the "
           "Cholesky factor once forward and once back for all 3 components together.")

@@ -1,11 +1,11 @@
-// The internal sparse Cholesky factor (interp/src/factor.hpp) against Eigen's dense LLT, an
+// The internal sparse Cholesky factor (interp/src/linalg/factor.hpp) against Eigen's dense LLT, an
 // independent solver: every width of right-hand sides, both factorizations, the serial sweeps and
 // the sweeps split into groups of subtrees with the top part's supernodes shared out between the
 // threads (the grouped schedule, forced on a small matrix), on 1 to 3 of the library's threads
 // with the same result.
 #include <catch2/catch.hpp>
 
-#include "factor.hpp"
+#include "linalg/factor.hpp"
 
 #include <mbi/interp/threads.hpp>
 

@@ -1,4 +1,4 @@
-// The library's threads (mbi/interp/threads.hpp and the internal pool, interp/src/threads.hpp):
+// The library's threads (mbi/interp/threads.hpp and the internal pool, interp/src/runtime/threads.hpp):
 // the count set is the most that run, results do not depend on it, several caller threads share
 // the one pool (its threads never exceed the count), and the parallel loops' contracts (every
 // block once, nested calls, exceptions, steps that depend on each other).
@@ -6,7 +6,7 @@
 
 #include "common/grid_meshes.hpp"
 #include "common/sanitizers.hpp"
-#include "threads.hpp"
+#include "runtime/threads.hpp"
 
 #include <mbi/interp.hpp>
 #include <mbi/interp/threads.hpp>

@@ -102,7 +102,7 @@ class FastEvaluator {
   std::vector<float> normals_;         // p d from moff_ (+ padding): m = cof(A)^T n per point (AVX-512: 16-point groups by component)
   std::size_t moff_ = 0;               // where normals_'s block starts, in floats
   int moves_ = 0;                      // times the block was moved (at most 2)
-  std::vector<float> coef_;            // m x 32 (3D; 2D: 16): position terms, cache-line aligned, per call (layout: see src/fast_kernel.hpp)
+  std::vector<float> coef_;            // m x 32 (3D; 2D: 16): position terms, cache-line aligned, per call (layout: see src/evaluate/fast_kernel.hpp)
 };
 
 }  // namespace mbi::interp

@@ -47,6 +47,11 @@ struct Options {
 
 /// Default alpha for dimension d (0.1 in 3D, 0.2 in 2D).
 double default_alpha(int d);
+/// The alpha that options give in dimension d: options.alpha, or default_alpha(d) when it is 0.
+/// The one check of alpha: throws Error unless the result is finite and > 0.
+double resolve_alpha(const Options& options, int d);
+/// beta's check: throws Error unless options.beta is finite and >= 0 (0 = automatic).
+void check_beta(const Options& options);
 
 /// Per-vertex matrices M: (n d) x d; rows [i d, i d + d) hold M_i (d x d). Row c of M_i is m_i
 /// of output component c.

@@ -1,8 +1,8 @@
 // Point location in the control mesh with a uniform grid; nearest element for outside points.
 #include <mbi/interp/embed.hpp>
 
-#include "detail.hpp"
-#include "threads.hpp"
+#include "method/detail.hpp"
+#include "runtime/threads.hpp"
 
 #include <algorithm>
 #include <array>

@@ -3,8 +3,8 @@
 // The terms are computed in double from B and rounded to float once per call.
 #include <mbi/interp/fast_evaluate.hpp>
 
-#include "fast_kernel.hpp"
-#include "threads.hpp"
+#include "evaluate/fast_kernel.hpp"
+#include "runtime/threads.hpp"
 
 #include <algorithm>
 #include <array>

@@ -1,7 +1,7 @@
 // Control-mesh validation and topology (one code path for triangles and tetrahedra).
 #include <mbi/interp/mesh.hpp>
 
-#include "detail.hpp"
+#include "method/detail.hpp"
 
 #include <array>
 #include <cmath>

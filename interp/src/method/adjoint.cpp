@@ -1,8 +1,8 @@
 // Transposes of evaluate() and bezier_points() (see adjoint.hpp).
 #include <mbi/interp/adjoint.hpp>
 
-#include "detail.hpp"
-#include "threads.hpp"
+#include "method/detail.hpp"
+#include "runtime/threads.hpp"
 
 #include <algorithm>
 #include <array>

@@ -1,7 +1,7 @@
 // Interactive control (paper Eq. 10 / 11, method.md fact 10).
 #include <mbi/interp/control.hpp>
 
-#include "detail.hpp"
+#include "method/detail.hpp"
 
 #include <Eigen/SparseCholesky>
 #include <cmath>
@@ -49,15 +49,12 @@ HandleSolver::HandleSolver(const Eigen::Ref<const Eigen::MatrixXd>& U,
   }
   I.handles = std::move(handles);
   const Options& io = options.interp;
-  if (!(io.alpha >= 0) || !std::isfinite(io.alpha))
-    throw Error("alpha must be > 0 (0 selects the default), got " + std::to_string(io.alpha));
-  if (!(io.beta >= 0) || !std::isfinite(io.beta))
-    throw Error("beta must be > 0 (0 selects the automatic rule), got " + std::to_string(io.beta));
+  I.alpha = resolve_alpha(io, d);
+  check_beta(io);
   if (!(options.gamma >= 0) || !std::isfinite(options.gamma))
     throw Error("gamma must be >= 0 (0 selects the automatic rule), got " + std::to_string(options.gamma));
   if (!(options.regularization >= 0) || !std::isfinite(options.regularization))
     throw Error("regularization must be >= 0, got " + std::to_string(options.regularization));
-  I.alpha = io.alpha > 0 ? io.alpha : default_alpha(d);
 
   const detail::Hessians Hs = detail::assemble(I.U, I.T);
   if (Hs.disc_mm.nonZeros() == 0)

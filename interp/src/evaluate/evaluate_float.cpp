@@ -3,10 +3,10 @@
 // (as FastEvaluator does); then per block of kChunk points the points' records are packed into a
 // buffer that stays in L1, the kernel writes the block's positions beside it (plain stores: the
 // buffer is read back at once), and they are copied into the output's three columns.
-#include "evaluate_float.hpp"
+#include "evaluate/evaluate_float.hpp"
 
-#include "fast_kernel.hpp"
-#include "threads.hpp"
+#include "evaluate/fast_kernel.hpp"
+#include "runtime/threads.hpp"
 
 #include <mbi/error.hpp>
 

@@ -1,7 +1,7 @@
 // Sparse Cholesky factor (see factor.hpp).
-#include "factor.hpp"
+#include "linalg/factor.hpp"
 
-#include "threads.hpp"
+#include "runtime/threads.hpp"
 
 #include <mbi/interp/threads.hpp>
 

@@ -3,7 +3,7 @@
 
 #include <mbi/interp/evaluate.hpp>
 
-#include "detail.hpp"
+#include "method/detail.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,7 +1,7 @@
 // Phong deformation's closed-form M (phong.hpp).
 #include <mbi/interp/phong.hpp>
 
-#include "detail.hpp"
+#include "method/detail.hpp"
 
 #include <cmath>
 #include <string>

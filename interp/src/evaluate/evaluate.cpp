@@ -1,9 +1,9 @@
 // Evaluation of embedded points from element Bezier control points (facts 5, 6).
 #include <mbi/interp/evaluate.hpp>
 
-#include "detail.hpp"
-#include "evaluate_float.hpp"
-#include "threads.hpp"
+#include "method/detail.hpp"
+#include "evaluate/evaluate_float.hpp"
+#include "runtime/threads.hpp"
 
 #include <array>
 #include <atomic>

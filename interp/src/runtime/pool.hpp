@@ -8,7 +8,7 @@
 // been scheduled since is never waited for, and waits only for those that picked it up. A thread
 // without work waits on the CPU for kSpin (a frame's next call usually comes sooner, and then
 // finds it running), then sleeps in the kernel until posted to.
-#include "threads.hpp"
+#include "runtime/threads.hpp"
 
 #include <atomic>
 #include <cstdint>

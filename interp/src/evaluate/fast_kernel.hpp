@@ -23,7 +23,7 @@
 // once) in place of n, and a point's normal is cof(D) m = m_1 (D_2 x D_3) + m_2 (D_3 x D_1) +
 // m_3 (D_1 x D_2), renormalised (the AVX-512 kernel: the same vector as
 // D_2 x (m_1 D_3 - m_3 D_1) + m_2 (D_3 x D_1), two cross products instead of three).
-#include "cpu.hpp"
+#include "runtime/cpu.hpp"
 
 #include <Eigen/Core>
 

@@ -7,7 +7,7 @@
 // (records, rest normals) are prefetched kStreamAhead points ahead in either order. Groups of 4
 // points are written as 3 aligned 16-byte vectors with streaming stores (the output is not read
 // back by this pass, so it bypasses the caches and saves the write-allocate reads).
-#include "fast_kernel_x86.hpp"
+#include "evaluate/fast_kernel_x86.hpp"
 
 #ifdef MBI_INTERP_X86
 #include <cfloat>

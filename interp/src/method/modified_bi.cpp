@@ -1,10 +1,10 @@
 // Modified-BI precompute (assembly, beta, gauge, factorisation) and per-frame solve.
 #include <mbi/interp/modified_bi.hpp>
 
-#include "detail.hpp"
-#include "factor.hpp"
-#include "cpu.hpp"
-#include "threads.hpp"
+#include "method/detail.hpp"
+#include "linalg/factor.hpp"
+#include "runtime/cpu.hpp"
+#include "runtime/threads.hpp"
 
 #include <algorithm>
 #include <array>
@@ -382,6 +382,18 @@ double default_alpha(int d) {
   throw Error("dimension must be 2 or 3, got " + std::to_string(d));
 }
 
+double resolve_alpha(const Options& options, int d) {
+  const double alpha = options.alpha == 0 ? default_alpha(d) : options.alpha;
+  if (!(alpha > 0) || !std::isfinite(alpha))
+    throw Error("alpha must be a finite number > 0 (0 selects the default), got " + std::to_string(options.alpha));
+  return alpha;
+}
+
+void check_beta(const Options& options) {
+  if (!(options.beta >= 0) || !std::isfinite(options.beta))
+    throw Error("beta must be > 0 (0 selects the automatic rule), got " + std::to_string(options.beta));
+}
+
 const std::vector<std::pair<int, int>>& bezier_edges(int d) {
   static const std::vector<std::pair<int, int>> e2{{0, 1}, {0, 2}, {1, 2}};
   static const std::vector<std::pair<int, int>> e3{{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
@@ -566,11 +578,8 @@ ModifiedBI::ModifiedBI(const Eigen::Ref<const Eigen::MatrixXd>& U,
   I.m = static_cast<int>(T.rows());
   I.opt = options;
   const int d = I.d, n = I.n;
-  if (!(options.alpha >= 0) || !std::isfinite(options.alpha))
-    throw Error("alpha must be > 0 (0 selects the default), got " + std::to_string(options.alpha));
-  if (!(options.beta >= 0) || !std::isfinite(options.beta))
-    throw Error("beta must be > 0 (0 selects the automatic rule), got " + std::to_string(options.beta));
-  I.alpha = options.alpha > 0 ? options.alpha : default_alpha(d);
+  I.alpha = resolve_alpha(options, d);
+  check_beta(options);
 
   I.H = detail::assemble(I.U, I.T);
   if (I.H.disc_mm.nonZeros() == 0)
@@ -625,9 +634,10 @@ ModifiedBI::ModifiedBI(ModifiedBI&&) noexcept = default;
 ModifiedBI& ModifiedBI::operator=(ModifiedBI&&) noexcept = default;
 
 void ModifiedBI::set_alpha(double alpha) {
-  if (!(alpha > 0) || !std::isfinite(alpha))
-    throw Error("alpha must be a finite number > 0, got " + std::to_string(alpha));
-  impl_->factor(alpha);
+  Options o = impl_->opt;
+  o.alpha = alpha;
+  if (alpha == 0) throw Error("alpha must be a finite number > 0, got 0");
+  impl_->factor(resolve_alpha(o, impl_->d));
   warm_up();
 }
 

@@ -1,7 +1,7 @@
 // The AVX-512 evaluation kernels (see fast_kernel.hpp): two points to a 512-bit vector, each as
 // in the AVX2 positions kernel (pairs layout), positions only (eval_positions) and with normals
 // (eval_normals); prefetches and streaming stores as in the AVX2 kernels.
-#include "fast_kernel_x86.hpp"
+#include "evaluate/fast_kernel_x86.hpp"
 
 #ifdef MBI_INTERP_X86
 #include <cfloat>

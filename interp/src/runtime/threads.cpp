@@ -1,7 +1,7 @@
 // The pool and the parallel loops of mbi::interp (see threads.hpp and mbi/interp/threads.hpp).
-#include "threads.hpp"
+#include "runtime/threads.hpp"
 
-#include "spin.hpp"
+#include "runtime/spin.hpp"
 
 #include <mbi/interp/threads.hpp>
 
@@ -10,7 +10,7 @@
 #include <mutex>
 
 #ifdef MBI_WITH_THREADS
-#include "pool.hpp"
+#include "runtime/pool.hpp"
 #endif
 
 #if defined(__linux__) || defined(__APPLE__)

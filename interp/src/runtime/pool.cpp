@@ -1,7 +1,7 @@
 // The process's one pool of threads (see pool.hpp).
-#include "pool.hpp"
+#include "runtime/pool.hpp"
 
-#include "spin.hpp"
+#include "runtime/spin.hpp"
 
 #ifdef MBI_WITH_THREADS
 

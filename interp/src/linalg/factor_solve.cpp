@@ -1,10 +1,10 @@
 // The per-frame solve with a sparse Cholesky factor: triangular sweeps over the supernodes for
 // all right-hand sides at once (see factor.hpp), serially or shared out between the library's
 // threads along the factor's schedule (CholeskyFactor::schedule).
-#include "factor.hpp"
+#include "linalg/factor.hpp"
 
-#include "cpu.hpp"
-#include "threads.hpp"
+#include "runtime/cpu.hpp"
+#include "runtime/threads.hpp"
 
 #include <mbi/error.hpp>
 

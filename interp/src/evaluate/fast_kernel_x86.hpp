@@ -2,7 +2,7 @@
 // What the AVX2 and AVX-512 evaluation kernels share (internal; see fast_kernel.hpp): prefetches
 // and streaming stores. Functions compiled for AVX2/FMA by their target attribute, as the
 // kernels are, so that nothing here is built for a CPU the caller did not check.
-#include "fast_kernel.hpp"
+#include "evaluate/fast_kernel.hpp"
 
 #ifdef MBI_INTERP_X86
 #include <cstdint>

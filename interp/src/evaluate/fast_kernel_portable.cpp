@@ -1,6 +1,6 @@
 // The portable evaluation kernel (see fast_kernel.hpp): plain C++, any CPU, 2D and 3D, either
 // layout; also the tails of the x86 kernels' ranges.
-#include "fast_kernel.hpp"
+#include "evaluate/fast_kernel.hpp"
 
 #include <cfloat>
 #include <cmath>
