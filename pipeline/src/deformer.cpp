@@ -2,10 +2,10 @@
 #include <mbi/error.hpp>
 #include <mbi/interp/evaluate.hpp>
 #include <mbi/pipeline/deformer.hpp>
+#include <mbi/pipeline/precompute.hpp>
 
-#include <cmath>
-#include <optional>
 #include <string>
+#include <utility>
 
 namespace mbi::pipeline {
 namespace {
@@ -17,29 +17,19 @@ std::string shape(Eigen::Index rows, Eigen::Index cols) {
 }  // namespace
 
 struct Deformer::Impl {
-  Eigen::MatrixXd U;
-  Eigen::MatrixXi T;
+  Precompute pre;
   interp::Embedding embedding;
   DeformerOptions options;
   Eigen::MatrixXd rest_normals;
-  std::optional<interp::ModifiedBI> solver;
-  std::optional<interp::Phong> phong;
   std::unique_ptr<interp::FastEvaluator> fast;  // deform_float(), built on its first call
 
-  // X must be n x d and finite (BI and the float kernel would carry a NaN into every point).
-  void check_pose(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
-    if (X.rows() != U.rows() || X.cols() != U.cols())
-      throw Error("X must be " + shape(U.rows(), U.cols()) + ", got " + shape(X.rows(), X.cols()));
-    for (Eigen::Index i = 0; i < X.rows(); ++i)
-      for (Eigen::Index c = 0; c < X.cols(); ++c)
-        if (!std::isfinite(X(i, c)))
-          throw Error("control vertex " + std::to_string(i) + " has a non-finite coordinate (column " +
-                      std::to_string(c) + ")");
-  }
+  Impl(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
+       const DeformerOptions& o)
+      : pre(U, T, o.method, o.interp), options(o) {}
 
   void check_points(const char* what, Eigen::Index rows, Eigen::Index cols) const {
-    if (rows != embedding.size() || cols != U.cols())
-      throw Error(std::string(what) + " must be " + shape(embedding.size(), U.cols()) + ", got " +
+    if (rows != embedding.size() || cols != pre.dim())
+      throw Error(std::string(what) + " must be " + shape(embedding.size(), pre.dim()) + ", got " +
                   shape(rows, cols));
   }
 
@@ -67,8 +57,7 @@ Deformer::Deformer(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<
 Deformer::Deformer(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
                    interp::Embedding embedding, const DeformerOptions& options,
                    const Eigen::MatrixXd& rest_normals)
-    : impl_(std::make_unique<Impl>()) {
-  interp::validate_mesh(U, T);
+    : impl_(std::make_unique<Impl>(U, T, options)) {
   const int d = static_cast<int>(U.cols());
   if (embedding.dim() != d || embedding.bary.rows() != embedding.element.size())
     throw Error("the embedding must have " + std::to_string(d + 1) + " barycentric coordinates a point");
@@ -78,71 +67,55 @@ Deformer::Deformer(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<
                   " outside [0, " + std::to_string(T.rows()) + ")");
   if (options.threads < 0) throw Error("threads must be >= 0 (0 = all cores)");
   Impl& I = *impl_;
-  I.U = U;
-  I.T = T;
   I.embedding = std::move(embedding);
-  I.options = options;
   if (rest_normals.size() != 0) {
     I.check_points("rest normals", rest_normals.rows(), rest_normals.cols());
     if (I.embedding.gradients.rows() != T.rows() * (d + 1))
       throw Error("normals need the embedding's basis gradients (filled by interp::embed())");
     I.rest_normals = rest_normals;
   }
-  if (needs_solve(options.method)) I.solver.emplace(I.U, I.T, options.interp);
-  if (needs_phong(options.method)) I.phong.emplace(I.U, I.T);
 }
 
 Deformer::~Deformer() = default;
 Deformer::Deformer(Deformer&&) noexcept = default;
 Deformer& Deformer::operator=(Deformer&&) noexcept = default;
 
-int Deformer::dim() const { return static_cast<int>(impl_->U.cols()); }
-int Deformer::vertices() const { return static_cast<int>(impl_->U.rows()); }
-int Deformer::elements() const { return static_cast<int>(impl_->T.rows()); }
+int Deformer::dim() const { return impl_->pre.dim(); }
+int Deformer::vertices() const { return static_cast<int>(impl_->pre.rest_positions().rows()); }
+int Deformer::elements() const { return static_cast<int>(impl_->pre.elements().rows()); }
 long long Deformer::points() const { return impl_->embedding.size(); }
 Method Deformer::method() const { return impl_->options.method; }
 const DeformerOptions& Deformer::options() const { return impl_->options; }
 const interp::Embedding& Deformer::embedding() const { return impl_->embedding; }
-const Eigen::MatrixXd& Deformer::rest_positions() const { return impl_->U; }
-const Eigen::MatrixXi& Deformer::elements_matrix() const { return impl_->T; }
+const Eigen::MatrixXd& Deformer::rest_positions() const { return impl_->pre.rest_positions(); }
+const Eigen::MatrixXi& Deformer::elements_matrix() const { return impl_->pre.elements(); }
 bool Deformer::has_rest_normals() const { return impl_->rest_normals.size() != 0; }
 
 const interp::ModifiedBI& Deformer::solver() const {
-  if (!impl_->solver) throw Error(std::string("the ") + method_name(method()) + " method has no modified-BI solver");
-  return *impl_->solver;
+  const interp::ModifiedBI* s = impl_->pre.built_solver();
+  if (!s) throw Error(std::string("the ") + method_name(method()) + " method has no modified-BI solver");
+  return *s;
 }
 
 const interp::Phong& Deformer::phong() const {
-  if (!impl_->phong) throw Error(std::string("the ") + method_name(method()) + " method has no Phong weights");
-  return *impl_->phong;
+  const interp::Phong* p = impl_->pre.built_phong();
+  if (!p) throw Error(std::string("the ") + method_name(method()) + " method has no Phong weights");
+  return *p;
 }
 
 void Deformer::set_alpha(double alpha) {
-  if (!impl_->solver) throw Error(std::string("alpha is a parameter of modified-BI, not of ") + method_name(method()));
-  impl_->solver->set_alpha(alpha);
-  impl_->options.interp.alpha = alpha;
+  if (!impl_->pre.built_solver())
+    throw Error(std::string("alpha is a parameter of modified-BI, not of ") + method_name(method()));
+  impl_->pre.set_alpha(alpha);
+  impl_->options.interp = impl_->pre.options();
 }
 
 interp::VertexMatrices Deformer::M(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
-  const Impl& I = *impl_;
-  I.check_pose(X);
-  switch (I.options.method) {
-    case Method::ModifiedBI: return I.solver->solve(X);
-    case Method::Phong: return I.phong->M(X);
-    case Method::BI: break;
-  }
-  return interp::VertexMatrices::Zero(I.U.rows() * I.U.cols(), I.U.cols());
+  return std::as_const(impl_->pre).M(method(), X);
 }
 
 interp::BezierPoints Deformer::bezier(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
-  const Impl& I = *impl_;
-  I.check_pose(X);
-  switch (I.options.method) {
-    case Method::ModifiedBI: return I.solver->bezier(X, I.solver->solve(X));
-    case Method::Phong: return interp::bezier_points(I.U, I.T, X, I.phong->M(X));
-    case Method::BI: break;
-  }
-  return interp::bezier_bi(X, I.T);
+  return impl_->pre.bezier(method(), X);
 }
 
 void Deformer::deform(const Eigen::Ref<const Eigen::MatrixXd>& X, interp::PointsRef<double> positions) const {
@@ -196,9 +169,9 @@ Eigen::MatrixXd Deformer::vjp(const interp::ConstPointsRef<double>& G) const {
   const Impl& I = *impl_;
   I.check_points("dL/dpositions", G.rows(), G.cols());
   const interp::BezierPoints GB = interp::evaluate_transpose(I.embedding, G, elements(), I.options.threads);
-  interp::BezierTranspose t = interp::bezier_transpose(I.U, I.T, GB);
-  if (I.solver) t.X += I.solver->solve_transpose(t.M);
-  else if (I.phong) t.X += I.phong->M_transpose(t.M);
+  interp::BezierTranspose t = interp::bezier_transpose(I.pre.rest_positions(), I.pre.elements(), GB);
+  if (method() == Method::ModifiedBI) t.X += I.pre.built_solver()->solve_transpose(t.M);
+  else if (method() == Method::Phong) t.X += I.pre.built_phong()->M_transpose(t.M);
   return std::move(t.X);
 }
 

@@ -1,26 +1,20 @@
+// FramePipeline (see frame_pipeline.hpp): a driver, the methods' Precompute and an evaluator.
 #include <mbi/base/timer.hpp>
 #include <mbi/error.hpp>
 #include <mbi/interp/evaluate.hpp>
 #include <mbi/pipeline/frame_pipeline.hpp>
+#include <mbi/pipeline/precompute.hpp>
 
-#include <chrono>
+#include <memory>
 
 namespace mbi::pipeline {
-namespace {
-
-}  // namespace
 
 struct FramePipeline::Impl {
-  Eigen::MatrixXd U;
-  Eigen::MatrixXi T;
+  Precompute pre;
   std::shared_ptr<const interp::Embedding> embedding;
   std::unique_ptr<Driver> driver;
   PipelineOptions options;
   std::unique_ptr<Evaluator> evaluator;
-  std::optional<interp::ModifiedBI> solver;
-  double precompute_ms = 0;
-  std::optional<interp::Phong> phong;
-  double phong_ms = 0;
 
   int frame = -1;
   Eigen::MatrixXd X;
@@ -33,28 +27,15 @@ struct FramePipeline::Impl {
   bool evaluated = false;
   FrameTimings timings;
 
-  const interp::ModifiedBI& get_solver() {
-    if (!solver) {
-      const auto t0 = Clock::now();
-      solver.emplace(U, T, options.interp);
-      precompute_ms = ms_since(t0);
-    }
-    return *solver;
-  }
-
-  const interp::Phong& get_phong() {
-    if (!phong) {
-      const auto t0 = Clock::now();
-      phong.emplace(U, T);
-      phong_ms = ms_since(t0);
-    }
-    return *phong;
-  }
+  // Method::BI builds nothing yet: the constructor builds what the method and driver need
+  Impl(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
+       const PipelineOptions& o)
+      : pre(U, T, Method::BI, o.interp), options(o) {}
 
   // Phong's M at X: closed form from the element deformation gradients.
   const interp::VertexMatrices& phong_M() {
     if (!have_phong) {
-      M_phong = get_phong().M(X);
+      M_phong = pre.M(Method::Phong, X);
       have_phong = true;
     }
     return M_phong;
@@ -66,7 +47,7 @@ struct FramePipeline::Impl {
       if (const interp::VertexMatrices* dm = driver->solved_M())
         M_mbi = *dm;
       else
-        M_mbi = get_solver().solve(X);
+        M_mbi = pre.M(Method::ModifiedBI, X);
       have_mbi = true;
     }
     return M_mbi;
@@ -75,24 +56,16 @@ struct FramePipeline::Impl {
   // The method's M and Bezier points for the current X.
   void solve_and_bezier() {
     auto t0 = Clock::now();
-    const int n = static_cast<int>(U.rows()), d = static_cast<int>(U.cols());
-    if (options.method == Method::BI) {
-      if (M.rows() != static_cast<Eigen::Index>(n) * d || M.cols() != d || M.any())
-        M.setZero(static_cast<Eigen::Index>(n) * d, d);  // BI: M = 0, set once, not every frame
-      timings.solve_ms = 0;
-      t0 = Clock::now();
-      B = interp::bezier_bi(X, T);
-    } else if (options.method == Method::Phong) {
-      M = phong_M();
-      timings.solve_ms = ms_since(t0);
-      t0 = Clock::now();
-      B = interp::bezier_points(U, T, X, M);
+    const Method method = options.method;
+    if (method == Method::BI) {
+      const Eigen::Index nd = pre.rest_positions().size(), d = pre.dim();
+      if (M.rows() != nd || M.cols() != d || M.any()) M.setZero(nd, d);  // BI: M = 0, set once
     } else {
-      M = mbi_M();
-      timings.solve_ms = driver->solved_M() ? 0.0 : ms_since(t0);
-      t0 = Clock::now();
-      B = interp::bezier_points(U, T, X, M);
+      M = method == Method::Phong ? phong_M() : mbi_M();
     }
+    timings.solve_ms = method == Method::BI || (method == Method::ModifiedBI && driver->solved_M()) ? 0.0 : ms_since(t0);
+    t0 = Clock::now();
+    B = pre.bezier(method, X, M);
     timings.bezier_ms = ms_since(t0);
   }
 
@@ -109,10 +82,8 @@ FramePipeline::FramePipeline(const Eigen::Ref<const Eigen::MatrixXd>& U,
                              interp::Embedding embedding, std::unique_ptr<Driver> driver,
                              const PipelineOptions& options, std::unique_ptr<Evaluator> evaluator,
                              const Eigen::MatrixXd& rest_normals)
-    : impl_(std::make_unique<Impl>()) {
+    : impl_(std::make_unique<Impl>(U, T, options)) {
   const int d = static_cast<int>(U.cols());
-  if ((d != 2 && d != 3) || T.cols() != d + 1)
-    throw Error("the control mesh must be n x d (d = 2, 3) with m x (d+1) elements");
   if (embedding.size() > 0 && embedding.dim() != d)
     throw Error("the embedding is " + std::to_string(embedding.dim()) +
                 "D, the control mesh " + std::to_string(d) + "D");
@@ -120,22 +91,21 @@ FramePipeline::FramePipeline(const Eigen::Ref<const Eigen::MatrixXd>& U,
   if (options.normals && rest_normals.size() == 0)
     throw Error("normals asked for, but no rest normals were given");
   Impl& s = *impl_;
-  s.U = U;
-  s.T = T;
   s.embedding = std::make_shared<const interp::Embedding>(std::move(embedding));
   s.driver = std::move(driver);
-  s.options = options;
   s.evaluator = evaluator ? std::move(evaluator) : std::make_unique<CpuEvaluator>();
+  const Eigen::MatrixXd& U0 = s.pre.rest_positions();
+  const Eigen::MatrixXi& T0 = s.pre.elements();
   PointSet points;
   points.embedding = s.embedding;
-  points.rest_bezier = interp::bezier_bi(s.U, s.T);
-  points.rest_positions = s.embedding->size() > 0 ? interp::embedded_positions(s.U, s.T, *s.embedding)
+  points.rest_bezier = interp::bezier_bi(U0, T0);
+  points.rest_positions = s.embedding->size() > 0 ? interp::embedded_positions(U0, T0, *s.embedding)
                                                   : Eigen::MatrixXd(0, d);
   points.rest_normals = rest_normals;
   s.evaluator->set_points(points);
-  s.X = s.U;
-  if (needs_solve(options.method) && !s.driver->solved_M()) s.get_solver();
-  if (needs_phong(options.method)) s.get_phong();
+  s.X = U0;
+  if (needs_solve(options.method) && !s.driver->solved_M()) s.pre.solver();
+  if (needs_phong(options.method)) s.pre.phong();
 }
 
 FramePipeline::~FramePipeline() = default;
@@ -151,10 +121,7 @@ FrameResult FramePipeline::step(bool evaluate_now) {
   if (!r.ok) return {false, r.message, s.frame};
   s.timings = {};
   s.timings.drive_ms = ms_since(t0);
-  if (X.rows() != s.U.rows() || X.cols() != s.U.cols())
-    throw Error("the driver gave " + std::to_string(X.rows()) + " x " +
-                std::to_string(X.cols()) + " positions for a control mesh of " +
-                std::to_string(s.U.rows()) + " x " + std::to_string(s.U.cols()));
+  s.pre.check_pose(X);
   s.X = std::move(X);
   s.frame = next;
   s.have_mbi = false;
@@ -175,7 +142,7 @@ void FramePipeline::reset() {
   Impl& s = *impl_;
   s.driver->reset();
   s.frame = -1;
-  s.X = s.U;
+  s.X = s.pre.rest_positions();
   s.have_mbi = false;
   s.have_phong = false;
   s.evaluated = false;
@@ -223,12 +190,8 @@ interp::BezierPoints FramePipeline::bezier_with(Method method) {
   Impl& s = *impl_;
   if (s.frame < 0) throw Error("bezier_with() before the first step()");
   if (method == s.options.method) return s.B;
-  switch (method) {
-    case Method::BI: return interp::bezier_bi(s.X, s.T);
-    case Method::ModifiedBI: return interp::bezier_points(s.U, s.T, s.X, s.mbi_M());
-    case Method::Phong: return interp::bezier_points(s.U, s.T, s.X, s.phong_M());
-  }
-  return s.B;
+  if (method == Method::BI) return s.pre.bezier(method, s.X);
+  return s.pre.bezier(method, s.X, method == Method::Phong ? s.phong_M() : s.mbi_M());
 }
 
 Method FramePipeline::method() const { return impl_->options.method; }
@@ -245,13 +208,8 @@ void FramePipeline::set_method(Method method) {
 
 void FramePipeline::set_alpha(double alpha) {
   Impl& s = *impl_;
-  if (!(alpha > 0)) throw Error("alpha must be > 0");
-  s.options.interp.alpha = alpha;
-  if (s.solver) {
-    const auto t0 = Clock::now();
-    s.solver->set_alpha(alpha);
-    s.precompute_ms = ms_since(t0);
-  }
+  s.pre.set_alpha(alpha);
+  s.options.interp = s.pre.options();
   if (s.frame >= 0 && !s.driver->solved_M()) {
     s.have_mbi = false;
     s.solve_and_bezier();
@@ -260,23 +218,23 @@ void FramePipeline::set_alpha(double alpha) {
 }
 
 const PipelineOptions& FramePipeline::options() const { return impl_->options; }
-const interp::ModifiedBI& FramePipeline::solver() { return impl_->get_solver(); }
-double FramePipeline::precompute_ms() const { return impl_->precompute_ms; }
-const interp::Phong& FramePipeline::phong() { return impl_->get_phong(); }
-double FramePipeline::phong_precompute_ms() const { return impl_->phong_ms; }
+const interp::ModifiedBI& FramePipeline::solver() { return impl_->pre.solver(); }
+double FramePipeline::precompute_ms() const { return impl_->pre.precompute_ms(); }
+const interp::Phong& FramePipeline::phong() { return impl_->pre.phong(); }
+double FramePipeline::phong_precompute_ms() const { return impl_->pre.phong_ms(); }
 Driver& FramePipeline::driver() { return *impl_->driver; }
 
 std::unique_ptr<Driver> FramePipeline::set_driver(std::unique_ptr<Driver> driver) {
   if (!driver) throw Error("no driver");
   std::swap(impl_->driver, driver);
   impl_->have_mbi = false;
-  if (needs_solve(impl_->options.method) && !impl_->driver->solved_M()) impl_->get_solver();
+  if (needs_solve(impl_->options.method) && !impl_->driver->solved_M()) impl_->pre.solver();
   return driver;
 }
 Evaluator& FramePipeline::evaluator() { return *impl_->evaluator; }
 const interp::Embedding& FramePipeline::embedding() const { return *impl_->embedding; }
-const Eigen::MatrixXd& FramePipeline::rest_positions() const { return impl_->U; }
-const Eigen::MatrixXi& FramePipeline::elements() const { return impl_->T; }
-int FramePipeline::dim() const { return static_cast<int>(impl_->U.cols()); }
+const Eigen::MatrixXd& FramePipeline::rest_positions() const { return impl_->pre.rest_positions(); }
+const Eigen::MatrixXi& FramePipeline::elements() const { return impl_->pre.elements(); }
+int FramePipeline::dim() const { return impl_->pre.dim(); }
 
 }  // namespace mbi::pipeline

@@ -3,6 +3,7 @@
 #include "evaluation.hpp"
 
 #include <mbi/interp/embed.hpp>
+#include <mbi/interp/modified_bi.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -40,7 +41,7 @@ Stage::Stage(const Shown& shown)
   lo.head(d) = U.colwise().minCoeff().transpose();
   hi.head(d) = U.colwise().maxCoeff().transpose();
   size = (hi - lo).norm();
-  alpha = pipe.options().interp.alpha > 0 ? pipe.options().interp.alpha : (d == 3 ? 0.1 : 0.2);
+  alpha = interp::resolve_alpha(pipe.options().interp, d);
 }
 
 void Stage::set_views(bool split) {

@@ -110,6 +110,10 @@ int mbi_set_alpha(double alpha) {
   return guarded([alpha] { return g_model->set_alpha(alpha), 1; }, 0);
 }
 
+double mbi_alpha(void) {
+  return guarded([] { return g_model->alpha(); }, 0.0);
+}
+
 int mbi_grab(int view, double ox, double oy, double oz, double dx, double dy, double dz) {
   return guarded(
       [=] {

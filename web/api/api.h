@@ -24,6 +24,8 @@ int mbi_step(void);
 int mbi_reset(void);
 int mbi_set_method(int method);
 int mbi_set_alpha(double alpha);
+/// The current alpha of modified-BI (interp's default until set); 0 on failure.
+double mbi_alpha(void);
 
 /// Starts a poke where the ray (origin, direction; model coordinates) hits the view's surface;
 /// 1 when it hit.

@@ -25,7 +25,7 @@ const api = {
   setAlpha: call('set_alpha', 'number', 1), grab: call('grab', 'number', 7),
   move: call('move', null, 6), release: call('release', null, 0),
   setCpuEvaluation: call('set_cpu_evaluation', 'number', 1),
-  error: M.cwrap('mbi_error', 'string', []), description: M.cwrap('mbi_description', 'string', []),
+  alpha: M.cwrap('mbi_alpha', 'number', []), error: M.cwrap('mbi_error', 'string', []), description: M.cwrap('mbi_description', 'string', []),
 };
 const TINTS = [[0.85, 0.55, 0.35], [0.35, 0.6, 0.85]];
 
@@ -107,6 +107,7 @@ function loaded(up) {
   }
   const center = lo.map((l, c) => 0.5 * (l + hi[c]));
   state.camera = new Camera(center, Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]), up);
+  $('alpha').value = api.alpha();  // the model's (interp's default)
   restart();
 }
 

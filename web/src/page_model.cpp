@@ -71,13 +71,13 @@ PageModel::PageModel(PageModel&&) noexcept = default;
 PageModel& PageModel::operator=(PageModel&&) noexcept = default;
 
 PageModel::PageModel(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T, Surface dense, sim::Simulator simulator,
-                     double alpha, std::string description)
+                     std::optional<double> alpha, std::string description)
     : rest_(std::move(dense)), description_(std::move(description)) {
   auto driver = std::make_unique<pipeline::SimulatorDriver>(std::move(simulator));
   sim_ = driver.get();
   pipeline::PipelineOptions po;
   po.method = pipeline::Method::ModifiedBI;
-  po.interp.alpha = alpha;
+  if (alpha) po.interp.alpha = *alpha;
   pipe_ = std::make_unique<pipeline::FramePipeline>(U, T, interp::embed(U, T, rest_.V),
                                                     std::move(driver), po);
   size_ = (rest_.V.colwise().maxCoeff() - rest_.V.colwise().minCoeff()).norm();
@@ -185,9 +185,10 @@ void PageModel::set_method(pipeline::Method method) {
 }
 
 void PageModel::set_alpha(double alpha) {
-  if (!(alpha > 0) || !std::isfinite(alpha)) throw mbi::Error("alpha must be a positive number");
   pipe_->set_alpha(alpha);
 }
+
+double PageModel::alpha() const { return interp::resolve_alpha(pipe_->options().interp, pipe_->dim()); }
 
 bool PageModel::grab(View view, const Ray& ray) {
   positions(view);  // the CPU's positions of this frame (the GPU's stay on the GPU)

@@ -49,14 +49,14 @@ PageModel PageModel::builtin(SceneKind kind) {
     generate::CageResult cage = generate::make_cage(dense.V, dense.F, {.target_vertices = 150});
     sim::Simulator s = poke_simulator(cage.U, cage.T);
     std::string what = "dense sphere: " + counts(dense.V, cage.U);
-    return PageModel(cage.U, cage.T, std::move(dense), std::move(s), 0.1, std::move(what));
+    return PageModel(cage.U, cage.T, std::move(dense), std::move(s), std::nullopt, std::move(what));
   }
   if (kind == SceneKind::Poke) {
     generate::cylinder_surface(0.5, 4.0, 96, 192, 12, dense.V, dense.F);
     generate::CageResult cage = generate::make_cage(dense.V, dense.F, {.target_vertices = 150});
     sim::Simulator s = poke_simulator(cage.U, cage.T);
     std::string what = "poke: the built-in cylinder, " + counts(dense.V, cage.U);
-    return PageModel(cage.U, cage.T, std::move(dense), std::move(s), 0.1, std::move(what));
+    return PageModel(cage.U, cage.T, std::move(dense), std::move(s), std::nullopt, std::move(what));
   }
   // twist-bar.toml: one end held, the other twisted by 90 degrees over 3 s, then held
   generate::paper_bar_control(U, T);
@@ -73,7 +73,7 @@ PageModel PageModel::builtin(SceneKind kind) {
                                                  .angular_velocity = 0.5235987756,
                                                  .stop = 3.0});
   std::string what = "twisting bar: the paper's bar, " + counts(dense.V, U);
-  return PageModel(U, T, std::move(dense), std::move(s), 0.1, std::move(what));
+  return PageModel(U, T, std::move(dense), std::move(s), std::nullopt, std::move(what));
 }
 
 PageModel PageModel::surface(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, int control_vertices) {
@@ -82,7 +82,7 @@ PageModel PageModel::surface(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
       generate::make_cage(V, F, {.target_vertices = control_vertices, .force_3d = true});
   sim::Simulator s = poke_simulator(cage.U, cage.T);
   std::string what = "your model: " + counts(V, cage.U);
-  return PageModel(cage.U, cage.T, Surface{V, F}, std::move(s), 0.1, std::move(what));
+  return PageModel(cage.U, cage.T, Surface{V, F}, std::move(s), std::nullopt, std::move(what));
 }
 
 }  // namespace mbi::web

@@ -17,6 +17,7 @@
 #include <Eigen/Core>
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -54,8 +55,10 @@ class PageModel {
   void reset();
   /// The pipeline's method (BI or modified-BI), the one the phase times measure.
   void set_method(pipeline::Method method);
-  /// alpha > 0 of modified-BI (refactors; throws mbi::Error otherwise).
+  /// alpha of modified-BI (refactors; interp checks it and throws mbi::Error when it is not > 0).
   void set_alpha(double alpha);
+  /// The current alpha (interp's default until set_alpha()).
+  double alpha() const;
 
   /// Starts a poke where `ray` first hits the dense surface as drawn in `view`: a spring from
   /// the material point under the cursor to a target at the hit point. False on a miss.
@@ -114,7 +117,7 @@ class PageModel {
     Eigen::Vector3d grabbed = Eigen::Vector3d::Zero();
   };
   PageModel(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T, Surface dense, sim::Simulator simulator,
-            double alpha, std::string description);
+            std::optional<double> alpha, std::string description);
   struct GpuInputs {
     std::vector<int> elements;
     std::vector<float> bary, rest, texels[2];

@@ -1,0 +1,97 @@
+// Precompute (see precompute.hpp): the methods' precomputes and the one dispatch on the method.
+#include <mbi/base/timer.hpp>
+#include <mbi/error.hpp>
+#include <mbi/pipeline/precompute.hpp>
+
+#include <cmath>
+#include <string>
+
+namespace mbi::pipeline {
+
+Precompute::Precompute(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
+                       Method method, const interp::Options& options)
+    : U_(U), T_(T), options_(options) {
+  interp::validate_mesh(U_, T_);
+  interp::resolve_alpha(options_, dim());
+  interp::check_beta(options_);
+  if (needs_solve(method)) solver();
+  if (needs_phong(method)) phong();
+}
+
+void Precompute::check_pose(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
+  if (X.rows() != U_.rows() || X.cols() != U_.cols())
+    throw Error("X must be " + std::to_string(U_.rows()) + " x " + std::to_string(U_.cols()) + ", got " +
+                std::to_string(X.rows()) + " x " + std::to_string(X.cols()));
+  for (Eigen::Index i = 0; i < X.rows(); ++i)
+    for (Eigen::Index c = 0; c < X.cols(); ++c)
+      if (!std::isfinite(X(i, c)))
+        throw Error("control vertex " + std::to_string(i) + " has a non-finite coordinate (column " +
+                    std::to_string(c) + ")");
+}
+
+interp::VertexMatrices Precompute::M(Method method, const Eigen::Ref<const Eigen::MatrixXd>& X) {
+  if (needs_solve(method)) solver();
+  if (needs_phong(method)) phong();
+  return std::as_const(*this).M(method, X);
+}
+
+interp::VertexMatrices Precompute::M(Method method, const Eigen::Ref<const Eigen::MatrixXd>& X) const {
+  check_pose(X);
+  switch (method) {
+    case Method::ModifiedBI:
+      if (!solver_) throw Error("modified-BI's precompute was not built");
+      return solver_->solve(X);
+    case Method::Phong:
+      if (!phong_) throw Error("Phong's vertex weights were not built");
+      return phong_->M(X);
+    case Method::BI: break;
+  }
+  return interp::VertexMatrices::Zero(U_.rows() * U_.cols(), U_.cols());
+}
+
+interp::BezierPoints Precompute::bezier(Method method, const Eigen::Ref<const Eigen::MatrixXd>& X,
+                                        const interp::VertexMatrices& M) const {
+  if (method == Method::BI) return interp::bezier_bi(X, T_);
+  return interp::bezier_points(U_, T_, X, M);
+}
+
+interp::BezierPoints Precompute::bezier(Method method, const Eigen::Ref<const Eigen::MatrixXd>& X) const {
+  if (method != Method::BI) return bezier(method, X, M(method, X));
+  check_pose(X);
+  return interp::bezier_bi(X, T_);
+}
+
+const interp::ModifiedBI& Precompute::solver() {
+  if (!solver_) {
+    const auto t0 = Clock::now();
+    solver_.emplace(U_, T_, options_);
+    precompute_ms_ = ms_since(t0);
+  }
+  return *solver_;
+}
+
+const interp::Phong& Precompute::phong() {
+  if (!phong_) {
+    const auto t0 = Clock::now();
+    phong_.emplace(U_, T_);
+    phong_ms_ = ms_since(t0);
+  }
+  return *phong_;
+}
+
+void Precompute::set_alpha(double alpha) {
+  interp::Options o = options_;
+  o.alpha = alpha;
+  if (solver_) {
+    const auto t0 = Clock::now();
+    solver_->set_alpha(alpha);
+    precompute_ms_ = ms_since(t0);
+  } else if (alpha == 0) {
+    throw Error("alpha must be a finite number > 0, got 0");
+  } else {
+    interp::resolve_alpha(o, dim());
+  }
+  options_ = o;
+}
+
+}  // namespace mbi::pipeline
