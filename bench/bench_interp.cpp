@@ -10,7 +10,7 @@
 #include <benchmark/benchmark.h>
 #include <mbi/interp.hpp>
 
-#include "../tests/common/grid_meshes.hpp"
+#include "common/grid_meshes.hpp"
 #include "bench_common.hpp"
 
 #include <random>
