@@ -25,33 +25,8 @@ if [ "${1:-}" = "--sanitizers" ]; then
   cmake --preset debug >/dev/null
   cmake --build --preset debug -j "${MBI_JOBS:-$(nproc)}"
   export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
-  # test numbers of the OpenGL programs (gl) and of the others (rest), for ctest -I; the cases
-  # tagged [long] in neither
-  lists=$(ctest --preset debug --show-only=json-v1 | python3 -c '
-import json, os, subprocess, sys
-tests = json.load(sys.stdin)["tests"]
-catch = {t["command"][0] for t in tests
-         if t.get("command") and os.path.basename(t["command"][0]).startswith("test_")}
-long = set()
-for program in catch:
-    listed = subprocess.run([program, "--list-test-names-only", "[long]"], capture_output=True,
-                            text=True)
-    if listed.returncode < 0:  # Catch2 exits with the number of cases listed; a signal is a failure
-        sys.exit(f"{program} --list-test-names-only: killed by signal {-listed.returncode}")
-    names = listed.stdout
-    long.update(n.strip() for n in names.splitlines() if n.strip())
-tests = [t if t["name"] not in long else None for t in tests]
-gl_programs = {"test_gpu", "test_scenes", "test_app", "test_viewer"}
-def uses_gl(t):
-    cmd = t.get("command") or ["?"]
-    if os.path.basename(cmd[0]) in gl_programs:
-        return True
-    # bad-input cases: mbi run / view without --gpu off may make a context
-    args = [a[len("-DARGS="):] for a in cmd if a.startswith("-DARGS=")]
-    return bool(args) and args[0].split(";")[0] in ("run", "view") and "--gpu;off" not in args[0]
-gl = [i + 1 for i, t in enumerate(tests) if t and uses_gl(t)]
-rest = [i + 1 for i, t in enumerate(tests) if t and i + 1 not in gl]
-print(",".join(map(str, [0, 0, 0] + gl)), ",".join(map(str, [0, 0, 0] + rest)))')
+  # test numbers of the OpenGL programs (gl) and of the others (rest), for ctest -I
+  lists=$(ctest --preset debug --show-only=json-v1 | python3 scripts/ctest_lists.py)
   read -r gl rest <<<"$lists"
   status=0
   env -u MBI_MODELS_DIR ASAN_OPTIONS="detect_leaks=1${ASAN_OPTIONS:+:$ASAN_OPTIONS}" \
