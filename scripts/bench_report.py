@@ -198,8 +198,12 @@ def loglog_fit(xs, ys):
 
 
 # ------------------------------------------------------------------------------------ report
-def targets(R, nthreads):
-    """Rows [name, measured, goal, met, how] of the speed targets, from one run."""
+def target_row(name, measured, goal, met, how):
+    return [name, measured, goal, "n/a" if met is None else ("**yes**" if met else "**no**"), how]
+
+
+def eval_targets(R, nthreads):
+    """Target (1): evaluation of 1M points against the peers, the triad, 1 thread, BI and normals."""
     ev = lambda **kv: R.find("BM_Eval", **kv)
     P = 1000000
     triad1, triadN = R.find("BM_Triad", threads=1), R.find("BM_Triad", threads=0)
@@ -209,10 +213,7 @@ def targets(R, nthreads):
     ours_n = ev(points=P, control=450, mbi=1, threads=0, double=0, normals=1)
     vega = R.find("BM_PeerVegaLoop", points=P, control=450)
     rows = []
-
-    def target(name, measured, goal, met, how):
-        rows.append([name, measured, goal, "n/a" if met is None else ("**yes**" if met else "**no**"), how])
-
+    target = lambda *a: rows.append(target_row(*a))
     if ours and vega:
         r = ms(vega) / ms(ours)
         target("(1) 1M points, float positions, all threads vs the peers' plain double BI loop (1 thread)",
@@ -247,6 +248,13 @@ def targets(R, nthreads):
                "1M float, modified-BI, all threads")
     else:
         target("(1) positions + normals / positions", "not measured", "<= 2x", None, "full run only")
+    return rows
+
+
+def scale_targets(R):
+    """Targets (2) to (5): solve, precompute, embedding and the simulator step at given sizes."""
+    rows = []
+    target = lambda *a: rows.append(target_row(*a))
     for c, goal in ((450, 0.1), (1300, 2.0), (10000, 30.0)):
         b = R.find("BM_ScaleSolve", control=c)
         v = ms(b) if b else None
@@ -262,7 +270,7 @@ def targets(R, nthreads):
         target(f"(3) precompute at ~{c:,} control vertices", (f_ms(v) + mem) if v else "not measured",
                f"<= {f_ms(goal)}", None if v is None else v <= goal,
                "BM_ScalePrecompute: assembly + " + (b.get("label") or "Eigen SimplicialLLT" if b else "?"))
-    b = R.find("BM_Embed", points=P, tets=5000)
+    b = R.find("BM_Embed", points=1000000, tets=5000)
     target("(4) embedding 1M points into 5,082 tetrahedra", f_ms(ms(b)) if b else "not measured", "< 1 s",
            None if not b else ms(b) < 1000, "BM_Embed")
     for mesh, (vtets, vms) in VEGA_STEP.items():
@@ -273,6 +281,11 @@ def targets(R, nthreads):
                f"<= {goal:.2f} ms (5x faster)", None if not b else ms(b) <= goal,
                "default solver at this size (PCG, tol 1e-8, as LinearSolver::Auto picks)")
     return rows
+
+
+def targets(R, nthreads):
+    """Rows [name, measured, goal, met, how] of the speed targets, from one run."""
+    return eval_targets(R, nthreads) + scale_targets(R)
 
 
 class Run:
@@ -696,11 +709,8 @@ def report(data, json_path, wall_s, baseline=None, baseline_path=None):
 
 
 # ------------------------------------------------------------------------------------ plots
-def plots(R, base):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+def throughput_plot(R, base, plt):
+    """Million points a second against the point count, ours and the peers', with the triad's limit."""
     sizes = sorted({r["kv"]["points"] for r in R.all("BM_Eval")})
     ev = lambda **kv: R.find("BM_Eval", **kv)
     triadN = R.find("BM_Triad", threads=0)
@@ -734,6 +744,9 @@ def plots(R, base):
     fig.savefig(base + "-throughput.png", dpi=110)
     plt.close(fig)
 
+
+def scaling_plot(R, base, plt):
+    """Precompute and solve time against the control-vertex count, with fitted growth."""
     fig, ax = plt.subplots(figsize=(7, 4.5))
     for fam, label, color in (("BM_ScalePrecompute", "precompute (assembly + factorisation)", "C0"),
                               ("BM_ScaleSolve", "per-frame solve", "C1")):
@@ -760,6 +773,15 @@ def plots(R, base):
     fig.tight_layout()
     fig.savefig(base + "-scaling.png", dpi=110)
     plt.close(fig)
+
+
+def plots(R, base):
+    """RESULT-throughput.png and RESULT-scaling.png beside the report."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    throughput_plot(R, base, plt)
+    scaling_plot(R, base, plt)
 
 
 def main():
