@@ -1,6 +1,7 @@
 // Deformer (see deformer.hpp): one embedding and one precompute, then any number of poses.
 #include <mbi/error.hpp>
 #include <mbi/interp/evaluate.hpp>
+#include <mbi/interp/threads.hpp>
 #include <mbi/pipeline/deformer.hpp>
 #include <mbi/pipeline/precompute.hpp>
 
@@ -65,7 +66,7 @@ Deformer::Deformer(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<
     if (embedding.element(p) < 0 || embedding.element(p) >= T.rows())
       throw Error("point " + std::to_string(p) + " refers to element " + std::to_string(embedding.element(p)) +
                   " outside [0, " + std::to_string(T.rows()) + ")");
-  if (options.threads < 0) throw Error("threads must be >= 0 (0 = all cores)");
+  interp::check_threads(options.threads);
   Impl& I = *impl_;
   I.embedding = std::move(embedding);
   if (rest_normals.size() != 0) {

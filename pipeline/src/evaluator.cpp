@@ -10,7 +10,7 @@ namespace mbi::pipeline {
 
 CpuEvaluator::CpuEvaluator(Precision precision, int threads)
     : precision_(precision), threads_(threads) {
-  if (threads < 0) throw Error("threads must be >= 0 (0 = the library's count)");
+  interp::check_threads(threads);
 }
 
 std::string CpuEvaluator::name() const {

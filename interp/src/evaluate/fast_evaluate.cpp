@@ -2,6 +2,7 @@
 // element terms, and runs the kernel of its instruction set (fast_kernel.hpp) over the points.
 // The terms are computed in double from B and rounded to float once per call.
 #include <mbi/interp/fast_evaluate.hpp>
+#include <mbi/interp/threads.hpp>
 
 #include "evaluate/fast_kernel.hpp"
 #include "runtime/threads.hpp"
@@ -140,7 +141,7 @@ FastEvaluator::FastEvaluator(const Embedding& emb, int threads, Simd simd) : thr
   if (emb.bary.rows() != emb.element.size())
     throw Error("embedding has " + std::to_string(emb.element.size()) + " elements but " +
                 std::to_string(emb.bary.rows()) + " coordinate rows");
-  if (threads < 0) throw Error("threads must be >= 0 (0 = all cores)");
+  check_threads(threads);
   p_ = emb.size();
   const int d = d_;
   m_ = 0;

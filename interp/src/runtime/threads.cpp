@@ -3,11 +3,13 @@
 
 #include "runtime/spin.hpp"
 
+#include <mbi/interp/mesh.hpp>
 #include <mbi/interp/threads.hpp>
 
 #include <algorithm>
 #include <exception>
 #include <mutex>
+#include <string>
 
 #ifdef MBI_WITH_THREADS
 #include "runtime/pool.hpp"
@@ -24,7 +26,16 @@ namespace {
 std::atomic<int> g_threads{0};  // 0: the default
 }
 
-void set_threads(int n) { g_threads.store(n > 0 ? n : 0, std::memory_order_relaxed); }
+void check_threads(int n, const char* what) {
+  if (n < 0 || n > kMaxThreads)
+    throw Error(std::string(what) + " must be a whole number from 0 (the cores this process may run on) to " +
+                std::to_string(kMaxThreads) + ", got " + std::to_string(n));
+}
+
+void set_threads(int n) {
+  check_threads(n);
+  g_threads.store(n, std::memory_order_relaxed);
+}
 
 int threads() {
 #ifdef MBI_WITH_THREADS

@@ -20,9 +20,17 @@
 // it runs (docs/performance.md, "Threads").
 namespace mbi::interp {
 
+/// The most threads a count may name.
+inline constexpr int kMaxThreads = 1024;
+
+/// The one check of a thread count (set_threads and every object's threads=): throws Error
+/// unless 0 <= n <= kMaxThreads; `what` names the argument in the message.
+void check_threads(int n, const char* what = "threads");
+
 /// Sets the number of threads mbi's parallel work runs on, the calling thread included, for
-/// every later call from any thread: 1 runs everything on the calling thread; 0 (or a negative
-/// number) restores the default, the cores this process may run on (its CPU affinity). A count
+/// every later call from any thread: 1 runs everything on the calling thread; 0 restores the
+/// default, the cores this process may run on (its CPU affinity); check_threads() refuses the
+/// rest. A count
 /// given to one object (FastEvaluator, pipeline::CpuEvaluator, evaluate(..., threads)) limits that
 /// object's calls further; 0 there means this count. Pool threads are started when first needed
 /// and kept for the life of the process.
