@@ -106,10 +106,7 @@ void bind_embedding(py::module_& m) {
   m.def("cholmod_available", &interp::cholmod_available, "True when this build factors with CHOLMOD.");
   m.def(
       "set_threads",
-      [](int n) {
-        if (n < 0) throw interp::Error("threads must be >= 0 (0 = the cores this process may run on)");
-        interp::set_threads(n);
-      },
+      &interp::set_threads,
       "n"_a,
       "Threads of every later call of the library (one pool for the process, shared by all Python "
       "threads), the calling one included; 0: the cores this process may run on. An object's own "

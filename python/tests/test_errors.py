@@ -165,7 +165,7 @@ def test_options_and_names(setup):
         mbi.ModifiedBI(U, T, beta=float("nan"))
     with raises(r"alpha must be"):
         deformer.set_alpha(0.0)
-    with raises(r"threads must be >= 0"):
+    with raises(r"threads must be a whole number from 0"):
         mbi.Deformer(U, T, P, threads=-2)
     bi = mbi.Deformer(U, T, P, method="bi")
     with raises(r"alpha is a parameter of modified-BI, not of bi"):
