@@ -9,6 +9,8 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <sys/stat.h>
+
 #include <cstring>
 #include <fstream>
 #include <string>
@@ -155,8 +157,11 @@ TEST_CASE("glTF in: node transforms, and skins, morph targets and bad accessors 
   json float_index = one_triangle();
   float_index["accessors"][1] = {{"bufferView", 0}, {"componentType", 5126}, {"count", 3}, {"type", "SCALAR"}};
   CHECK_THAT(error_of(write_json(dir, float_index)), Catch::Contains("indices") && Catch::Contains("is not"));
-  json device = one_triangle();  // a buffer is read only from a regular file
+  json device = one_triangle();  // a buffer is read only from a regular file in the asset's folder
   device["buffers"][0]["uri"] = "/dev/zero";
+  CHECK_THAT(error_of(write_json(dir, device)), Catch::Contains("t.gltf: buffer 0: uri '/dev/zero' is not read"));
+  REQUIRE(mkfifo((dir / "fifo.bin").c_str(), 0600) == 0);
+  device["buffers"][0]["uri"] = "fifo.bin";
   CHECK_THAT(error_of(write_json(dir, device)), Catch::Contains("t.gltf: not a readable glTF 2.0 file"));
   std::ofstream(dir / "junk.glb") << "glTF but not really";
   CHECK_THAT(error_of(dir / "junk.glb"), Catch::Contains("junk.glb: not a readable glTF 2.0 file"));

@@ -9,6 +9,7 @@
 #include <tiny_gltf.h>
 
 #include "format_gltf.hpp"
+#include "format_gltf_check.hpp"
 #include "surface.hpp"
 
 #include <Eigen/Geometry>
@@ -27,17 +28,22 @@ bool keep_image(tinygltf::Image*, const int, std::string*, std::string*, int, in
   return true;
 }
 
-// Buffers in files beside the asset: read as every input of mbi is (regular files only, the size
-// capped: a uri naming /dev/zero or a FIFO is refused), names taken as written (tinygltf's own
-// expansion runs wordexp).
-bool regular_file(const std::string& name, void*) {
+// Buffers in files beside the asset: only in the asset's folder or below (`folder`, the user
+// data; format_gltf_check.cpp refuses other uris first, by name), read as every input of mbi is
+// (regular files only, the size capped: /dev/zero or a FIFO is refused), names taken as written
+// (tinygltf's own expansion runs wordexp).
+const path& folder_of(void* user) { return *static_cast<const path*>(user); }
+bool regular_file(const std::string& name, void* user) {
+  const path p = confined(folder_of(user), name, true);
   std::error_code ec;
-  return std::filesystem::is_regular_file(name, ec);
+  return !p.empty() && std::filesystem::is_regular_file(p, ec);
 }
 std::string as_written(const std::string& name, void*) { return name; }
-bool read_buffer(std::vector<unsigned char>* out, std::string* err, const std::string& name, void*) {
+bool read_buffer(std::vector<unsigned char>* out, std::string* err, const std::string& name, void* user) {
   try {
-    const std::string bytes = slurp(name);
+    const path p = confined(folder_of(user), name, true);
+    if (p.empty()) fail(name, 0, "outside the asset's folder");
+    const std::string bytes = slurp(p);
     out->assign(bytes.begin(), bytes.end());
     return true;
   } catch (const std::exception& e) {
@@ -50,11 +56,12 @@ bool never_write(std::string*, const std::string&, const std::vector<unsigned ch
 tinygltf::Model load_model(std::string_view data, const path& file, bool binary) {
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(keep_image, nullptr);
-  loader.SetFsCallbacks({regular_file, as_written, read_buffer, never_write, nullptr});
+  std::error_code ec;
+  const path folder = std::filesystem::absolute(file, ec).parent_path();
+  const std::string dir = folder.string();
+  loader.SetFsCallbacks({regular_file, as_written, read_buffer, never_write, const_cast<path*>(&folder)});
   tinygltf::Model model;
   std::string err, warn;
-  std::error_code ec;
-  const std::string dir = std::filesystem::absolute(file, ec).parent_path().string();
   const bool ok = binary ? loader.LoadBinaryFromMemory(&model, &err, &warn,
                                                        reinterpret_cast<const unsigned char*>(data.data()),
                                                        static_cast<unsigned>(data.size()), dir)
@@ -67,23 +74,74 @@ tinygltf::Model load_model(std::string_view data, const path& file, bool binary)
   return model;
 }
 
-// The file's JSON (for the materials, kept verbatim): a .glb's first chunk, or the whole text.
-nlohmann::json file_json(std::string_view data, bool binary) {
-  if (binary) {
-    const auto length = load_le<std::uint32_t>(data.data() + 12);  // tinygltf checked the chunk
-    data = data.substr(20, length);
-  }
-  return nlohmann::json::parse(data.begin(), data.end());
-}
-
 std::string node_name(const tinygltf::Model& m, int n) {
   const std::string& s = m.nodes[static_cast<std::size_t>(n)].name;
   return s.empty() ? "node " + std::to_string(n) : "node " + std::to_string(n) + " '" + s + "'";
 }
 
+// What an accessor is read for: each use allows the component types of glTF 2.0 section
+// 3.7.2.1 (KHR_mesh_quantization allows more for positions, normals and texture coordinates).
+enum class Use { kPosition, kNormal, kTexcoord, kColor, kIndices };
+
+struct Kind {
+  int type;
+  bool normalized;
+};
+
+std::vector<Kind> allowed_kinds(Use use, bool quantized) {
+  constexpr int b = TINYGLTF_COMPONENT_TYPE_BYTE, ub = TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
+                s = TINYGLTF_COMPONENT_TYPE_SHORT, us = TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
+                ui = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, f = TINYGLTF_COMPONENT_TYPE_FLOAT;
+  switch (use) {
+    case Use::kPosition:
+      if (quantized) return {{f, false}, {b, false}, {b, true}, {ub, false}, {ub, true}, {s, false}, {s, true}, {us, false}, {us, true}};
+      return {{f, false}};
+    case Use::kNormal:
+      if (quantized) return {{f, false}, {b, true}, {s, true}};
+      return {{f, false}};
+    case Use::kTexcoord:
+      if (quantized) return {{f, false}, {b, false}, {b, true}, {ub, false}, {ub, true}, {s, false}, {s, true}, {us, false}, {us, true}};
+      return {{f, false}, {ub, true}, {us, true}};
+    case Use::kColor: return {{f, false}, {ub, true}, {us, true}};
+    case Use::kIndices: return {{ub, false}, {us, false}, {ui, false}};
+  }
+  return {};
+}
+
+// "unsigned short normalized"; "" for a type glTF 2.0 does not have.
+std::string kind_name(int type, bool normalized) {
+  std::string s;
+  switch (type) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE: s = "byte"; break;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: s = "unsigned byte"; break;
+    case TINYGLTF_COMPONENT_TYPE_SHORT: s = "short"; break;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: s = "unsigned short"; break;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: s = "unsigned int"; break;
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: s = "float"; break;
+    default: return "";
+  }
+  return normalized ? s + " normalized" : s;
+}
+
+// Throws unless accessor `a`'s component type is one the spec allows for `use`.
+void check_kind(const tinygltf::Model& m, const tinygltf::Accessor& a, Use use, const path& file, const std::string& at) {
+  const bool quantized = std::find(m.extensionsUsed.begin(), m.extensionsUsed.end(), "KHR_mesh_quantization") !=
+                         m.extensionsUsed.end();
+  const std::vector<Kind> kinds = allowed_kinds(use, quantized);
+  if (std::any_of(kinds.begin(), kinds.end(), [&](Kind k) { return k.type == a.componentType && k.normalized == a.normalized; }))
+    return;
+  std::string names;
+  for (const Kind& k : kinds) names += (names.empty() ? "" : ", ") + kind_name(k.type, k.normalized);
+  const bool more = !quantized && use != Use::kColor && use != Use::kIndices;
+  const std::string name = kind_name(a.componentType, a.normalized);
+  fail(file, 0, at + ": component type " + std::to_string(a.componentType) + (name.empty() ? "" : " (" + name + ")") +
+                    " is not allowed for this use by glTF 2.0 (allowed: " + names +
+                    (more ? "; more with KHR_mesh_quantization in extensionsUsed)" : ")"));
+}
+
 // The values of accessor `index`, count x components, normalized integers mapped to [0, 1] or
 // [-1, 1] as the format says. `where` names the node, mesh and attribute in messages.
-std::vector<double> read_accessor(const tinygltf::Model& m, int index, std::initializer_list<int> components,
+std::vector<double> read_accessor(const tinygltf::Model& m, int index, Use use, std::initializer_list<int> components,
                                   const path& file, const std::string& where) {
   if (index < 0 || index >= static_cast<int>(m.accessors.size()))
     fail(file, 0, where + ": accessor " + std::to_string(index) + " does not exist");
@@ -93,9 +151,8 @@ std::vector<double> read_accessor(const tinygltf::Model& m, int index, std::init
   const int comps = tinygltf::GetNumComponentsInType(static_cast<std::uint32_t>(a.type));
   if (std::find(components.begin(), components.end(), comps) == components.end())
     fail(file, 0, at + ": " + std::to_string(comps) + " components is not a type this attribute takes");
+  check_kind(m, a, use, file, at);
   const int size = tinygltf::GetComponentSizeInBytes(static_cast<std::uint32_t>(a.componentType));
-  if (size <= 0 || a.componentType == TINYGLTF_COMPONENT_TYPE_DOUBLE)
-    fail(file, 0, at + ": component type " + std::to_string(a.componentType) + " is not a glTF 2.0 type");
   if (a.bufferView < 0 || a.bufferView >= static_cast<int>(m.bufferViews.size()))
     fail(file, 0, at + ": no bufferView");
   const tinygltf::BufferView& bv = m.bufferViews[static_cast<std::size_t>(a.bufferView)];
@@ -122,7 +179,8 @@ std::vector<double> read_accessor(const tinygltf::Model& m, int index, std::init
         case TINYGLTF_COMPONENT_TYPE_BYTE: x = static_cast<signed char>(*p); break;
         case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: x = load_le<std::uint16_t>(p); break;
         case TINYGLTF_COMPONENT_TYPE_SHORT: x = load_le<std::int16_t>(p); break;
-        default: x = load_le<std::uint32_t>(p); break;
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: x = load_le<std::uint32_t>(p); break;
+        default: fail(file, 0, at + ": component type " + std::to_string(a.componentType) + " is not read");
       }
       if (a.normalized && a.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT) {
         const double top = static_cast<double>((1ull << (8 * size - (a.componentType % 2 == 0 ? 1 : 0))) - 1);
@@ -208,7 +266,7 @@ class Gatherer {
       fail(file_, 0, where + ": morph targets are not read: apply the shape keys first and export the mesh alone");
     const int pos = attribute(p, "POSITION");
     if (pos < 0) fail(file_, 0, where + ": no POSITION attribute");
-    const std::vector<double> P = read_accessor(m_, pos, {3}, file_, where + ": POSITION");
+    const std::vector<double> P = read_accessor(m_, pos, Use::kPosition, {3}, file_, where + ": POSITION");
     const long long nv = static_cast<long long>(P.size() / 3), first = static_cast<long long>(v_.size());
     if (nv == 0) return;
     // instances place a mesh many times: bounded by the file's size, and by int indices
@@ -231,15 +289,15 @@ class Gatherer {
     normals(p, normal_map, nv, where);
     faces(p, nv, first, L.determinant() < 0, where);
     part.faces = static_cast<long long>(f_.size()) - part.first_face;
-    if (const int t = attribute(p, "TEXCOORD_0"); t >= 0) part.uv0 = floats(t, {2}, nv, where + ": TEXCOORD_0");
-    if (const int t = attribute(p, "TEXCOORD_1"); t >= 0) part.uv1 = floats(t, {2}, nv, where + ": TEXCOORD_1");
+    if (const int t = attribute(p, "TEXCOORD_0"); t >= 0) part.uv0 = uvs(t, nv, where + ": TEXCOORD_0");
+    if (const int t = attribute(p, "TEXCOORD_1"); t >= 0) part.uv1 = uvs(t, nv, where + ": TEXCOORD_1");
     if (const int c = attribute(p, "COLOR_0"); c >= 0) part.color = colors(c, nv, where + ": COLOR_0");
     asset_.parts.push_back(std::move(part));
   }
 
   void normals(const tinygltf::Primitive& p, const Eigen::Matrix3d& map, long long nv, const std::string& where) {
     const int a = attribute(p, "NORMAL");
-    const std::vector<double> N = a >= 0 ? read_accessor(m_, a, {3}, file_, where + ": NORMAL") : std::vector<double>();
+    const std::vector<double> N = a >= 0 ? read_accessor(m_, a, Use::kNormal, {3}, file_, where + ": NORMAL") : std::vector<double>();
     if (a >= 0 && static_cast<long long>(N.size()) != 3 * nv)
       fail(file_, 0, where + ": NORMAL has " + std::to_string(N.size() / 3) + " elements, POSITION " + std::to_string(nv));
     for (long long i = 0; i < nv; ++i) {
@@ -253,11 +311,7 @@ class Gatherer {
   void faces(const tinygltf::Primitive& p, long long nv, long long first, bool flip, const std::string& where) {
     std::vector<double> I;
     if (p.indices >= 0) {
-      I = read_accessor(m_, p.indices, {1}, file_, where + ": indices");
-      const int type = m_.accessors[static_cast<std::size_t>(p.indices)].componentType;
-      if (type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
-          type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
-        fail(file_, 0, where + ": indices: component type " + std::to_string(type) + " is not an unsigned integer");
+      I = read_accessor(m_, p.indices, Use::kIndices, {1}, file_, where + ": indices");
     } else {
       I.resize(static_cast<std::size_t>(nv));
       for (long long i = 0; i < nv; ++i) I[static_cast<std::size_t>(i)] = static_cast<double>(i);
@@ -277,15 +331,15 @@ class Gatherer {
     }
   }
 
-  std::vector<float> floats(int accessor, std::initializer_list<int> comps, long long nv, const std::string& where) {
-    const std::vector<double> x = read_accessor(m_, accessor, comps, file_, where);
-    if (static_cast<long long>(x.size()) != nv * *comps.begin())
-      fail(file_, 0, where + ": " + std::to_string(x.size() / *comps.begin()) + " elements, POSITION has " + std::to_string(nv));
+  std::vector<float> uvs(int accessor, long long nv, const std::string& where) {
+    const std::vector<double> x = read_accessor(m_, accessor, Use::kTexcoord, {2}, file_, where);
+    if (static_cast<long long>(x.size()) != nv * 2)
+      fail(file_, 0, where + ": " + std::to_string(x.size() / 2) + " elements, POSITION has " + std::to_string(nv));
     return {x.begin(), x.end()};
   }
 
   std::vector<float> colors(int accessor, long long nv, const std::string& where) {
-    const std::vector<double> x = read_accessor(m_, accessor, {3, 4}, file_, where);
+    const std::vector<double> x = read_accessor(m_, accessor, Use::kColor, {3, 4}, file_, where);
     const long long comps = nv > 0 ? static_cast<long long>(x.size()) / nv : 4;
     if (static_cast<long long>(x.size()) != nv * comps) fail(file_, 0, where + ": count differs from POSITION's");
     std::vector<float> rgba;
@@ -303,19 +357,6 @@ class Gatherer {
   std::vector<int> seen_;  // per node: times reached
   long long bytes_;        // the file's size
 };
-
-// The names of the extensions used inside `j` (objects named "extensions", at any depth).
-void extension_names(const nlohmann::json& j, std::set<std::string>& names) {
-  if (j.is_object()) {
-    for (const auto& [key, value] : j.items()) {
-      if (key == "extensions" && value.is_object())
-        for (const auto& e : value.items()) names.insert(e.key());
-      extension_names(value, names);
-    }
-  } else if (j.is_array()) {
-    for (const auto& value : j) extension_names(value, names);
-  }
-}
 
 // Materials, textures, samplers and images as in the file; images inside a buffer as bytes.
 void keep_materials(const tinygltf::Model& m, const nlohmann::json& j, GltfAsset& a) {
@@ -345,6 +386,9 @@ void keep_materials(const tinygltf::Model& m, const nlohmann::json& j, GltfAsset
 
 SurfaceMesh parse_gltf(std::string_view data, const path& file) {
   const bool binary = data.size() >= 4 && data.substr(0, 4) == "glTF";
+  const nlohmann::json json = gltf_json(data, binary);
+  check_gltf_uris(json, file);
+  check_gltf_extensions(json, file);
   const tinygltf::Model model = load_model(data, file, binary);
   if (model.scenes.empty()) fail(file, 0, "no scene (a glTF file of parts alone is not read)");
   const int scene = model.defaultScene >= 0 ? model.defaultScene : 0;
@@ -354,7 +398,7 @@ SurfaceMesh parse_gltf(std::string_view data, const path& file) {
   for (int n : model.scenes[static_cast<std::size_t>(scene)].nodes) g.node(n, Eigen::Matrix4d::Identity(), 0);
   SurfaceMesh s;
   g.finish(s);
-  keep_materials(model, file_json(data, binary), *asset);
+  keep_materials(model, json, *asset);
   auto attributes = std::make_shared<SurfaceAttributes>();
   attributes->format = ".glb";  // either extension writes them back (formats.cpp)
   attributes->binary = binary;
