@@ -404,8 +404,16 @@ const Registrar reg{
       sub.add_option("--max-outside", a->max_outside,
                      "refuse dense points farther outside the control mesh than this times the model size")
           ->check(CLI::NonNegativeNumber);
-      sub.add_option("--fps", a->fps, "frames per second where times meet frames (MDD times, PC2 frames; default 24)")
-          ->check(CLI::PositiveNumber);
+      sub.add_option_function<std::string>(
+          "--fps",
+          [a](const std::string& s) {
+            try {
+              a->fps = parse_fps(s);
+            } catch (const std::runtime_error& e) {
+              throw CLI::ValidationError(e.what());
+            }
+          },
+          "frames per second where times meet frames (MDD times, PC2 frames; default 24)");
       sub.add_flag("--force", a->force, "overwrite existing --out / --stats files");
       sub.add_option("--example", a->example, "built-in example instead of files: twist-bar");
       add_threads_option(sub);

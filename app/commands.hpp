@@ -55,9 +55,15 @@ CLI::Option* add_choice(CLI::App& sub, const std::string& name, T& value, const 
 /// set when the option is parsed, before the command runs); 0, the default: the cores this
 /// process may run on. Every subcommand takes it.
 inline CLI::Option* add_threads_option(CLI::App& sub) {
-  return sub.add_option_function<int>("--threads", [](int n) { interp::set_threads(n); },
-                                      "threads to compute on, the calling one included (default 0: the cores this process may run on)")
-      ->check(CLI::Range(0, 1024));
+  // decimal digits only: CLI11 would take 0x10 as 16 and 010 as 8
+  auto set = [](const std::string& s) {
+    const bool digits = !s.empty() && s.size() <= 4 && s.find_first_not_of("0123456789") == std::string::npos;
+    if (!digits || std::stoi(s) > 1024)
+      throw CLI::ValidationError("--threads " + s + ": give a whole number of threads from 0 to 1024 in decimal digits");
+    interp::set_threads(std::stoi(s));
+  };
+  return sub.add_option_function<std::string>("--threads", set,
+                                              "threads to compute on, the calling one included (default 0: the cores this process may run on)");
 }
 
 struct Registrar {

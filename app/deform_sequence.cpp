@@ -16,10 +16,13 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cfloat>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -36,8 +39,9 @@ OutKind out_kind(const std::string& out) {
   const std::string ext = io::lower_extension(out);
   if (ext == ".pc2") return OutKind::pc2;
   if (ext == ".mdd") return OutKind::mdd;
-  if ((ext == ".glb" || ext == ".gltf") && out.find('%') == std::string::npos) return OutKind::gltf;
-  if (out.find('%') == std::string::npos)
+  const bool numbered = io::is_numbered_name(out);
+  if ((ext == ".glb" || ext == ".gltf") && !numbered) return OutKind::gltf;
+  if (!numbered)
     throw std::runtime_error("--out " + out + ": a sequence goes into a point cache (.pc2, .mdd), an animated glTF "
                              "(.glb, .gltf) or numbered files (a printf pattern: out_%04d.obj)");
   const io::FileFormat* f = io::file_format(out);
@@ -103,6 +107,12 @@ struct Timing {
   std::vector<double> gltf_times;  // strictly increasing, as glTF keys must be
 };
 
+std::string short_number(double x) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.6g", x);
+  return b;
+}
+
 // The MDD times when they increase, else one frame every 1/fps seconds.
 std::vector<double> increasing_times(const std::vector<float>& times, double fps) {
   std::vector<double> t(times.begin(), times.end());
@@ -141,10 +151,36 @@ Timing cache_timing(const io::Trajectory& t, double fps) {
   return o;
 }
 
-Timing output_timing(const io::Trajectory& t, double fps) {
+// The most frames whose times a sequence holds in memory (MDD and glTF outputs; 12 bytes a
+// frame): float32 times cannot increase over more frames evenly spaced anyway.
+constexpr int kMaxTimedFrames = 1 << 24;
+
+// The timing of the outputs; the per-frame times only when `per_frame` (an MDD or glTF output).
+Timing output_timing(const io::Trajectory& t, double fps, bool per_frame, const std::string& out) {
+  if (!per_frame && !t.has_times()) {
+    Timing o;
+    if (const auto pc2 = t.pc2_timing()) o.pc2_start = pc2->first, o.pc2_rate = pc2->second;
+    return o;
+  }
+  if (t.frames() > kMaxTimedFrames)
+    throw std::runtime_error("--out " + out + ": " + std::to_string(t.frames()) + " frames of " + t.spec() +
+                             " are more than the " + std::to_string(kMaxTimedFrames) +
+                             " frames whose times a sequence holds (write a PC2 from a PC2, or fewer frames)");
   Timing o = cache_timing(t, fps);
   o.gltf_times = increasing_times(o.mdd_times, fps);
   return o;
+}
+
+// An --fps whose frame times k / fps (s) are finite and strictly increasing as float32 (MDD and
+// glTF store them so) for every frame; `frames` at least 1.
+void check_fps(double fps, int frames) {
+  const double last = std::max(frames - 1, 1);
+  const float dt = static_cast<float>(1.0 / fps), end = static_cast<float>(last / fps);
+  if (std::isnormal(dt) && std::isfinite(end)) return;
+  char range[96];
+  std::snprintf(range, sizeof range, "from %.3g to %.3g", last / static_cast<double>(FLT_MAX), 1.0 / FLT_MIN);
+  throw std::runtime_error("--fps " + short_number(fps) + ": the times of " + std::to_string(frames) +
+                           " frames at this rate are not finite and increasing as float32; give a rate " + range);
 }
 
 // SIGINT and SIGTERM while the frames run: the loop stops after the frame in progress (the one
@@ -259,17 +295,27 @@ class FrameWriter {
   std::vector<std::unique_ptr<PartWriter>> parts_;
 };
 
-// Every numbered output follows the overwrite rule before any work: each is checked as an
-// output of its own (and never the --stats file).
-void check_numbered(const SequenceArgs& a, const std::string& pattern, const std::vector<fs::path>& inputs, int frames) {
+// Every output, numbered files expanded, checked together before any work: each follows the
+// overwrite rule on its own, and no two (two series, a series and a cache, glTF or --stats)
+// name one file.
+void check_outputs(const SequenceArgs& a, const std::vector<Out>& outs, const std::vector<fs::path>& inputs, int frames) {
   std::error_code ec;
-  const fs::path stats = a.stats.empty() ? fs::path() : fs::weakly_canonical(a.stats, ec);
-  for (int k = 0; k < frames; ++k) {
-    const fs::path f = io::numbered_file(pattern, k);
-    io::OutputSet one(inputs, a.force);
-    one.add(f, "--out");
-    if (!stats.empty() && fs::weakly_canonical(f, ec) == stats)
-      throw std::runtime_error("--stats " + a.stats + ": is also another output of this command (" + f.string() + ")");
+  std::map<fs::path, std::string> taken;  // canonical name -> the option and name that took it
+  auto take = [&](const fs::path& f, const std::string& what) {
+    const auto [it, fresh] = taken.emplace(fs::weakly_canonical(fs::absolute(f, ec), ec), what + " " + f.string());
+    if (!fresh) throw std::runtime_error(what + " " + f.string() + ": is also another output of this command (" + it->second + ")");
+  };
+  for (const Out& o : outs)
+    if (o.kind != OutKind::numbered) take(o.name, "--out");
+  if (!a.stats.empty()) take(a.stats, "--stats");
+  for (const Out& o : outs) {
+    if (o.kind != OutKind::numbered) continue;
+    for (int k = 0; k < frames; ++k) {
+      const fs::path f = io::numbered_file(o.name, k);
+      take(f, "--out " + o.name + ": frame " + std::to_string(k) + ":");
+      io::OutputSet one(inputs, a.force);
+      one.add(f, "--out");
+    }
   }
 }
 
@@ -296,20 +342,20 @@ class Progress {
 
 // How the frames went.
 struct Run {
-  int done = 0, signal = 0;
+  int done = 0, frames = 0, signal = 0;
   std::string failure;
   double embed_ms = 0, precompute_ms = 0, read_ms = 0, deform_ms = 0, write_ms = 0;
 };
 
 void run_frames(const SequenceArgs& a, io::Trajectory& traj, const Model& m, pipeline::Deformer& deformer,
-                FrameWriter& out, bool use_float, Run& run) {
-  const StopOnSignal stop;
+                FrameWriter& out, bool use_float, const StopOnSignal& stop, const io::OutputSet& outputs, Run& run) {
   Progress progress(traj.frames());
   Eigen::MatrixXd positions(m.P.rows(), m.dim()), normals;
   if (deformer.has_rest_normals()) normals.resize(m.P.rows(), 3);
   interp::RowMatrixXf xyz(use_float ? m.P.rows() : 0, 3);
   for (int k = 0; k < traj.frames() && !(run.signal = stop.signal()); ++k) {
     try {
+      if (k == 1) test_signal_at("frame");
       auto t0 = Clock::now();
       const Eigen::MatrixXd X = to_pose(traj.read(k), m, traj.where(k), a.control);
       run.read_ms += ms_since(t0);
@@ -323,7 +369,7 @@ void run_frames(const SequenceArgs& a, io::Trajectory& traj, const Model& m, pip
       else out.write(k, positions, normals);
       run.write_ms += ms_since(t0);
     } catch (const std::exception& e) {
-      const std::string what = e.what();
+      const std::string what = outputs.name_targets(e.what());
       run.failure = what.find("frame " + std::to_string(k)) == std::string::npos ? "frame " + std::to_string(k) + ": " + what : what;
       break;
     }
@@ -396,6 +442,7 @@ pipeline::Deformer make_deformer(const SequenceArgs& a, const Model& m, bool nor
     std::fprintf(stderr, "mbi deform: warning: %zu of %d points lie outside the control mesh (farthest %.3g); they follow "
                  "the nearest element by extrapolation\n", emb.outside.size(), emb.size(), emb.max_outside_distance);
   if (a.max_outside) refuse_far_points(emb, m.control.U, m.control.T, m.P, *a.max_outside, m.dense.names(), a.control);
+  test_signal_at("precompute");
   pipeline::DeformerOptions opt{.method = a.method, .interp = {}};
   opt.interp.alpha = a.alpha.value_or(0.0);
   opt.interp.pin_boundary = a.pin_boundary;
@@ -417,8 +464,9 @@ int report_stop(const Run& run) {
     return 3;
   }
   if (run.signal) {
-    std::fprintf(stderr, "mbi deform: interrupted by %s (outputs up to frame %d kept)\n",
-                 run.signal == SIGINT ? "SIGINT" : "SIGTERM", run.done - 1);
+    std::fprintf(stderr, "mbi deform: interrupted by %s (outputs up to frame %d kept%s)\n",
+                 run.signal == SIGINT ? "SIGINT" : "SIGTERM", run.done - 1,
+                 run.done == run.frames ? ": every frame was done, the outputs are finished" : "");
     return 128 + run.signal;
   }
   return 0;
@@ -427,6 +475,7 @@ int report_stop(const Run& run) {
 // Everything from the models to the last frame; `outputs` holds the caches, glTF and --stats.
 int run_sequence_frames(const SequenceArgs& a, const std::vector<Out>& outs, io::Trajectory& traj,
                         io::OutputSet& outputs, std::size_t i_stats) {
+  test_signal_at("load");
   const Model m = load_model(a);
   const int d = m.dim();
   scenes::check_run_size(a.control, m.P.rows(), m.control.U.rows(), m.control.T.rows(), d);
@@ -434,30 +483,43 @@ int run_sequence_frames(const SequenceArgs& a, const std::vector<Out>& outs, io:
   to_pose(traj.read(0), m, traj.where(0), a.control);  // a wrong node count fails before any work
   // numbered surfaces and glTF get deformed normals when their part has normals; caches hold
   // positions only, and take the float kernel (its output is their layout) for a 3D model
-  bool normals = false, use_float = d == 3 && m.P_extra.cols() == 0;
+  bool normals = false, use_float = d == 3 && m.P_extra.cols() == 0, per_frame_times = false;
+  std::string timed_out;
   for (const Out& o : outs) {
+    if (o.kind == OutKind::mdd || o.kind == OutKind::gltf) per_frame_times = true, timed_out = o.name;
     normals |= (o.kind == OutKind::gltf || (o.kind == OutKind::numbered && io::is_surface_file(o.name)));
     use_float &= o.kind == OutKind::pc2 || o.kind == OutKind::mdd;
   }
   normals = normals && d == 3 && m.dense.normals().rows() > 0;
   Run run;
+  run.frames = traj.frames();
+  const Timing timing = output_timing(traj, a.fps, per_frame_times, timed_out);
   pipeline::Deformer deformer = make_deformer(a, m, normals, run);
-  {
-    FrameWriter out(outs, outputs, m, output_timing(traj, a.fps));
-    run_frames(a, traj, m, deformer, out, use_float, run);
+  // From the first frame to the last rename a signal stops the frames, and what was done is
+  // finished (signals.hpp); before, it ends the process at once with nothing written.
+  const StopOnSignal stop;
+  try {
+    FrameWriter out(outs, outputs, m, timing);
+    run_frames(a, traj, m, deformer, out, use_float, stop, outputs, run);
     if (run.done == 0 && run.signal) {
-      std::fprintf(stderr, "mbi deform: interrupted by signal %d before the first frame: nothing written\n", run.signal);
+      std::fprintf(stderr, "mbi deform: interrupted by %s before the first frame: nothing written\n",
+                   run.signal == SIGINT ? "SIGINT" : "SIGTERM");
       return 128 + run.signal;
     }
     if (run.done == 0) throw std::runtime_error(run.failure);
+    test_signal_at("finish");
     out.finish();
+  } catch (const std::exception& e) {
+    throw std::runtime_error(outputs.name_targets(e.what()));
   }
   if (!a.stats.empty()) {
+    if (!run.signal) run.signal = stop.signal();
     const nlohmann::json j = stats_json(a, m, deformer, traj.frames(), run);
     check_finite(j, a.stats);
     io::write_text_atomic(outputs.staging(i_stats), j.dump(2) + "\n");
   }
   outputs.commit();
+  if (!run.signal) run.signal = stop.signal();
   print_summary(a, m, deformer, traj.frames(), run);
   return report_stop(run);
 }
@@ -468,9 +530,17 @@ bool is_sequence(const std::string& deformed, const std::vector<std::string>& ou
   if (io::Trajectory::names_trajectory(deformed)) return true;
   for (const std::string& out : outs) {
     const std::string ext = io::lower_extension(out);
-    if (ext == ".pc2" || ext == ".mdd" || out.find('%') != std::string::npos) return true;
+    if (ext == ".pc2" || ext == ".mdd" || io::is_numbered_name(out)) return true;
   }
   return false;
+}
+
+double parse_fps(const std::string& text) {
+  char* end = nullptr;
+  const double fps = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || !std::isfinite(fps) || !(fps > 0))
+    throw std::runtime_error("--fps " + text + ": give a number of frames per second > 0 (e.g. 24 or 29.97)");
+  return fps;
 }
 
 int run_deform_sequence(const SequenceArgs& a) {
@@ -480,10 +550,11 @@ int run_deform_sequence(const SequenceArgs& a) {
     throw std::runtime_error("give one --out for each --mesh (" + std::to_string(a.meshes.size()) + " --mesh, " +
                              std::to_string(a.outs.size()) + " --out)");
   if (a.alpha && !(*a.alpha > 0)) throw std::runtime_error("--alpha must be > 0 (E_disc alone has extra null modes)");
-  if (!(a.fps > 0) || !std::isfinite(a.fps)) throw std::runtime_error("--fps must be > 0");
+  if (!(a.fps > 0) || !std::isfinite(a.fps)) throw std::runtime_error("--fps " + short_number(a.fps) + ": must be > 0");
   std::vector<Out> outs;
   for (const std::string& o : a.outs) outs.push_back({.name = o, .kind = out_kind(o)});
   io::Trajectory traj(a.deformed);  // the list of frames; every file named exists
+  check_fps(a.fps, traj.frames());
   // One overwrite rule (docs/cli.md): every output checked before any work, inputs never outputs.
   std::vector<fs::path> inputs = traj.files();
   inputs.insert(inputs.end(), a.meshes.begin(), a.meshes.end());
@@ -492,8 +563,7 @@ int run_deform_sequence(const SequenceArgs& a) {
   for (Out& o : outs)
     if (o.kind != OutKind::numbered) o.index = outputs.add(o.name, "--out");
   const std::size_t i_stats = a.stats.empty() ? 0 : outputs.add(a.stats, "--stats");
-  for (const Out& o : outs)
-    if (o.kind == OutKind::numbered) check_numbered(a, o.name, inputs, traj.frames());
+  check_outputs(a, outs, inputs, traj.frames());
   return run_sequence_frames(a, outs, traj, outputs, i_stats);
 }
 

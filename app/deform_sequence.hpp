@@ -30,4 +30,8 @@ bool is_sequence(const std::string& deformed, const std::vector<std::string>& ou
 /// written) on bad input found before the first frame is written.
 int run_deform_sequence(const SequenceArgs& a);
 
+/// --fps's text as a number: decimal, finite and > 0, or an error saying so (whether its frame
+/// times fit float32 is checked against the trajectory's length when it is opened).
+double parse_fps(const std::string& text);
+
 }  // namespace mbi::cli

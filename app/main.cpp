@@ -3,11 +3,13 @@
 // Every error is one line on stderr, "mbi <sub>: error: <what>" (or "mbi: error: <what>" before
 // a subcommand is known), and exit code 2; --help and --version exit 0.
 #include "commands.hpp"
+#include "signals.hpp"
 
 #include <algorithm>
 #include <cstdio>
 #include <exception>
 #include <map>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -53,6 +55,9 @@ std::string names(const std::vector<Command>& commands) {
 
 int main(int argc, char** argv) {
   using namespace mbi::cli;
+  // from the first instruction a signal removes this process's temporaries (none yet) and ends
+  // it with 128 + signal; run and deform's frames then take it as "stop after this frame"
+  handle_interrupts(nullptr);
   CLI::App app{"mbi: physics-driven deformation of dense meshes with modified barycentric "
                "interpolation"};
   app.require_subcommand(1);
@@ -102,6 +107,10 @@ int main(int argc, char** argv) {
     if (!sub->parsed()) continue;
     try {
       return action();
+    } catch (const std::bad_alloc&) {
+      std::fprintf(stderr, "mbi %s: error: out of memory (the inputs need more than this process may take)\n",
+                   sub->get_name().c_str());
+      return 2;
     } catch (const std::exception& e) {
       std::fprintf(stderr, "mbi %s: error: %s\n", sub->get_name().c_str(), clean(e.what()).c_str());
       return 2;

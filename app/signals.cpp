@@ -5,6 +5,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <cstdlib>
 #include <cstring>
 
 namespace mbi::cli {
@@ -37,6 +38,18 @@ void handle_interrupts(std::atomic<int>* stop) {
   sigaddset(&sa.sa_mask, SIGTERM);
   sa.sa_flags = SA_RESTART;  // reads and writes in progress go on (no EINTR failures)
   for (int sig : {SIGINT, SIGTERM}) ::sigaction(sig, &sa, nullptr);
+  // a file past the size limit (ulimit -f) is a write error (EFBIG) like a full disk, whose
+  // frames are kept, not a signal that kills the process with its temporaries
+  ::signal(SIGXFSZ, SIG_IGN);
+}
+
+void test_signal_at(const char* stage) {
+  const char* at = std::getenv("MBI_TEST_SIGNAL_AT");
+  if (!at) return;
+  const std::size_t n = std::strlen(stage);
+  if (std::strncmp(at, stage, n) != 0) return;
+  if (at[n] == '\0') ::raise(SIGINT);
+  else if (std::strcmp(at + n, ":TERM") == 0) ::raise(SIGTERM);
 }
 
 }  // namespace mbi::cli

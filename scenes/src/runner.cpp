@@ -24,6 +24,9 @@ namespace {
 
 // The scene with the run's options in place of its own values.
 Scene with_overrides(const Scene& scene, const RunOptions& opt) {
+  // the scene file's own range for simulation.frames; 0 keeps the scene's
+  if (opt.frames < 0 || opt.frames > 1000000)
+    throw SceneError("frames = " + std::to_string(opt.frames) + ": give 1 to 1000000 frames, or 0 for the scene's own");
   Scene sc = scene;
   if (opt.method) sc.interpolation.method = *opt.method;
   if (opt.frames > 0) sc.simulation.frames = opt.frames;

@@ -14,6 +14,8 @@
 #include <cerrno>
 #include <climits>
 #include <cstring>
+#include <map>
+#include <mutex>
 #include <random>
 
 namespace mbi::io {
@@ -55,10 +57,25 @@ void unlist_temporary(int& slot) {
   slot = -1;
 }
 
-// "<dir>/.mbi-tmp.<pid>.<n>-<random><suffix>", created exclusively (O_EXCL: never an existing
-// file, never through a symbolic link). Returns the open descriptor; throws naming `target`.
+// Opens `made` exclusively (O_EXCL: never an existing file, never through a symbolic link),
+// listed for remove_temporaries_now() before it exists, so that a signal at any moment finds
+// it (a name listed but not yet made is harmless to unlink: it carries our process id).
+// Returns the descriptor, or -1 with errno set and nothing listed.
+int open_listed(const std::filesystem::path& made, int& slot) {
+  slot = list_temporary(made);
+  const int fd = ::open(made.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd < 0) {
+    const int err = errno;
+    unlist_temporary(slot);
+    errno = err;
+  }
+  return fd;
+}
+
+// "<dir>/.mbi-tmp.<pid>.<n>-<random><suffix>", created exclusively and listed (open_listed).
+// Returns the open descriptor; throws naming `target`.
 int create_temporary(const std::filesystem::path& target, const std::string& suffix,
-                     std::filesystem::path& made) {
+                     std::filesystem::path& made, int& slot) {
   if (target.filename().empty()) fail(target, "no file name to write");
   std::filesystem::path dir = target.parent_path();
   std::error_code ec;
@@ -72,13 +89,20 @@ int create_temporary(const std::filesystem::path& target, const std::string& suf
   for (int attempt = 0; attempt < 16; ++attempt) {
     made = dir / (std::string(kTemporaryPrefix) + std::to_string(::getpid()) + "." +
                   std::to_string(counter++) + "-" + std::to_string(rd() % 1000000) + suffix);
-    const int fd = ::open(made.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    const int fd = open_listed(made, slot);
     if (fd >= 0) return fd;
     if (errno == EEXIST) continue;
     fail(target, std::string("cannot create a temporary file in its folder (") +
                      std::strerror(errno) + ")");
   }
   fail(target, "cannot find a free temporary file name in its folder");
+}
+
+// Staging file -> the target it stands for (output_name()).
+std::mutex names_mutex;
+std::map<std::string, std::filesystem::path>& staged_names() {
+  static std::map<std::string, std::filesystem::path> m;
+  return m;
 }
 
 // The target's extension when it is a plain short one (writers pick the format by it), else "".
@@ -100,8 +124,7 @@ std::string errno_text() { return errno != 0 ? std::strerror(errno) : "an I/O er
 
 AtomicFile::AtomicFile(const std::filesystem::path& target) : target_(target) {
   // ".mbi-tmp.<pid>.<n>-<random>.tmp": unique per process, call and attempt
-  const int fd = create_temporary(target, ".tmp", temporary_);
-  slot_ = list_temporary(temporary_);
+  const int fd = create_temporary(target, ".tmp", temporary_, slot_);
   file_ = ::fdopen(fd, "wb");
   if (!file_) {
     ::close(fd);
@@ -247,10 +270,27 @@ void refuse_held_folder(const std::filesystem::path& target, const std::string& 
 
 OutputSet::~OutputSet() {
   std::error_code ec;
+  const std::lock_guard<std::mutex> hold(names_mutex);
   for (Entry& e : entries_) {
     if (!committed_) std::filesystem::remove(e.staging, ec);
     unlist_temporary(e.slot);
+    staged_names().erase(e.staging.string());
   }
+}
+
+std::filesystem::path output_name(const std::filesystem::path& p) {
+  const std::lock_guard<std::mutex> hold(names_mutex);
+  const auto it = staged_names().find(p.string());
+  return it == staged_names().end() ? p : it->second;
+}
+
+std::string OutputSet::name_targets(std::string what) const {
+  for (const Entry& e : entries_) {
+    const std::string from = e.staging.string(), to = e.target.string();
+    for (std::size_t at = what.find(from); at != std::string::npos; at = what.find(from, at + to.size()))
+      what.replace(at, from.size(), to);
+  }
+  return what;
 }
 
 std::size_t OutputSet::add(const std::filesystem::path& target, const std::string& what,
@@ -288,14 +328,14 @@ std::size_t OutputSet::add(const std::filesystem::path& target, const std::strin
     std::string name = stem.staging.string();
     name.resize(name.size() - staging_suffix(stem.target).size());
     e.staging = name + staging_suffix(target);
-    const int fd = ::open(e.staging.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    const int fd = open_listed(e.staging, e.slot);
     if (fd < 0)
       fail(target, std::string("cannot create a temporary file in its folder (") +
                        std::strerror(errno) + ")");
     ::close(fd);
   } else {
     try {
-      const int fd = create_temporary(target, staging_suffix(target), e.staging);
+      const int fd = create_temporary(target, staging_suffix(target), e.staging, e.slot);
       ::close(fd);
     } catch (const IoError& err) {
       if (what.empty()) throw;
@@ -303,7 +343,10 @@ std::size_t OutputSet::add(const std::filesystem::path& target, const std::strin
     }
   }
   e.reserved = file_id(e.staging);  // a writer replaces the file (a new inode) or fills it
-  e.slot = list_temporary(e.staging);
+  {
+    const std::lock_guard<std::mutex> hold(names_mutex);
+    staged_names()[e.staging.string()] = e.target;
+  }
   entries_.push_back(std::move(e));
   return entries_.size() - 1;
 }
@@ -313,11 +356,7 @@ void OutputSet::write(std::size_t i, const std::function<void(const std::filesys
   try {
     body(e.staging);
   } catch (const IoError& err) {
-    std::string what = err.what();
-    const std::string from = e.staging.string(), to = e.target.string();
-    for (std::size_t at = what.find(from); at != std::string::npos; at = what.find(from, at + to.size()))
-      what.replace(at, from.size(), to);
-    throw IoError(what);
+    throw IoError(name_targets(err.what()));
   }
 }
 

@@ -21,7 +21,8 @@ struct CacheLayout {
   bool big_endian = false;
   unsigned long long data_offset = 0;
   float start_frame = 0.0f, sample_rate = 1.0f;  // PC2
-  std::vector<float> times;                       // MDD
+  std::vector<float> times;                       // MDD (unless left unread)
+  unsigned long long times_offset = 0;            // MDD: where its times are
 };
 
 /// The first n bytes of a file (fewer when it is shorter).
@@ -30,7 +31,9 @@ using HeadReader = std::function<std::string(std::size_t n)>;
 /// A PC2 file's layout from its first bytes and its size; throws IoError naming what is wrong.
 CacheLayout pc2_layout(const HeadReader& head, unsigned long long size, const std::filesystem::path& file);
 /// An MDD file's layout (a Blender export's extra rest frame skipped).
-CacheLayout mdd_layout(const HeadReader& head, unsigned long long size, const std::filesystem::path& file);
+/// `with_times`: the times are read too (else only their place is given).
+CacheLayout mdd_layout(const HeadReader& head, unsigned long long size, const std::filesystem::path& file,
+                       bool with_times = true);
 
 /// One frame of `points` float32 triples at `bytes` (big or little endian) into out (points x 3);
 /// throws IoError "<file>: frame k: point i: non-finite coordinate" (and for magnitudes above

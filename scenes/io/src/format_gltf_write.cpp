@@ -13,6 +13,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 
@@ -42,19 +43,27 @@ std::string base64(const std::vector<unsigned char>& b) {
   return s;
 }
 
+// A time as written in messages (6 significant digits).
+std::string short_number(double x) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.6g", x);
+  return b;
+}
+
 }  // namespace
 
 /// The document being built: JSON objects and the one binary buffer they point into.
 class GltfDocument {
  public:
-  GltfDocument(const path& file, const Polygons& faces, long long vertices, const GltfAsset* asset)
-      : file_(file), vertices_(vertices) {
+  // `name`: the root node's (and a plain mesh's part's) name
+  GltfDocument(const path& file, const std::string& name, const Polygons& faces, long long vertices, const GltfAsset* asset)
+      : file_(file), name_(name), vertices_(vertices) {
     if (asset) {
       parts_ = asset->parts;
       asset_ = asset;
     } else {
       GltfPart whole;
-      whole.name = file.stem().string();
+      whole.name = name;
       whole.vertices = vertices;
       whole.faces = static_cast<long long>(faces.size());
       parts_.push_back(std::move(whole));
@@ -68,9 +77,13 @@ class GltfDocument {
   void add_frame(double time, const Eigen::Ref<const Eigen::MatrixXd>& V, const Eigen::Ref<const Eigen::MatrixXd>& N) {
     if (V.rows() != vertices_ || V.cols() != 3 || (N.size() > 0 && (N.rows() != vertices_ || N.cols() != 3)))
       fail(file_, 0, "frame " + std::to_string(times_.size()) + ": positions or normals do not match the mesh");
-    if (!times_.empty() && !(time > times_.back()))
-      fail(file_, 0, "frame " + std::to_string(times_.size()) + ": time " + std::to_string(time) +
-                         " s is not after the previous frame's");
+    // the file stores float32 times: those must be finite and strictly increasing
+    const float t32 = static_cast<float>(time);
+    if (!std::isfinite(time) || !std::isfinite(t32))
+      fail(file_, 0, "frame " + std::to_string(times_.size()) + ": time " + short_number(time) + " s is not finite as float32");
+    if (!times_.empty() && !(t32 > static_cast<float>(times_.back())))
+      fail(file_, 0, "frame " + std::to_string(times_.size()) + ": time " + short_number(time) +
+                         " s is not after the previous frame's (" + short_number(times_.back()) + " s) as float32");
     const unsigned long long frame_bytes = static_cast<unsigned long long>(vertices_) * (N.size() > 0 ? 24 : 12);
     if (bin_.size() + frame_bytes > kMaxBinary)
       fail(file_, 0, "frame " + std::to_string(times_.size()) + ": the glTF would pass 4 GB, the format's limit " +
@@ -240,7 +253,7 @@ class GltfDocument {
   json document() const {
     json children = json::array();
     for (std::size_t k = 0; k < nodes_.size(); ++k) children.push_back(k + 1);
-    json nodes = json::array({{{"name", file_.stem().string()}, {"children", children}}});
+    json nodes = json::array({{{"name", name_}, {"children", children}}});
     for (const json& n : nodes_) nodes.push_back(n);
     json j = {{"asset", {{"version", "2.0"}, {"generator", "mbi"}}}, {"scene", 0},
               {"scenes", json::array({{{"nodes", {0}}}})}, {"nodes", nodes}, {"meshes", meshes_},
@@ -258,6 +271,7 @@ class GltfDocument {
   }
 
   path file_;
+  std::string name_;
   long long vertices_;
   const GltfAsset* asset_ = nullptr;
   std::vector<GltfPart> parts_;
@@ -272,7 +286,7 @@ class GltfDocument {
 
 void write_gltf(std::FILE* f, const SurfaceOutput& out) {
   const GltfAsset* asset = out.attributes ? out.attributes->gltf.get() : nullptr;
-  GltfDocument doc(out.file, out.faces, out.V.rows(), asset);
+  GltfDocument doc(out.file, output_name(out.file).stem().string(), out.faces, out.V.rows(), asset);
   doc.add_frame(0.0, out.V, out.N);
   doc.write(f);
 }
@@ -304,7 +318,8 @@ GltfWriter::GltfWriter(const std::filesystem::path& file, const SurfaceMesh& top
   const SurfaceAttributes* a = topology.attributes.get();
   const detail::GltfAsset* asset =
       a && a->gltf && a->vertices == topology.V.rows() && detail::gltf_attributes_fit(*a, state_->faces) ? a->gltf.get() : nullptr;
-  state_->doc = std::make_unique<detail::GltfDocument>(file, state_->faces, topology.V.rows(), asset);
+  state_->doc = std::make_unique<detail::GltfDocument>(file, output_name(file).stem().string(), state_->faces,
+                                                       topology.V.rows(), asset);
 }
 
 GltfWriter::~GltfWriter() = default;

@@ -80,7 +80,15 @@ void MddWriter::append(const float* xyz) {
     if constexpr (std::endian::native == std::endian::little) u = __builtin_bswap32(u);
     std::memcpy(buffer_.data() + 4 * i, &u, 4);
   }
-  out_->write(buffer_.data(), buffer_.size());
+  // all of the frame or none: a full disk fails this frame, which is cut off
+  const long end = static_cast<long>(8 + 4 * times_.size() + 12 * static_cast<std::size_t>(num_points_) * samples_);
+  try {
+    out_->write(buffer_.data(), buffer_.size());
+    out_->flush();
+  } catch (const IoError&) {
+    out_->truncate(end);
+    throw;
+  }
   ++samples_;
 }
 
@@ -113,7 +121,8 @@ void MddWriter::finish() {
   out_.reset();
 }
 
-detail::CacheLayout detail::mdd_layout(const HeadReader& head, unsigned long long size, const path& file) {
+detail::CacheLayout detail::mdd_layout(const HeadReader& head, unsigned long long size, const path& file,
+                                       bool with_times) {
   const std::string h8 = head(8);
   if (h8.size() < 8) fail(file, 0, "too short for an MDD header (8 bytes)");
   const auto frames = get_be<std::int32_t>(h8, 0);
@@ -131,12 +140,14 @@ detail::CacheLayout detail::mdd_layout(const HeadReader& head, unsigned long lon
     fail(file, 0, "header says " + std::to_string(frames) + " frames of " + std::to_string(points) +
                       " points (" + std::to_string(need) + " bytes) but the file has " + std::to_string(size) +
                       (need > size ? " (truncated?)" : ""));
-  const std::string h = head(static_cast<std::size_t>(times_end));
   CacheLayout L;
   L.points = points;
   L.frames = frames;
   L.big_endian = true;
   L.data_offset = times_end + (rest_frame ? 12 * np : 0);
+  L.times_offset = 8;
+  if (!with_times) return L;
+  const std::string h = head(static_cast<std::size_t>(times_end));
   L.times.resize(nf);
   for (std::size_t k = 0; k < nf; ++k) {
     L.times[k] = get_be<float>(h, 8 + 4 * k);

@@ -81,10 +81,18 @@ void Pc2Writer::append(const float* xyz) {
   const std::size_t bad = detail::first_non_finite(xyz, n);
   if (bad < n)
     fail(file_, 0, "sample " + std::to_string(samples_) + " point " + std::to_string(bad / 3) + ": non-finite coordinate");
-  if constexpr (std::endian::native == std::endian::big) {
-    for (std::size_t i = 0; i < n; ++i) put_le<float>(*out_, xyz[i]);
-  } else {
-    out_->write(xyz, n * sizeof(float));
+  // all of the sample or none, as above
+  const long end = 32 + 12 * static_cast<long>(num_points_) * samples_;
+  try {
+    if constexpr (std::endian::native == std::endian::big) {
+      for (std::size_t i = 0; i < n; ++i) put_le<float>(*out_, xyz[i]);
+    } else {
+      out_->write(xyz, n * sizeof(float));
+    }
+    out_->flush();
+  } catch (const IoError&) {
+    out_->truncate(end);
+    throw;
   }
   ++samples_;
 }

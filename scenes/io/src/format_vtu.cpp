@@ -11,6 +11,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
+#include <new>
 #include <optional>
 
 namespace mbi::io {
@@ -310,6 +311,7 @@ std::string VtuReader::binary(DataBytes& in, std::size_t bytes, const pugi::xml_
   if (full != bytes || (blocks > 0 && block == 0) || last > block)
     fail(file_, line(da), what + ": compressed blocks of " + std::to_string(full) + " bytes, expected " + std::to_string(bytes));
   std::string packed;
+  out.reserve(bytes);  // once: growing block by block would take up to twice the memory
   for (std::uint64_t b = 0; b < blocks; ++b) {
     const std::uint64_t want = b + 1 == blocks && last != 0 ? last : block;
     // zlib expands at most about 1032 to 1: a larger claim is a broken or hostile header
@@ -355,16 +357,31 @@ std::vector<double> VtuReader::ascii(const pugi::xml_node& da, long long count, 
 
 ControlMesh read_vtu_mesh(const path& file) { return parse_vtu_mesh(detail::slurp(file), file); }
 
+namespace {
+// `read` run, its std::bad_alloc (arrays within the inflation bound can still be larger than
+// the memory this process may take) an error naming the file.
+template <typename F>
+auto naming_memory(const path& file, std::size_t bytes, F read) {
+  try {
+    return read();
+  } catch (const std::bad_alloc&) {
+    fail(file, 0, "not enough memory for its arrays (a file of " + std::to_string(bytes) + " bytes; zlib data may inflate 1100 times)");
+  }
+}
+}  // namespace
+
 ControlMesh parse_vtu_mesh(std::string_view data, const path& file) {
-  VtuReader r(detail::skip_bom(data), file);
-  const Eigen::MatrixXd P = r.points();
-  return detail::vtk_control_mesh(P, r.cells(P.rows()), file);
+  return naming_memory(file, data.size(), [&] {
+    VtuReader r(detail::skip_bom(data), file);
+    const Eigen::MatrixXd P = r.points();
+    return detail::vtk_control_mesh(P, r.cells(P.rows()), file);
+  });
 }
 
 Eigen::MatrixXd read_vtu_points(const path& file) { return parse_vtu_points(detail::slurp(file), file); }
 
 Eigen::MatrixXd parse_vtu_points(std::string_view data, const path& file) {
-  return VtuReader(detail::skip_bom(data), file).points();
+  return naming_memory(file, data.size(), [&] { return VtuReader(detail::skip_bom(data), file).points(); });
 }
 
 }  // namespace mbi::io

@@ -65,7 +65,7 @@ PointCacheReader::PointCacheReader(const path& file) : file_(file) {
   };
   detail::CacheLayout L;
   try {
-    L = ext == ".pc2" ? detail::pc2_layout(head, size, file) : detail::mdd_layout(head, size, file);
+    L = ext == ".pc2" ? detail::pc2_layout(head, size, file) : detail::mdd_layout(head, size, file, false);
   } catch (...) {
     std::fclose(in_);
     throw;
@@ -76,7 +76,26 @@ PointCacheReader::PointCacheReader(const path& file) : file_(file) {
   data_offset_ = L.data_offset;
   start_frame_ = L.start_frame;
   sample_rate_ = L.sample_rate;
-  times_ = std::move(L.times);
+  times_offset_ = L.times_offset;
+}
+
+const std::vector<float>& PointCacheReader::times() {
+  if (times_read_ || times_offset_ == 0) return times_;
+  // float32 times cannot increase over more frames evenly spaced; more would only fill memory
+  constexpr int kMaxTimes = 1 << 24;
+  if (frames_ > kMaxTimes)
+    fail(file_, 0, "the times of " + std::to_string(frames_) + " frames are more than mbi reads (" +
+                       std::to_string(kMaxTimes) + ")");
+  std::string b(4 * static_cast<std::size_t>(frames_), '\0');
+  if (std::fseek(in_, static_cast<long>(times_offset_), SEEK_SET) != 0 || std::fread(b.data(), 1, b.size(), in_) != b.size())
+    fail(file_, 0, "frame times: file truncated (it changed since it was opened)");
+  times_.resize(static_cast<std::size_t>(frames_));
+  for (std::size_t k = 0; k < times_.size(); ++k) {
+    times_[k] = detail::load_bytes<float>(b.data() + 4 * k, std::endian::native == std::endian::little);
+    if (!std::isfinite(times_[k])) fail(file_, 0, "time of frame " + std::to_string(k) + ": not finite");
+  }
+  times_read_ = true;
+  return times_;
 }
 
 PointCacheReader::~PointCacheReader() {

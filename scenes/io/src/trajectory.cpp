@@ -17,8 +17,9 @@ namespace {
 
 bool has_glob_chars(const std::string& s) { return s.find_first_of("*?[") != std::string::npos; }
 
-// The printf pattern's parts: prefix, digits (0: "%d"), suffix; nullopt when `spec` has no '%'.
-// "%%" is a percent sign; anything else after '%' but d / 0Nd is refused.
+// The printf pattern's parts: prefix, digits (0: "%d"), suffix; nullopt when `spec` has no
+// conversion (%d, %Nd) at all: "100%.obj" is a plain name. In a pattern "%%" is a percent sign
+// and anything else after '%' but d / 0Nd is refused.
 struct Pattern {
   std::string prefix, suffix;
   int digits = 0;
@@ -29,7 +30,7 @@ struct Pattern {
   }
 };
 std::optional<Pattern> printf_pattern(const std::string& spec) {
-  if (spec.find('%') == std::string::npos) return std::nullopt;
+  if (!is_numbered_name(spec)) return std::nullopt;
   Pattern p;
   std::string* part = &p.prefix;
   bool found = false;
@@ -63,6 +64,13 @@ std::optional<Pattern> printf_pattern(const std::string& spec) {
 bool is_file(const path& p) {
   std::error_code ec;
   return std::filesystem::is_regular_file(p, ec);
+}
+
+// What a frame named `p` is, when it is not a regular file.
+std::string not_a_file(const path& p) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(p, ec)) return "is a folder, not a file of positions";
+  return std::filesystem::exists(p, ec) ? "is not a regular file" : "does not exist";
 }
 
 // Names with runs of digits compared as numbers: x_2 before x_10.
@@ -107,6 +115,20 @@ std::vector<path> glob_files(const std::string& spec) {
 
 }  // namespace
 
+bool is_numbered_name(const std::string& name) {
+  for (std::size_t i = 0; i < name.size(); ++i) {
+    if (name[i] != '%') continue;
+    if (i + 1 < name.size() && name[i + 1] == '%') {
+      ++i;
+      continue;
+    }
+    std::size_t j = i + 1;
+    while (j < name.size() && std::isdigit(static_cast<unsigned char>(name[j]))) ++j;
+    if (j < name.size() && name[j] == 'd') return true;
+  }
+  return false;
+}
+
 path numbered_file(const std::string& pattern, int k) {
   const std::optional<Pattern> p = printf_pattern(pattern);
   if (!p) fail(pattern, 0, "a numbered name takes one %d or %0Nd (e.g. out_%04d.obj)");
@@ -123,6 +145,8 @@ struct Trajectory::Impl {
   std::optional<std::pair<float, float>> pc2;
 
   void open_files(std::vector<path> f) {
+    for (std::size_t k = 0; k < f.size(); ++k)
+      if (!is_file(f[k])) fail(f[k], 0, "frame " + std::to_string(k) + " of " + spec + ": " + not_a_file(f[k]));
     for (const path& p : f) {
       const FileFormat* fmt = file_format(p);
       if (fmt && fmt->kind != FileKind::control && fmt->kind != FileKind::points)
@@ -163,7 +187,6 @@ Trajectory::Trajectory(const std::string& spec) : impl_(std::make_unique<Impl>()
     I.open_files(glob_files(spec));
   } else if (ext == ".pc2" || ext == ".mdd") {
     I.cache = std::make_unique<PointCacheReader>(spec);
-    for (float t : I.cache->times()) I.times.push_back(t);
     if (ext == ".pc2") I.pc2 = std::pair{I.cache->start_frame(), I.cache->sample_rate()};
   } else if (ext == ".pvd") {
     I.open_pvd(spec);
@@ -179,7 +202,7 @@ Trajectory& Trajectory::operator=(Trajectory&&) noexcept = default;
 
 bool Trajectory::names_trajectory(const std::string& spec) {
   const std::string ext = lower_extension(spec);
-  return ext == ".pc2" || ext == ".mdd" || ext == ".pvd" || spec.find('%') != std::string::npos ||
+  return ext == ".pc2" || ext == ".mdd" || ext == ".pvd" || is_numbered_name(spec) ||
          has_glob_chars(path(spec).filename().string());
 }
 
@@ -203,7 +226,16 @@ std::string Trajectory::where(int k) const {
   return "frame " + std::to_string(k) + ": " + I.files.at(static_cast<std::size_t>(k)).string();
 }
 
-const std::vector<double>& Trajectory::times() const { return impl_->times; }
+const std::vector<double>& Trajectory::times() const {
+  Impl& I = *impl_;
+  if (I.cache && I.cache->has_times() && I.times.empty())
+    for (float t : I.cache->times()) I.times.push_back(t);
+  return I.times;
+}
+
+bool Trajectory::has_times() const { return !impl_->times.empty() || (impl_->cache && impl_->cache->has_times()); }
+
+const std::string& Trajectory::spec() const { return impl_->spec; }
 
 std::optional<std::pair<float, float>> Trajectory::pc2_timing() const { return impl_->pc2; }
 

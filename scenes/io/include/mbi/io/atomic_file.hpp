@@ -77,6 +77,11 @@ void check_file_name(const std::filesystem::path& target, const std::string& wha
 /// (left by a killed process); returns how many were removed. Symbolic links are never followed.
 int remove_stale_temporaries(const std::filesystem::path& dir);
 
+/// The target a staging file of a live OutputSet stands for, else `p` itself: writers that put
+/// a name into the file (a glTF's root node) take it from here, never from the staging name, so
+/// the same inputs give the same bytes.
+std::filesystem::path output_name(const std::filesystem::path& p);
+
 /// The identity of an existing file (st_dev, st_ino after following symbolic links); nullopt
 /// when it does not exist. Two spellings, hard links or symbolic links of one file compare equal.
 struct FileId {
@@ -117,6 +122,8 @@ class OutputSet {
   /// Runs body(staging(i)); an IoError it throws names target(i) instead of the staging file
   /// (a full disk names the user's file, not an internal one).
   void write(std::size_t i, const std::function<void(const std::filesystem::path&)>& body) const;
+  /// `what` with every staging file's name replaced by its target's (for messages).
+  std::string name_targets(std::string what) const;
   const std::filesystem::path& target(std::size_t i) const { return entries_.at(i).target; }
   /// Renames every staging file over its target. Throws IoError if one is missing (not written).
   void commit();

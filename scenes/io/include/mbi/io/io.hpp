@@ -368,8 +368,10 @@ class PointCacheReader {
   /// PC2: the header's start frame and sample rate; MDD: 0 and 1.
   float start_frame() const { return start_frame_; }
   float sample_rate() const { return sample_rate_; }
-  /// MDD: each frame's time (s); PC2: empty.
-  const std::vector<float>& times() const { return times_; }
+  /// MDD: each frame's time (s), read on the first call (IoError naming the file past 2^24
+  /// frames); PC2: empty.
+  const std::vector<float>& times();
+  bool has_times() const { return times_offset_ > 0; }
   /// Frame k (0-based), points() x 3. Throws IoError "<file>: frame k: point i: ..." on a
   /// non-finite coordinate or a file that changed under us.
   Eigen::MatrixXd frame(int k);
@@ -381,7 +383,9 @@ class PointCacheReader {
   bool big_endian_ = false;
   unsigned long long data_offset_ = 0;
   float start_frame_ = 0.0f, sample_rate_ = 1.0f;
+  unsigned long long times_offset_ = 0;  // MDD: where the times are
   std::vector<float> times_;
+  bool times_read_ = false;
   std::string buffer_;
 };
 
@@ -403,6 +407,9 @@ std::vector<PvdEntry> read_pvd(const std::filesystem::path& file);
 /// The file of number k of a printf pattern ("out/m_%04d.obj" -> "out/m_0007.obj"): one %d or
 /// %0Nd (N <= 12) in the file name, %% for a percent sign. Throws IoError on any other pattern.
 std::filesystem::path numbered_file(const std::string& pattern, int k);
+/// Whether `name` is a printf pattern: it has a %d or %0Nd; a '%' otherwise ("100%.obj") is
+/// part of a plain name.
+bool is_numbered_name(const std::string& name);
 
 /// The positions of a control mesh's nodes over time, read one frame at a time, from
 ///  - a PC2 or MDD point cache (one row per node),
@@ -429,8 +436,13 @@ class Trajectory {
   Eigen::MatrixXd read(int k);
   /// Where frame k comes from, for messages: "x_0007.vtk" or "traj.pc2: frame 7".
   std::string where(int k) const;
-  /// Frame times (s) from an MDD or a .pvd; empty otherwise.
+  /// Frame times (s) from an MDD or a .pvd; empty otherwise. An MDD's are read on the first
+  /// call (IoError naming the file past 2^24 frames: memory for them is not taken up front).
   const std::vector<double>& times() const;
+  /// Whether it has frame times (an MDD or a .pvd), without reading them.
+  bool has_times() const;
+  /// The trajectory as given.
+  const std::string& spec() const;
   /// A PC2's start frame and sample rate (frames), when read from one.
   std::optional<std::pair<float, float>> pc2_timing() const;
   /// Every file it reads (to keep them from being outputs).
