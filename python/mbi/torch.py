@@ -9,7 +9,9 @@ positions X through Deformer.vjp (exact: the positions are linear in X for every
     loss.backward()                                # X.grad = dL/dX
 
 Computed in float64 on the CPU: X of another dtype or device is converted, the result and the
-gradient are converted back. Importing this module needs torch; importing mbi does not.
+gradient are converted back. Tensors of any strides are taken (expand()ed, t()ed, the
+zero-stride gradient of loss.sum()): mbi reads them as numpy views and copies what it cannot
+read in place. Importing this module needs torch; importing mbi does not.
 """
 import torch
 
@@ -22,16 +24,20 @@ class DeformFunction(torch.autograd.Function):
     @staticmethod
     def forward(ctx, X, deformer):
         ctx.deformer = deformer
-        x = X.detach().to("cpu", torch.float64).numpy()
-        positions = torch.from_numpy(deformer.deform(x))
+        positions = torch.from_numpy(deformer.deform(_as_numpy(X)))
         return positions.to(X.device, X.dtype)
 
     @staticmethod
     @torch.autograd.function.once_differentiable
     def backward(ctx, grad):
-        g = grad.detach().to("cpu", torch.float64).numpy()
-        dX = torch.from_numpy(ctx.deformer.vjp(g))
+        dX = torch.from_numpy(ctx.deformer.vjp(_as_numpy(grad)))
         return dX.to(grad.device, grad.dtype), None
+
+
+def _as_numpy(t):
+    """t as a float64 numpy view on the CPU (its strides kept; a lazily negated or conjugated
+    tensor materialised, which numpy cannot view)."""
+    return t.detach().to("cpu", torch.float64).resolve_conj().resolve_neg().numpy()
 
 
 def deform(deformer, X):

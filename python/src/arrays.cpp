@@ -5,6 +5,7 @@
 #include <climits>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <type_traits>
 
 namespace mbi::python {
@@ -21,19 +22,16 @@ std::string shape_of(const py::array& a) {
   return s + (a.ndim() == 1 ? ",)" : ")");
 }
 
-// "(rows, cols)", or "(frames, rows / frames, cols)" for frames > 0
-std::string shape_text(Eigen::Index rows, Eigen::Index cols, Eigen::Index frames) {
-  if (frames > 0) return "(" + std::to_string(frames) + ", " + std::to_string(rows / frames) + ", " + std::to_string(cols) + ")";
-  return "(" + std::to_string(rows) + ", " + std::to_string(cols) + ")";
+std::string shape_text(const std::vector<py::ssize_t>& shape) {
+  std::string s = "(";
+  for (size_t k = 0; k < shape.size(); ++k) s += (k ? ", " : "") + std::to_string(shape[k]);
+  return s + ")";
 }
 
-// out= must be (rows, cols), or (frames, rows / frames, cols) for frames > 0 (no strings built
-// unless it is not: this runs every frame)
-void check_output_shape(const py::array& a, const char* name, Eigen::Index rows, Eigen::Index cols,
-                        Eigen::Index frames) {
-  const bool ok = frames > 0 ? a.ndim() == 3 && a.shape(0) == frames && a.shape(1) == rows / frames && a.shape(2) == cols
-                             : a.ndim() == 2 && a.shape(0) == rows && a.shape(1) == cols;
-  if (!ok) throw Error(std::string(name) + " must have shape " + shape_text(rows, cols, frames) + ", got " + shape_of(a));
+// The shape of an output: (rows, cols), or (frames, rows, cols) for a batch.
+std::vector<py::ssize_t> output_shape(Eigen::Index rows, Eigen::Index cols, Frames frames) {
+  if (frames.batch) return {frames.count, rows, cols};
+  return {rows, cols};
 }
 
 std::string dtype_of(const py::array& a) { return py::str(a.dtype()).cast<std::string>(); }
@@ -56,14 +54,6 @@ void check_shape(const py::array& a, const char* name, Shape want, py::ssize_t f
                 shape_text(want).substr(1) + ", got " + shape_of(a));
 }
 
-// float64, native byte order, strides that are non-negative multiples of 8: readable in place
-bool float64_in_place(const py::array& a) {
-  if (!py::isinstance<py::array_t<double>>(a) || a.dtype().kind() != 'f') return false;
-  for (py::ssize_t k = 0; k < a.ndim(); ++k)
-    if (a.strides(k) < 0 || a.strides(k) % static_cast<py::ssize_t>(sizeof(double)) != 0) return false;
-  return true;
-}
-
 void check_float_dtype(const py::array& a, const char* name) {
   if (a.dtype().kind() != 'f')
     throw Error(std::string(name) + " must be a float array (float64), got dtype " + dtype_of(a));
@@ -77,7 +67,97 @@ void check_finite(const ConstMap& A, const char* name) {
                     std::to_string(A(i, c)) + ")");
 }
 
-Eigen::Index stride_of(const py::array& a, py::ssize_t axis) { return a.strides(axis) / static_cast<py::ssize_t>(sizeof(double)); }
+bool aligned(const py::array& a) {
+  return (py::detail::array_proxy(a.ptr())->flags & py::detail::npy_api::NPY_ARRAY_ALIGNED_) != 0;
+}
+
+// A 2D array, or a 3D batch seen as (frames rows) x cols, as rows, cols and byte strides;
+// merged is false when a batch's frames are not one row stride apart. The stride of an axis of
+// one element or none is never used.
+struct Layout {
+  Eigen::Index rows, cols;
+  py::ssize_t row_stride, col_stride;
+  bool merged = true;
+};
+
+Layout layout_of(const py::array& a) {
+  const py::ssize_t ax = a.ndim() - 2;
+  Layout l{a.shape(ax) * (ax ? a.shape(0) : 1), a.shape(ax + 1), a.strides(ax), a.strides(ax + 1)};
+  if (ax && a.shape(0) > 1) {
+    if (a.shape(1) <= 1) l.row_stride = a.strides(0);
+    else l.merged = a.strides(0) == a.shape(1) * a.strides(1);
+  }
+  return l;
+}
+
+// Whether Eigen can view the layout: every stride that is used a positive multiple of the item
+// (Eigen::Ref reads a zero stride as "contiguous"; negative ones are left to numpy).
+bool mappable(const Layout& l, py::ssize_t item) {
+  auto ok = [item](Eigen::Index extent, py::ssize_t stride) { return extent <= 1 || (stride > 0 && stride % item == 0); };
+  return l.merged && ok(l.rows, l.row_stride) && ok(l.cols, l.col_stride);
+}
+
+// Eigen's (outer, inner) strides in items of a mappable layout (1 where unused).
+Stride eigen_stride(const Layout& l, py::ssize_t item) {
+  return Stride(l.cols > 1 ? l.col_stride / item : 1, l.rows > 1 ? l.row_stride / item : 1);
+}
+
+// a as a float64 map: in place when native float64, aligned and mappable, else a C-order copy
+// (zero or negative strides, frames apart, other float types and byte orders).
+Input read_floats(const py::array& a, const char* name, bool finite) {
+  py::array data = a;
+  if (!py::isinstance<py::array_t<double>>(a) || !aligned(a) || !mappable(layout_of(a), sizeof(double)))
+    data = a.attr("astype")("float64", py::arg("order") = "C");
+  const Layout l = layout_of(data);
+  Input in{name, a, data, ConstMap(static_cast<const double*>(data.data()), l.rows, l.cols, eigen_stride(l, sizeof(double)))};
+  if (finite) check_finite(in.map, name);
+  return in;
+}
+
+// Whether two elements of a share memory: sorted by stride, each axis must step past all the
+// elements of the axes below it (a sufficient test; a zero stride fails it).
+bool overlaps_itself(const py::array& a) {
+  std::vector<std::pair<py::ssize_t, py::ssize_t>> axes;  // |stride|, extent
+  for (py::ssize_t k = 0; k < a.ndim(); ++k) {
+    if (a.shape(k) == 0) return false;
+    if (a.shape(k) > 1) axes.emplace_back(std::abs(a.strides(k)), a.shape(k));
+  }
+  std::sort(axes.begin(), axes.end());
+  py::ssize_t span = a.itemsize();
+  for (const auto& [stride, extent] : axes) {
+    if (stride < span) return true;
+    span += stride * (extent - 1);
+  }
+  return false;
+}
+
+// out= of `shape` and float dtype of `itemsize` bytes, writable, not overlapping itself.
+py::array checked_out(const py::handle& out, const char* name, const std::vector<py::ssize_t>& shape,
+                      py::ssize_t itemsize) {
+  if (!py::isinstance<py::array>(out)) throw Error(std::string(name) + " must be a numpy array");
+  py::array a = py::reinterpret_borrow<py::array>(out);
+  bool same = a.ndim() == static_cast<py::ssize_t>(shape.size());
+  for (py::ssize_t k = 0; same && k < a.ndim(); ++k) same = a.shape(k) == shape[static_cast<size_t>(k)];
+  if (!same) throw Error(std::string(name) + " must have shape " + shape_text(shape) + ", got " + shape_of(a));
+  if (a.dtype().kind() != 'f' || a.itemsize() != itemsize)
+    throw Error(std::string(name) + " must be a " + (itemsize == 4 ? "float32" : "float64") + " array, got dtype " +
+                dtype_of(a));
+  if (!a.writeable()) throw Error(std::string(name) + " is read-only");
+  if (overlaps_itself(a))
+    throw Error(std::string(name) + " overlaps itself (a zero stride, or rows that share memory): it cannot be written");
+  return a;
+}
+
+// [lo, hi) of the bytes a spans; empty for an empty array
+std::pair<std::uintptr_t, std::uintptr_t> extent(const py::array& a) {
+  auto lo = reinterpret_cast<std::uintptr_t>(a.data()), hi = lo;
+  for (py::ssize_t k = 0; k < a.ndim(); ++k) {
+    if (a.shape(k) == 0) return {0, 0};
+    const py::ssize_t span = (a.shape(k) - 1) * a.strides(k);
+    (span < 0 ? lo : hi) += static_cast<std::uintptr_t>(span);  // modular: adds a negative span
+  }
+  return {lo, hi + static_cast<std::uintptr_t>(a.itemsize())};
+}
 
 }  // namespace
 
@@ -87,17 +167,13 @@ Input float_matrix(const py::handle& obj, const char* name, Shape shape, bool fi
     throw Error(std::string(name) + " must be a 2D array " + shape_text(shape) + ", got shape " + shape_of(a));
   check_shape(a, name, shape, 0);
   check_float_dtype(a, name);
-  if (!float64_in_place(a)) a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
-  Input in{a, ConstMap(static_cast<const double*>(a.data()), a.shape(0), a.shape(1),
-                       Stride(stride_of(a, 1), stride_of(a, 0)))};
-  if (finite) check_finite(in.map, name);
-  return in;
+  return read_floats(a, name, finite);
 }
 
-Input float_batch(const py::handle& obj, const char* name, Shape shape, Eigen::Index& frames, bool finite) {
+Input float_batch(const py::handle& obj, const char* name, Shape shape, Frames& frames, bool finite) {
   py::array a = as_array(obj, name);
   if (a.ndim() == 2) {
-    frames = 0;
+    frames = {};
     return float_matrix(a, name, shape, finite);
   }
   if (a.ndim() != 3)
@@ -105,14 +181,8 @@ Input float_batch(const py::handle& obj, const char* name, Shape shape, Eigen::I
                 shape_text(shape).substr(1) + ", got shape " + shape_of(a));
   check_shape(a, name, shape, 1);
   check_float_dtype(a, name);
-  frames = a.shape(0);
-  // frames stacked as (frames n) x d rows: frame k + 1 must start where frame k's rows would go on
-  const bool stacked = frames <= 1 || a.strides(0) == a.shape(1) * a.strides(1);
-  if (!float64_in_place(a) || !stacked) a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
-  Input in{a, ConstMap(static_cast<const double*>(a.data()), a.shape(0) * a.shape(1), a.shape(2),
-                       Stride(stride_of(a, 2), stride_of(a, 1)))};
-  if (finite) check_finite(in.map, name);
-  return in;
+  frames = {a.shape(0), true};
+  return read_floats(a, name, finite);
 }
 
 Eigen::VectorXd float_vector(const py::handle& obj, const char* name, Eigen::Index size) {
@@ -167,39 +237,42 @@ Mesh control_mesh(const py::handle& U, const py::handle& T) {
   return {u, index_matrix(T, "T", {-1, u.map.cols() + 1})};
 }
 
-Output float_output(const py::handle& out, const char* name, Eigen::Index rows, Eigen::Index cols, Eigen::Index frames) {
-  const Eigen::Index per = frames > 0 ? rows / frames : rows;
+template <class MapType>
+py::array OutputOf<MapType>::finish() const {
+  if (scratch) py::module_::import("numpy").attr("copyto")(array, scratch);
+  return array;
+}
+template struct OutputOf<Map>;
+template struct OutputOf<FloatMap>;
+
+Output float_output(const py::handle& out, const char* name, Eigen::Index rows, Eigen::Index cols, Frames frames) {
+  const std::vector<py::ssize_t> shape = output_shape(rows, cols, frames);
+  const Eigen::Index total = frames.count * rows;
+  const Stride c_order(1, std::max<Eigen::Index>(cols, 1));
   if (out.is_none()) {
-    py::array_t<double> a = frames > 0 ? py::array_t<double>({frames, per, cols}) : py::array_t<double>({rows, cols});
-    return {a, Map(a.mutable_data(), rows, cols, Stride(1, cols))};
+    py::array_t<double> a(shape);
+    return {name, a, py::object(), Map(a.mutable_data(), total, cols, c_order)};
   }
-  if (!py::isinstance<py::array>(out)) throw Error(std::string(name) + " must be a numpy array");
-  py::array a = py::reinterpret_borrow<py::array>(out);
-  check_output_shape(a, name, rows, cols, frames);
-  if (!float64_in_place(a))
-    throw Error(std::string(name) + " must be a float64 array with positive strides, got dtype " + dtype_of(a));
-  if (!a.writeable()) throw Error(std::string(name) + " is read-only");
-  const py::ssize_t ax = frames > 0 ? 1 : 0;
-  if (frames > 1 && a.strides(0) != a.shape(1) * a.strides(1))
-    throw Error(std::string(name) + ": its frames must follow one another (a C-order array, or a slice of frames)");
-  return {a, Map(static_cast<double*>(a.mutable_data()), rows, cols, Stride(stride_of(a, ax + 1), stride_of(a, ax)))};
+  py::array a = checked_out(out, name, shape, sizeof(double));
+  const Layout l = layout_of(a);
+  if (py::isinstance<py::array_t<double>>(a) && aligned(a) && mappable(l, sizeof(double)))
+    return {name, a, py::object(), Map(static_cast<double*>(a.mutable_data()), total, cols, eigen_stride(l, sizeof(double)))};
+  py::array_t<double> scratch(shape);
+  return {name, a, scratch, Map(scratch.mutable_data(), total, cols, c_order)};
 }
 
-std::pair<py::array, FloatMap> float32_output(const py::handle& out, const char* name, Eigen::Index rows,
-                                              Eigen::Index cols, Eigen::Index frames) {
-  const Eigen::Index per = frames > 0 ? rows / frames : rows;
+Output32 float32_output(const py::handle& out, const char* name, Eigen::Index rows, Eigen::Index cols, Frames frames) {
+  const std::vector<py::ssize_t> shape = output_shape(rows, cols, frames);
+  const Eigen::Index total = frames.count * rows;
   if (out.is_none()) {
-    py::array_t<float> a = frames > 0 ? py::array_t<float>({frames, per, cols}) : py::array_t<float>({rows, cols});
-    return {a, FloatMap(a.mutable_data(), rows, cols)};
+    py::array_t<float> a(shape);
+    return {name, a, py::object(), FloatMap(a.mutable_data(), total, cols)};
   }
-  if (!py::isinstance<py::array>(out)) throw Error(std::string(name) + " must be a numpy array");
-  py::array a = py::reinterpret_borrow<py::array>(out);
-  check_output_shape(a, name, rows, cols, frames);
-  if (!py::isinstance<py::array_t<float>>(a) || a.dtype().kind() != 'f')
-    throw Error(std::string(name) + " must be a float32 array, got dtype " + dtype_of(a));
-  if (!(a.flags() & py::array::c_style)) throw Error(std::string(name) + " must be C-contiguous");
-  if (!a.writeable()) throw Error(std::string(name) + " is read-only");
-  return {a, FloatMap(static_cast<float*>(a.mutable_data()), rows, cols)};
+  py::array a = checked_out(out, name, shape, sizeof(float));
+  if (py::isinstance<py::array_t<float>>(a) && aligned(a) && (a.flags() & py::array::c_style))
+    return {name, a, py::object(), FloatMap(static_cast<float*>(a.mutable_data()), total, cols)};
+  py::array_t<float> scratch(shape);
+  return {name, a, scratch, FloatMap(scratch.mutable_data(), total, cols)};
 }
 
 py::array readonly_view(const py::dtype& dtype, std::vector<py::ssize_t> shape, std::vector<py::ssize_t> strides,
@@ -242,19 +315,17 @@ py::array to_numpy_vector(const Eigen::Ref<const Eigen::VectorXd>& v) {
   return a;
 }
 
-void check_no_overlap(const py::array& out, const py::array& in, const char* out_name, const char* in_name) {
-  auto extent = [](const py::array& a) {
-    auto lo = reinterpret_cast<std::uintptr_t>(a.data()), hi = lo;
-    for (py::ssize_t k = 0; k < a.ndim(); ++k) {
-      if (a.shape(k) == 0) return std::pair<std::uintptr_t, std::uintptr_t>{0, 0};
-      const py::ssize_t span = (a.shape(k) - 1) * a.strides(k);
-      (span < 0 ? lo : hi) += span;
-    }
-    return std::pair<std::uintptr_t, std::uintptr_t>{lo, hi + static_cast<std::uintptr_t>(a.itemsize())};
-  };
+void check_disjoint(const py::array& out, const char* out_name, const py::array& other, const char* other_name) {
   const auto [a0, a1] = extent(out);
-  const auto [b0, b1] = extent(in);
-  if (a0 < b1 && b0 < a1) throw Error(std::string(out_name) + " shares memory with " + in_name);
+  const auto [b0, b1] = extent(other);
+  if (!(a0 < b1 && b0 < a1)) return;
+  // their spans meet: numpy decides whether an element is shared (interleaved rows are not)
+  bool shared = true;
+  try {
+    shared = py::module_::import("numpy").attr("shares_memory")(out, other, py::arg("max_work") = 1 << 20).cast<bool>();
+  } catch (py::error_already_set&) {  // numpy.TooHardError: taken as shared
+  }
+  if (shared) throw Error(std::string(out_name) + " shares memory with " + other_name);
 }
 
 }  // namespace mbi::python

@@ -1,15 +1,18 @@
 #pragma once
 // numpy arrays in and out of the C++ libraries: every check of a shape, dtype, layout and value
 // that the bindings make, with messages that name the argument. Inputs are read where they are
-// (float64, any strides) or converted once (other float types, integer indices); outputs are
-// written where the caller wants them (out=) or into a new C-order array. Every failure throws
-// mbi::Error, which Python sees as mbi.Error (a ValueError).
+// (float64 with positive strides) or copied once (any other layout: zero and negative strides,
+// other float types, integer indices); outputs are written where the caller wants them (out=,
+// through a scratch copy when its layout cannot be mapped) or into a new C-order array. Every
+// failure throws mbi::Error, which Python sees as mbi.Error (a ValueError). Eigen must never see
+// a zero stride: Eigen::Ref reads a stride of 0 as "contiguous".
 #include <mbi/error.hpp>
 
 #include <Eigen/Core>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <initializer_list>
 #include <string>
 #include <utility>
 #include <vector>
@@ -24,16 +27,19 @@ using Map = Eigen::Map<Eigen::MatrixXd, 0, Stride>;
 using FloatMap = Eigen::Map<Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>;
 
 /// A float64 matrix read in place: `array` keeps the memory alive (the caller's array, or the
-/// converted copy), `map` views it (rows x cols, any strides).
+/// converted copy), `map` views it (rows x cols, strides > 0). `source` is the caller's array
+/// as given (what an output must not overlap), `name` the argument's name.
 struct Input {
-  py::array array;
-  ConstMap map{nullptr, 0, 0, Stride(0, 0)};
+  const char* name = "";
+  py::array source, array;
+  ConstMap map{nullptr, 0, 0, Stride(1, 1)};
 };
 
-/// A float64 matrix to write: the caller's out= array or a new C-order one.
-struct Output {
-  py::array array;
-  Map map{nullptr, 0, 0, Stride(0, 0)};
+/// Frames of a batch: a (count, rows, cols) array seen as (count rows) x cols, or (batch false)
+/// one (rows, cols) array, count 1.
+struct Frames {
+  Eigen::Index count = 1;
+  bool batch = false;
 };
 
 /// Shape wanted for an argument: -1 = any.
@@ -41,13 +47,14 @@ struct Shape {
   Eigen::Index rows = -1, cols = -1;
 };
 
-/// A 2D float array (float64 read in place; float16/32 and long double converted), of `shape`,
-/// finite unless finite = false. name: the argument's name in messages.
+/// A 2D float array (float64 read in place when its strides are positive and it is aligned;
+/// any other layout, float16/32, long double and other byte orders converted into a C-order
+/// copy), of `shape`, finite unless finite = false. name: the argument's name in messages.
 Input float_matrix(const py::handle& obj, const char* name, Shape shape = {}, bool finite = true);
 
-/// A 2D float array (n x d) or a batch of them (frames x n x d), as (frames n) x d rows. frames
-/// receives the number of frames, or 0 when obj is 2D.
-Input float_batch(const py::handle& obj, const char* name, Shape shape, Eigen::Index& frames, bool finite = true);
+/// A 2D float array (n x d) or a batch of them (frames x n x d, frames >= 0), as (frames n) x d
+/// rows, read as float_matrix reads; frames receives the batch's layout.
+Input float_batch(const py::handle& obj, const char* name, Shape shape, Frames& frames, bool finite = true);
 
 /// A 2D integer array of `shape` (any signed or unsigned integer type, checked to fit in int32).
 Eigen::MatrixXi index_matrix(const py::handle& obj, const char* name, Shape shape = {});
@@ -67,16 +74,44 @@ struct Mesh {
 };
 Mesh control_mesh(const py::handle& U, const py::handle& T);
 
-/// An output of rows x cols float64: `out` (a writable float64 numpy array of that shape, any
-/// strides) or, when out is None, a new C-order array. frames > 0: a (frames, rows/frames, cols)
-/// array seen as rows x cols.
-Output float_output(const py::handle& out, const char* name, Eigen::Index rows, Eigen::Index cols,
-                    Eigen::Index frames = 0);
+/// An output to write: `array` is what the call returns (the caller's out= or a new C-order
+/// array); `map` views it, or, when out= is a layout that cannot be mapped (negative strides,
+/// frames apart, unaligned, another byte order, for float32 anything but C order), a C-order
+/// `scratch` array that finish() copies into out=.
+template <class MapType>
+struct OutputOf {
+  const char* name;
+  py::array array;
+  py::object scratch;  // null when map views array
+  MapType map;
+  /// The array to return, holding what was written into map.
+  py::array finish() const;
+};
+using Output = OutputOf<Map>;
+using Output32 = OutputOf<FloatMap>;
 
-/// An output of rows x cols float32, C-contiguous (the fast kernel's interleaved layout); frames
-/// as in float_output.
-std::pair<py::array, FloatMap> float32_output(const py::handle& out, const char* name, Eigen::Index rows,
-                                              Eigen::Index cols, Eigen::Index frames = 0);
+/// A float64 output of rows x cols per frame (frames as the batch read: (count, rows, cols)
+/// when frames.batch): `out` or, when out is None, a new C-order array. Refused with
+/// mbi.Error, before anything is written: out= not a numpy array, of another shape or dtype,
+/// read-only, or overlapping itself (a zero stride, rows that share memory).
+Output float_output(const py::handle& out, const char* name, Eigen::Index rows, Eigen::Index cols,
+                    Frames frames = {});
+
+/// The same in float32, mapped as C-order rows (the fast kernel's interleaved layout).
+Output32 float32_output(const py::handle& out, const char* name, Eigen::Index rows, Eigen::Index cols,
+                        Frames frames = {});
+
+/// Throws unless `out` shares no memory with `other` (numpy.shares_memory; an output written
+/// while its input is read, or two outputs of one call).
+void check_disjoint(const py::array& out, const char* out_name, const py::array& other, const char* other_name);
+template <class MapType>
+void check_disjoint(const OutputOf<MapType>& out, std::initializer_list<const Input*> inputs) {
+  for (const Input* in : inputs) check_disjoint(out.array, out.name, in->source, in->name);
+}
+template <class A, class B>
+void check_disjoint(const OutputOf<A>& a, const OutputOf<B>& b) {
+  check_disjoint(a.array, a.name, b.array, b.name);
+}
 
 /// A numpy view of memory owned by `owner` (read-only: changing it would change the owner).
 py::array readonly_view(const py::dtype& dtype, std::vector<py::ssize_t> shape,
@@ -93,8 +128,5 @@ py::array to_numpy(Eigen::MatrixXd&& A);
 py::array to_numpy(const Eigen::Ref<const Eigen::MatrixXd>& A);
 py::array to_numpy(const Eigen::MatrixXi& A);
 py::array to_numpy_vector(const Eigen::Ref<const Eigen::VectorXd>& v);
-
-/// Throws unless `out` and `in` share no memory (an output written while its input is read).
-void check_no_overlap(const py::array& out, const py::array& in, const char* out_name, const char* in_name);
 
 }  // namespace mbi::python

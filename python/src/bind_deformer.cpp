@@ -42,55 +42,60 @@ bool wants_float32(const py::object& out, const py::object& dtype) {
   throw Error("dtype must be float64 (exact) or float32 (the fast kernel), not " + py::str(dt).cast<std::string>());
 }
 
+// The fast kernel's float32 positions (and normals) of each pose of x.
+py::object deform_float(Bound& b, const Input& x, Frames frames, const py::object& out, bool normals,
+                        const py::object& normals_out) {
+  const Eigen::Index n = b.object.vertices(), p = b.object.points(), d = b.object.dim();
+  Output32 pos = float32_output(out, "out", p, d, frames);
+  check_disjoint(pos, {&x});
+  if (!normals) {
+    b.run([&](Deformer& e) {
+      for (Eigen::Index k = 0; k < frames.count; ++k)
+        e.deform_float(x.map.middleRows(k * n, n), pos.map.middleRows(k * p, p));
+    });
+    return pos.finish();
+  }
+  Output32 nrm = float32_output(normals_out, "normals_out", p, d, frames);
+  check_disjoint(nrm, {&x});
+  check_disjoint(pos, nrm);
+  b.run([&](Deformer& e) {
+    for (Eigen::Index k = 0; k < frames.count; ++k)
+      e.deform_float(x.map.middleRows(k * n, n), pos.map.middleRows(k * p, p), nrm.map.middleRows(k * p, p));
+  });
+  return py::make_tuple(pos.finish(), nrm.finish());
+}
+
 py::object deform(Bound& b, const py::object& X, const py::object& out, bool normals,
                   const py::object& normals_out, const py::object& dtype) {
-  const Deformer& D = b.object;
-  const Eigen::Index n = D.vertices(), p = D.points(), d = D.dim();
-  Eigen::Index frames = 0;
+  const Eigen::Index n = b.object.vertices(), p = b.object.points(), d = b.object.dim();
+  Frames frames;
   const Input x = float_batch(X, "X", {n, d}, frames);
-  const Eigen::Index f = std::max<Eigen::Index>(frames, 1);
   normals = normals || !normals_out.is_none();
-  if (wants_float32(out, dtype)) {
-    auto pos = float32_output(out, "out", f * p, d, frames);
-    if (!normals) {
-      b.run([&](Deformer& e) {
-        for (Eigen::Index k = 0; k < f; ++k) e.deform_float(x.map.middleRows(k * n, n), pos.second.middleRows(k * p, p));
-      });
-      return pos.first;
-    }
-    auto nrm = float32_output(normals_out, "normals_out", f * p, d, frames);
-    check_no_overlap(pos.first, nrm.first, "out", "normals_out");
-    b.run([&](Deformer& e) {
-      for (Eigen::Index k = 0; k < f; ++k)
-        e.deform_float(x.map.middleRows(k * n, n), pos.second.middleRows(k * p, p), nrm.second.middleRows(k * p, p));
-    });
-    return py::make_tuple(pos.first, nrm.first);
-  }
-  Output pos = float_output(out, "out", f * p, d, frames);
-  check_no_overlap(pos.array, x.array, "out", "X");
+  if (wants_float32(out, dtype)) return deform_float(b, x, frames, out, normals, normals_out);
+  Output pos = float_output(out, "out", p, d, frames);
+  check_disjoint(pos, {&x});
   if (!normals) {
     b.run([&](Deformer& e) { e.deform_batch(x.map, pos.map); });
-    return pos.array;
+    return pos.finish();
   }
-  Output nrm = float_output(normals_out, "normals_out", f * p, d, frames);
-  check_no_overlap(pos.array, nrm.array, "out", "normals_out");
-  check_no_overlap(nrm.array, x.array, "normals_out", "X");
+  Output nrm = float_output(normals_out, "normals_out", p, d, frames);
+  check_disjoint(nrm, {&x});
+  check_disjoint(pos, nrm);
   b.run([&](Deformer& e) {
-    for (Eigen::Index k = 0; k < f; ++k)
+    for (Eigen::Index k = 0; k < frames.count; ++k)
       e.deform(x.map.middleRows(k * n, n), pos.map.middleRows(k * p, p), nrm.map.middleRows(k * p, p));
   });
-  return py::make_tuple(pos.array, nrm.array);
+  return py::make_tuple(pos.finish(), nrm.finish());
 }
 
 py::object vjp(Bound& b, const py::object& G, const py::object& out) {
-  const Deformer& D = b.object;
-  const Eigen::Index n = D.vertices(), p = D.points(), d = D.dim();
-  Eigen::Index frames = 0;
+  const Eigen::Index n = b.object.vertices(), p = b.object.points(), d = b.object.dim();
+  Frames frames;
   const Input g = float_batch(G, "G", {p, d}, frames, false);  // the C++ call names a non-finite row
-  Output o = float_output(out, "out", std::max<Eigen::Index>(frames, 1) * n, d, frames);
-  check_no_overlap(o.array, g.array, "out", "G");
+  Output o = float_output(out, "out", n, d, frames);
+  check_disjoint(o, {&g});
   b.run([&](Deformer& e) { e.vjp_batch(g.map, o.map); });
-  return o.array;
+  return o.finish();
 }
 
 }  // namespace

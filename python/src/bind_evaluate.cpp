@@ -23,16 +23,19 @@ py::object evaluate_exact(const py::object& B, const Embedding& emb, const py::o
                           const py::object& rest_normals, const py::object& normals_out, int threads) {
   const Input b = bezier_points_arg(B, emb.dim(), true);
   Output pos = float_output(out, "out", emb.size(), emb.dim());
+  check_disjoint(pos, {&b});
   if (rest_normals.is_none()) {
     if (!normals_out.is_none()) throw Error("normals_out needs rest_normals");
     without_gil([&] { interp::evaluate<double>(b.map, emb, pos.map, threads); });
-    return pos.array;
+    return pos.finish();
   }
   const Input n = float_matrix(rest_normals, "rest_normals", {emb.size(), emb.dim()});
   Output nrm = float_output(normals_out, "normals_out", emb.size(), emb.dim());
-  check_no_overlap(pos.array, nrm.array, "out", "normals_out");
+  check_disjoint(pos, {&n});
+  check_disjoint(nrm, {&b, &n});
+  check_disjoint(pos, nrm);
   without_gil([&] { interp::evaluate<double>(b.map, emb, n.map, pos.map, nrm.map, threads); });
-  return py::make_tuple(pos.array, nrm.array);
+  return py::make_tuple(pos.finish(), nrm.finish());
 }
 
 std::unique_ptr<Fast> make_fast(const Embedding& emb, int threads, const std::string& simd) {
@@ -45,16 +48,18 @@ py::object evaluate_fast(Fast& f, const py::object& B, const py::object& out, bo
   const FastEvaluator& fe = f.object;
   // B is read as given (no NaN check: this is the per-frame kernel; a NaN gives NaN points)
   const Input b = bezier_points_arg(B, fe.dim(), false);
-  auto pos = float32_output(out, "out", fe.size(), fe.dim());
+  Output32 pos = float32_output(out, "out", fe.size(), fe.dim());
+  check_disjoint(pos, {&b});
   Eigen::MatrixXd scratch;
   if (!normals && normals_out.is_none()) {
-    f.run([&](FastEvaluator& e) { e.evaluate(columns(b.map, scratch), pos.second.data(), nullptr); });
-    return pos.first;
+    f.run([&](FastEvaluator& e) { e.evaluate(columns(b.map, scratch), pos.map.data(), nullptr); });
+    return pos.finish();
   }
-  auto nrm = float32_output(normals_out, "normals_out", fe.size(), fe.dim());
-  check_no_overlap(pos.first, nrm.first, "out", "normals_out");
-  f.run([&](FastEvaluator& e) { e.evaluate(columns(b.map, scratch), pos.second.data(), nrm.second.data()); });
-  return py::make_tuple(pos.first, nrm.first);
+  Output32 nrm = float32_output(normals_out, "normals_out", fe.size(), fe.dim());
+  check_disjoint(nrm, {&b});
+  check_disjoint(pos, nrm);
+  f.run([&](FastEvaluator& e) { e.evaluate(columns(b.map, scratch), pos.map.data(), nrm.map.data()); });
+  return py::make_tuple(pos.finish(), nrm.finish());
 }
 
 void bind_fast_evaluator(py::module_& m) {
@@ -74,7 +79,7 @@ void bind_fast_evaluator(py::module_& m) {
       .def("evaluate", &evaluate_fast, "B"_a, py::kw_only(), "out"_a = py::none(), "normals"_a = false,
            "normals_out"_a = py::none(),
            "Positions (p, d) float32 from Bezier points B ((m K), d); with normals (or normals_out) also the "
-           "mapped unit normals: (positions, normals). out, normals_out: C-contiguous float32 (p, d) arrays to "
+           "mapped unit normals: (positions, normals). out, normals_out: float32 (p, d) arrays to "
            "write into. B is not checked for NaN.")
       .def_property_readonly("dim", [](Fast& f) { return f.object.dim(); })
       .def_property_readonly("size", [](Fast& f) { return f.object.size(); }, "p")

@@ -148,9 +148,9 @@ void bind_control(py::module_& m) {
 py::array stacked(const std::vector<Eigen::MatrixXd>& frames, Eigen::Index rows, Eigen::Index cols) {
   const Eigen::Index f = static_cast<Eigen::Index>(frames.size());
   if (f == 0) return py::array_t<double>(std::vector<py::ssize_t>{0, rows, cols});
-  Output out = float_output(py::none(), "frames", f * rows, cols, f);
+  Output out = float_output(py::none(), "frames", rows, cols, {f, true});
   for (Eigen::Index k = 0; k < f; ++k) out.map.middleRows(k * rows, rows) = frames[static_cast<size_t>(k)];
-  return out.array;
+  return out.finish();
 }
 
 py::array cache_frames(const io::PointCache& c) {
@@ -158,10 +158,9 @@ py::array cache_frames(const io::PointCache& c) {
   return stacked(c.frames, n, 3);
 }
 
-// times: MDD's, one a frame (s); empty: frame k at k / rate
-void write_cache(const fs::path& p, const Input& x, Eigen::Index frames, float start, float rate,
+// frames of n points each; times: MDD's, one a frame (s); empty: frame k at k / rate
+void write_cache(const fs::path& p, const Input& x, Eigen::Index frames, Eigen::Index n, float start, float rate,
                  std::vector<float> t) {
-  const Eigen::Index n = x.map.rows() / std::max<Eigen::Index>(frames, 1);
   const std::string ext = io::lower_extension(p);
   if (ext == ".pc2") {
     io::Pc2Writer w(p, static_cast<int>(n), start, rate);
@@ -195,12 +194,13 @@ void bind_caches(py::module_& m) {
   m.def("write_point_cache", [](const py::object& path, const py::object& frames, float start_frame, float sample_rate,
                                 const py::object& times) {
     const fs::path p = path_arg(path, "path");
-    Eigen::Index f = 0;
+    Frames f;
     const Input x = float_batch(frames, "frames", {-1, 3}, f);
-    if (f == 0) throw Error("frames must have shape (frames, n, 3)");
+    if (!f.batch) throw Error("frames must have shape (frames, n, 3)");
     std::vector<float> t;
     if (!times.is_none()) t = times.cast<std::vector<float>>();
-    without_gil([&] { write_cache(p, x, f, start_frame, sample_rate, std::move(t)); });
+    const Eigen::Index n = x.source.shape(1);
+    without_gil([&] { write_cache(p, x, f.count, n, start_frame, sample_rate, std::move(t)); });
   }, py::arg("path"), py::arg("frames"), py::kw_only(), py::arg("start_frame") = 0.0f, py::arg("sample_rate") = 1.0f,
      py::arg("times") = py::none(),
      "Writes (frames, n, 3) float32 positions to .pc2 (start_frame, sample_rate) or .mdd (times, s).");

@@ -70,7 +70,7 @@ void bind_modified_bi(py::module_& m) {
       [](Solver& s, const py::object& X, const py::object& out) {
         const int n = s.object.vertices(), d = s.object.dim();
         const Input x = pose(X, n, d);
-        return result(out, static_cast<Eigen::Index>(n) * d, d,
+        return result(out, static_cast<Eigen::Index>(n) * d, d, {&x},
                       [&] { return s.run([&](const ModifiedBI& b) { return b.solve(x.map); }); });
       },
       "X"_a, py::kw_only(), "out"_a = py::none(),
@@ -89,7 +89,7 @@ void bind_modified_bi(py::module_& m) {
         const int n = s.object.vertices(), d = s.object.dim();
         const Input x = pose(X, n, d), mm = vertex_matrices(M, "M", n, d);
         const int K = (d + 1) * (d + 2) / 2;
-        return result(out, static_cast<Eigen::Index>(s.object.elements()) * K, d,
+        return result(out, static_cast<Eigen::Index>(s.object.elements()) * K, d, {&x, &mm},
                       [&] { return s.run([&](const ModifiedBI& b) { return b.bezier(x.map, mm.map); }); });
       },
       "X"_a, "M"_a, py::kw_only(), "out"_a = py::none(),
@@ -112,7 +112,7 @@ void bind_phong(py::module_& m) {
           "M",
           [](const Phong& p, const py::object& X, const py::object& out) {
             const Input x = pose(X, p.vertices(), p.dim());
-            return result(out, static_cast<Eigen::Index>(p.vertices()) * p.dim(), p.dim(),
+            return result(out, static_cast<Eigen::Index>(p.vertices()) * p.dim(), p.dim(), {&x},
                           [&] { return without_gil([&] { return p.M(x.map); }); });
           },
           "X"_a, py::kw_only(), "out"_a = py::none(), "M ((n d), d) at pose X (n, d).")

@@ -114,7 +114,7 @@ py::array copy_of(Object& b, F&& get) {
 py::array run_frames(Object& b, int frames) {
   if (frames < 1) throw Error("frames must be >= 1, got " + std::to_string(frames));
   const Eigen::Index p = b.object.embedding().size(), d = b.object.dim();
-  Output out = float_output(py::none(), "out", frames * p, d, frames);
+  Output out = float_output(py::none(), "out", p, d, {frames, true});
   b.run([&](FramePipeline& x) {
     for (int k = 0; k < frames; ++k) {
       const pipeline::FrameResult r = x.step();
@@ -122,7 +122,7 @@ py::array run_frames(Object& b, int frames) {
       out.map.middleRows(k * p, p) = x.positions();
     }
   });
-  return out.array;
+  return out.finish();
 }
 
 py::dict timings(const pipeline::FrameTimings& t) {
@@ -159,12 +159,13 @@ void bind_drivers(py::module_& m) {
   py::class_<GivenDriverObject, std::shared_ptr<GivenDriverObject>>(m, "GivenDriver",
       "Control positions from outside: one pose (n, d) changed by set(), or a sequence (frames, n, d).")
       .def(py::init([](const py::object& X) {
-             Eigen::Index frames = 0;
+             Frames frames;
              const Input x = float_batch(X, "X", {}, frames);
-             if (frames == 0) return std::make_shared<GivenDriverObject>(x.map);
-             const Eigen::Index n = x.map.rows() / frames;
+             if (!frames.batch) return std::make_shared<GivenDriverObject>(x.map);
+             if (frames.count == 0) throw Error("X must have at least one frame, got shape (0, n, d)");
+             const Eigen::Index n = x.map.rows() / frames.count;
              std::vector<Eigen::MatrixXd> sequence;
-             for (Eigen::Index k = 0; k < frames; ++k) sequence.emplace_back(x.map.middleRows(k * n, n));
+             for (Eigen::Index k = 0; k < frames.count; ++k) sequence.emplace_back(x.map.middleRows(k * n, n));
              return std::make_shared<GivenDriverObject>(std::move(sequence));
            }), py::arg("X"))
       .def("set", [](GivenDriverObject& g, const py::object& X) {

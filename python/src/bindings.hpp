@@ -43,13 +43,16 @@ auto without_gil(F&& f) {
 
 /// A control-sized result (M, Bezier points) that compute() makes (releasing the GIL itself):
 /// moved into a new array when out is None (no copy; Fortran order, which FastEvaluator reads
-/// in place), else written into out (rows x cols, checked before compute() runs).
+/// in place), else written into out (rows x cols, checked before compute() runs, against the
+/// call's inputs too).
 template <class F>
-py::array result(const py::handle& out, Eigen::Index rows, Eigen::Index cols, F&& compute) {
+py::array result(const py::handle& out, Eigen::Index rows, Eigen::Index cols, std::initializer_list<const Input*> inputs,
+                 F&& compute) {
   if (out.is_none()) return to_numpy(compute());
   Output o = float_output(out, "out", rows, cols);
+  check_disjoint(o, inputs);
   o.map = compute();
-  return o.array;
+  return o.finish();
 }
 
 /// An object whose calls change state it keeps (a FastEvaluator's per-call terms, a Deformer's

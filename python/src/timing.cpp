@@ -54,9 +54,11 @@ void bind_timing(py::module_& m) {
         const Input b = float_matrix(B, "B", {-1, f.object.dim()}, false);
         Eigen::MatrixXd scratch;
         const Eigen::Ref<const Eigen::MatrixXd> columns_of_b = columns(b.map, scratch);
-        auto o = float32_output(out, "out", f.object.size(), f.object.dim());  // o.first keeps it alive
-        float* const positions = o.second.data();
-        return time_calls(f, calls, [&] { f.object.evaluate(columns_of_b, positions, nullptr); });
+        Output32 o = float32_output(out, "out", f.object.size(), f.object.dim());  // o.array keeps it alive
+        float* const positions = o.map.data();
+        const auto seconds = time_calls(f, calls, [&] { f.object.evaluate(columns_of_b, positions, nullptr); });
+        o.finish();
+        return seconds;
       },
       "evaluator"_a, "B"_a, "out"_a, "calls"_a,
       "Seconds of each of `calls` calls of FastEvaluator::evaluate(B, positions) in C++ into out.");

@@ -134,14 +134,12 @@ def test_bad_out_arrays(setup):
     read_only.flags.writeable = False
     with raises(r"out is read-only"):
         deformer.deform(U, out=read_only)
-    with raises(r"out must be C-contiguous"):
-        deformer.deform(U, out=np.empty((50, 3), np.float32, order="F"))
+    with raises(r"out overlaps itself"):
+        deformer.deform(U, out=np.lib.stride_tricks.as_strided(np.zeros(3, np.float32), (50, 3), (0, 4)))
     with raises(r"out must be a float32 array"):
         mbi.FastEvaluator(deformer.embedding).evaluate(deformer.bezier(U), out=np.empty((50, 3)))
     with raises(r"out must have shape \(2, 50, 3\)"):
         deformer.deform(np.stack([U, U]), out=np.empty((100, 3)))
-    with raises(r"its frames must follow one another"):
-        deformer.deform(np.stack([U, U]), out=np.empty((3, 50, 3))[::2])
     positions = np.empty((50, 3))
     with raises(r"out shares memory with normals_out"):
         mbi.Deformer(U, T, P, rest_normals=np.tile([1.0, 0, 0], (50, 1))).deform(U, out=positions, normals_out=positions)
