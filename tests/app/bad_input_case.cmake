@@ -9,7 +9,9 @@
 # mbi runs (io::FolderLock).
 # An argument @FSIZE_LIMIT=N@ (anywhere; removed) runs mbi with a file-size limit of N KiB
 # (ulimit -f, SIGXFSZ ignored): a write past N KiB fails (EFBIG) as on a full disk, without
-# mounting one. -DXVFB=ON runs mbi under a fresh Xvfb server (the viewer's cases).
+# mounting one; the limit applies to mbi alone (set in a shell that then becomes mbi), never to
+# the X server or its runner. -DXVFB=ON runs mbi under a fresh Xvfb server (the viewer's cases:
+# with_xvfb.sh, whose exit status is mbi's alone).
 # Checks: the exit code, stderr matching MESSAGE, no crash (sanitizer reports fail the case), no
 # output left under @OUT@ when OUTPUTS is none, every corpus file unchanged (inputs are never
 # modified), and @FIFO@ and @CHR@ still what they were (never replaced by a file).
@@ -82,7 +84,7 @@ if(limit)
   set(command sh -c "ulimit -f ${blocks} && trap '' XFSZ && exec \"\$@\"" sh ${command})
 endif()
 if(XVFB)
-  set(command xvfb-run -a -s "-screen 0 1400x900x24" ${command})
+  set(command sh ${CMAKE_CURRENT_LIST_DIR}/with_xvfb.sh ${command})
 endif()
 if(ARGS MATCHES "@LOCKED@")
   # a pipeline: flock holds the folder and says so, then mbi starts; the holder ends on SIGPIPE

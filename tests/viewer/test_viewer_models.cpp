@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <fstream>
 #include <sstream>
 #include <vector>
 
@@ -178,6 +179,23 @@ TEST_CASE("mbi view --video: ffprobe reads the frames and size asked for, and wi
   CHECK(std::system(cmd.c_str()) != 0);
   CHECK(mbi::test::slurp(dir / "err.txt").find("needs ffmpeg") != std::string::npos);
   CHECK_FALSE(fs::exists(dir / "none.mp4"));
+}
+
+TEST_CASE("mbi view --video: an ffmpeg that never reads its input is an error after 10 s, not a hang", "[viewer][xvfb]") {
+  TempDir dir("view-video");
+  fs::create_directory(dir / "bin");
+  std::ofstream(dir / "bin" / "ffmpeg") << "#!/bin/sh\nexec sleep 300\n";  // holds its input open, reads nothing
+  fs::permissions(dir / "bin" / "ffmpeg", fs::perms::owner_all);
+  const std::string cmd = "PATH=" + q(dir / "bin") + ":\"$PATH\" timeout 120 xvfb-run -a -s '-screen 0 1400x900x24' \"" +
+                          std::string(MBI_EXE) + "\" view " + q(cube()) + " --width 640 --height 480 --no-panel --frames 3 --video " +
+                          q(dir / "v.mp4") + " > /dev/null 2> " + q(dir / "err.txt");
+  const int status = std::system(cmd.c_str());
+  const std::string err = mbi::test::slurp(dir / "err.txt");
+  INFO(err);
+  CHECK(WEXITSTATUS(status) == 2);  // timeout(1) would give 124
+  CHECK(err.find("ffmpeg took no frame data for 10 s; no video written") != std::string::npos);
+  CHECK_FALSE(fs::exists(dir / "v.mp4"));
+  for (const auto& e : fs::directory_iterator(dir.path())) CHECK(e.path().filename().string().rfind(".mbi-tmp", 0) != 0);
 }
 
 TEST_CASE("viewer scripts: a drop's PATH is the rest of the line, spaces kept, comment and blanks cut", "[viewer][script]") {

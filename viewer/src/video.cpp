@@ -13,6 +13,7 @@
 #include <vector>
 
 #include <fcntl.h>
+#include <poll.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -21,6 +22,11 @@ extern char** environ;
 
 namespace mbi::viewer {
 namespace fs = std::filesystem;
+
+namespace {
+// How long ffmpeg may take no frame data, and how long it may take to end after the last.
+constexpr int kWriteTimeoutMs = 10000, kFinishTimeoutMs = 60000;
+}  // namespace
 
 fs::path find_ffmpeg(const fs::path& file, const std::string& what) {
   const std::string ext = io::lower_extension(file);
@@ -68,6 +74,7 @@ VideoRecorder::VideoRecorder(const fs::path& ffmpeg, const fs::path& file, std::
     throw ViewerError(name_ + ": cannot start " + ffmpeg.string() + " (" + std::strerror(rc) + ")");
   }
   ::fcntl(fds[1], F_SETFD, FD_CLOEXEC);
+  ::fcntl(fds[1], F_SETFL, ::fcntl(fds[1], F_GETFL) | O_NONBLOCK);  // writes wait in poll(), bounded
   pipe_ = fds[1];
 }
 
@@ -87,9 +94,21 @@ void VideoRecorder::add_frame() {
   size_t done = 0;
   while (done < rgb.size()) {
     const ssize_t n = ::write(pipe_, rgb.data() + done, rgb.size() - done);
+    if (n > 0) {
+      done += static_cast<size_t>(n);
+      continue;
+    }
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) throw ViewerError(name_ + ": ffmpeg stopped taking frames (" + std::strerror(errno) + ")");
-    done += static_cast<size_t>(n);
+    if (n < 0 && errno == EAGAIN) {
+      // an ffmpeg that takes nothing for this long would hang the session: an error instead
+      pollfd p{pipe_, POLLOUT, 0};
+      const int ready = ::poll(&p, 1, kWriteTimeoutMs);
+      if (ready == 0)
+        throw ViewerError(name_ + ": ffmpeg took no frame data for " + std::to_string(kWriteTimeoutMs / 1000) +
+                          " s; no video written");
+      if (ready > 0 || errno == EINTR) continue;
+    }
+    throw ViewerError(name_ + ": ffmpeg stopped taking frames (" + std::strerror(errno) + ")");
   }
   ++frames_;
 }
@@ -98,8 +117,19 @@ void VideoRecorder::finish() {
   if (pid_ <= 0) return;
   ::close(pipe_);
   pipe_ = -1;
+  // ffmpeg ends once it has the end of its input; one that does not is stopped
   int status = 0;
-  while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
+  for (int waited = 0;; waited += 10) {
+    const pid_t w = ::waitpid(pid_, &status, WNOHANG);
+    if (w == pid_ || (w < 0 && errno != EINTR)) break;
+    if (waited >= kFinishTimeoutMs) {
+      ::kill(pid_, SIGKILL);
+      ::waitpid(pid_, &status, 0);
+      pid_ = -1;
+      throw ViewerError(name_ + ": ffmpeg did not end " + std::to_string(kFinishTimeoutMs / 1000) +
+                        " s after the last frame; no video written");
+    }
+    ::usleep(10000);
   }
   pid_ = -1;
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
