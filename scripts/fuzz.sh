@@ -3,7 +3,7 @@
 #
 #   bash scripts/fuzz.sh [SECONDS] [TARGET...]
 #
-# SECONDS per target (default 20); TARGETs from: obj off ply stl gltf points tetgen gmsh vtk vtu pvd
+# SECONDS per target (default 20); TARGETs from: obj off ply stl gltf gltf_files points tetgen gmsh vtk vtu pvd
 # pc2 mdd png scene script (default: all). Configures and builds a separate clang build in build/fuzz
 # (-DMBI_FUZZ=ON: the readers only, with -fsanitize=fuzzer,address,undefined), then runs the
 # targets, as many at once as there are cores (MBI_JOBS). Each starts from its seeds
@@ -17,7 +17,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 secs=${1:-20}
 shift || true
-all=(obj off ply stl gltf points tetgen gmsh vtk vtu pvd pc2 mdd png scene script)
+all=(obj off ply stl gltf gltf_files points tetgen gmsh vtk vtu pvd pc2 mdd png scene script)
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=("${all[@]}")
 for t in "${targets[@]}"; do
