@@ -58,3 +58,10 @@ def test_bad_scenes_name_the_file(tmp_path):
     with pytest.raises(ValueError, match="method: unknown value"):
         mbi.run_scene(os.path.join(SCENES, "cantilever.toml"), tmp_path / "out", method="linear")
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("frames", [-1, -2**31, 1_000_001])
+def test_frames_out_of_range_are_refused_before_anything_is_written(tmp_path, frames):
+    with pytest.raises(mbi.Error, match=r"frames = %d: give 1 to 1000000 frames, or 0" % frames):
+        mbi.run_scene(os.path.join(SCENES, "drag.toml"), tmp_path / "out", frames=frames)
+    assert not (tmp_path / "out").exists()
