@@ -227,6 +227,7 @@ Eigen::MatrixXi index_matrix(const py::handle& obj, const char* name, Shape shap
         out(i, j) = static_cast<int>(x);
       }
   };
+  if (!aligned(a)) a = a.attr("copy")();  // ensure() would keep an unaligned array of the right type
   if (kind == 'u') put(py::array_t<std::uint64_t, py::array::forcecast>::ensure(a));
   else put(py::array_t<std::int64_t, py::array::forcecast>::ensure(a));
   return out;

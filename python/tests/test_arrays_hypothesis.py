@@ -17,7 +17,7 @@ import mbi
 import meshes
 from layouts import arrange, contiguous
 
-settings.register_profile("mbi", max_examples=30, deadline=None, derandomize=True, database=None,
+settings.register_profile("mbi", max_examples=60, deadline=None, derandomize=True, database=None,
                           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 settings.load_profile("mbi")
 
@@ -209,7 +209,7 @@ def stepped(sim, steps=2):
     return np.array([sim.step().success for _ in range(steps)]), sim.positions
 
 
-@settings(max_examples=15)
+@settings(max_examples=30)
 @given(float_input, float_input, st.sampled_from(VECTOR_FORMS), st.sampled_from(VECTOR_FORMS), float_input)
 def test_simulator_setters(x, v, gform, fform, materials):
     def run(positions, velocities, gravity, force, element_materials):
@@ -230,7 +230,7 @@ def test_simulator_setters(x, v, gform, fform, materials):
     assert_same(got, want)
 
 
-@settings(max_examples=15)
+@settings(max_examples=30)
 @given(float_input, index_input, float_input, st.sampled_from([1, 3]))
 def test_file_writers(u, t, q, count):
     traj = arrange(np.stack([meshes.pose(U, seed=s) for s in range(count)]), q[0], q[1])
@@ -258,7 +258,7 @@ def test_file_writers(u, t, q, count):
             assert got == want, name
 
 
-@settings(max_examples=10)
+@settings(max_examples=20)
 @given(float_input, st.sampled_from([1, 3]), float_input)
 def test_pipeline_drivers(x, count, targets):
     compare(lambda Xs: mbi.FramePipeline(U, T, P, mbi.GivenDriver(Xs), method="bi").run(count),
