@@ -11,6 +11,8 @@
 #include <cmath>
 #include <cstring>
 
+#include <unistd.h>
+
 namespace mbi::io {
 
 using detail::fail;
@@ -99,25 +101,33 @@ void MddWriter::finish() {
     out_.reset();
     return;
   }
-  // Fewer frames than announced (a bad frame, an interruption): the times block is shorter, so
-  // the frames written move up; a new file gets them, the first is discarded.
-  if (std::fflush(out_->stream()) != 0) fail(file_, 0, "write error");
-  std::FILE* in = std::fopen(out_->temporary().c_str(), "rb");
-  if (!in) fail(file_, 0, std::string("cannot reread the temporary file (") + std::strerror(errno) + ")");
+  // Fewer frames than announced (a bad frame, an interruption, a full disk): the times block is
+  // shorter, so the frames written move up, in place (a full disk has no room for a copy).
+  out_->flush();
+  std::FILE* io = std::fopen(out_->temporary().c_str(), "r+b");
+  if (!io) fail(file_, 0, std::string("cannot reopen the file being written (") + std::strerror(errno) + ")");
   struct Closer {
     std::FILE* f;
-    ~Closer() { std::fclose(f); }
-  } closer{in};
-  AtomicFile shorter(file_);
-  shorter.write(mdd_header(samples_, num_points_, times_));
+    ~Closer() {
+      if (f) std::fclose(f);
+    }
+  } closer{io};
   const std::size_t frame = 12 * static_cast<std::size_t>(num_points_);
+  const long from = static_cast<long>(8 + 4 * times_.size()), to = static_cast<long>(8 + 4 * static_cast<std::size_t>(samples_));
   buffer_.resize(frame);
-  if (std::fseek(in, static_cast<long>(8 + 4 * times_.size()), SEEK_SET) != 0) fail(file_, 0, "seek error");
-  for (int k = 0; k < samples_; ++k) {
-    if (std::fread(buffer_.data(), 1, frame, in) != frame) fail(file_, 0, "cannot reread frame " + std::to_string(k));
-    shorter.write(buffer_.data(), frame);
+  for (int k = 0; k < samples_; ++k) {  // frame k's new place ends before frame k + 1's old one
+    const long at = static_cast<long>(frame) * k;
+    if (std::fseek(io, from + at, SEEK_SET) != 0 || std::fread(buffer_.data(), 1, frame, io) != frame ||
+        std::fseek(io, to + at, SEEK_SET) != 0 || std::fwrite(buffer_.data(), 1, frame, io) != frame)
+      fail(file_, 0, "cannot move frame " + std::to_string(k) + " up (" + std::strerror(errno) + ")");
   }
-  shorter.commit();
+  const std::string head = mdd_header(samples_, num_points_, times_);
+  if (std::fseek(io, 0, SEEK_SET) != 0 || std::fwrite(head.data(), 1, head.size(), io) != head.size() || std::fflush(io) != 0 ||
+      ::ftruncate(::fileno(io), to + static_cast<long>(frame) * samples_) != 0)
+    fail(file_, 0, std::string("cannot shorten the file to the frames written (") + std::strerror(errno) + ")");
+  std::fclose(io);
+  closer.f = nullptr;
+  out_->commit();
   out_.reset();
 }
 
