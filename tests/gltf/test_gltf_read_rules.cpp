@@ -282,3 +282,18 @@ TEST_CASE("glTF in: each accessor's component type is one the spec allows for it
   color["accessors"].push_back({{"bufferView", 0}, {"componentType", 5122}, {"normalized", true}, {"count", 3}, {"type", "VEC4"}});
   CHECK_THAT(error_of(write_json(t, color)), Catch::Contains("COLOR_0: accessor 2: component type 5122 (short normalized) is not allowed"));
 }
+
+TEST_CASE("glTF in: JSON nested deeper than 64 levels is refused before tinygltf recurses into it", "[io][gltf]") {
+  Folders f;
+  const fs::path t = f.asset / "t.gltf";
+  const auto nested = [&](int depth) {
+    std::string text = triangle_asset("in.bin").dump();
+    text.pop_back();
+    return text + ", \"extras\": " + std::string(static_cast<std::size_t>(depth), '[') +
+           std::string(static_cast<std::size_t>(depth), ']') + "}";
+  };
+  std::ofstream(t) << nested(60);  // within the limit with the asset's own levels
+  CHECK(mbi::io::read_surface(t).V.rows() == 3);
+  std::ofstream(t) << nested(200000);  // overflowed the stack in tinygltf's conversion of extras
+  CHECK_THAT(error_of(t), Catch::Contains("t.gltf: the JSON nests arrays and objects deeper than 64 levels"));
+}

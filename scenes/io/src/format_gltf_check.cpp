@@ -7,6 +7,7 @@
 #include <tiny_gltf.h>
 
 #include <algorithm>
+#include <cctype>
 #include <set>
 
 namespace mbi::io::detail {
@@ -73,14 +74,23 @@ bool kept_as_written(const std::string& key) {
 
 }  // namespace
 
-nlohmann::json gltf_json(std::string_view data, bool binary) {
+nlohmann::json gltf_json(std::string_view data, bool binary, const fs::path& file) {
   if (binary) {  // the header as tinygltf reads it: magic, version, length, JSON chunk length
     if (data.size() < 20) return nullptr;
     const auto length = load_le<std::uint32_t>(data.data() + 12);
     if (length > data.size() - 20) return nullptr;
     data = data.substr(20, length);
   }
-  return nlohmann::json::parse(data.begin(), data.end(), nullptr, false);
+  // nlohmann's parser does not recurse, tinygltf's conversion of extras does
+  int depth = 0;
+  const auto deepest = [&depth](int d, nlohmann::json::parse_event_t, nlohmann::json&) {
+    depth = std::max(depth, d);
+    return true;
+  };
+  nlohmann::json j = nlohmann::json::parse(data.begin(), data.end(), deepest, false);
+  if (depth > kMaxGltfNesting)
+    fail(file, 0, "the JSON nests arrays and objects deeper than " + std::to_string(kMaxGltfNesting) + " levels");
+  return j;
 }
 
 void extension_names(const nlohmann::json& j, std::set<std::string>& names) {
@@ -126,8 +136,12 @@ void check_gltf_uris(const nlohmann::json& j, const fs::path& file) {
 void check_gltf_extensions(const nlohmann::json& j, const fs::path& file) {
   if (!j.is_object() || !j.contains("extensionsRequired") || !j["extensionsRequired"].is_array()) return;
   std::set<std::string> kept, elsewhere;
-  for (const auto& [key, value] : j.items())
-    extension_names(nlohmann::json::object({{key, value}}), kept_as_written(key) ? kept : elsewhere);
+  for (const auto& [key, value] : j.items()) {
+    std::set<std::string>& names = kept_as_written(key) ? kept : elsewhere;
+    if (key == "extensions" && value.is_object())
+      for (const auto& e : value.items()) names.insert(e.key());
+    extension_names(value, names);
+  }
   for (const nlohmann::json& e : j["extensionsRequired"]) {
     if (!e.is_string()) continue;  // tinygltf refuses it
     const std::string name = e.get<std::string>();

@@ -11,9 +11,14 @@
 
 namespace mbi::io::detail {
 
-/// The asset's JSON: a .glb's first chunk, or the whole text; null when it cannot be parsed
-/// (tinygltf then reports why).
-nlohmann::json gltf_json(std::string_view data, bool binary);
+/// Deepest nesting of arrays and objects read (tinygltf converts extras recursively; real
+/// assets nest about ten levels).
+constexpr int kMaxGltfNesting = 64;
+
+/// The asset's JSON: a .glb's first chunk, or the whole text; discarded when it cannot be parsed
+/// (tinygltf then reports why). Throws IoError naming `file` when it nests deeper than
+/// kMaxGltfNesting.
+nlohmann::json gltf_json(std::string_view data, bool binary, const std::filesystem::path& file);
 
 /// Throws IoError naming `file`, the buffer or image, and its uri, unless every uri of `j` is
 /// a data: URI or a relative path that, percent-decoded and with its symbolic links followed,

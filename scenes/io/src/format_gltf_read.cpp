@@ -386,7 +386,7 @@ void keep_materials(const tinygltf::Model& m, const nlohmann::json& j, GltfAsset
 
 SurfaceMesh parse_gltf(std::string_view data, const path& file) {
   const bool binary = data.size() >= 4 && data.substr(0, 4) == "glTF";
-  const nlohmann::json json = gltf_json(data, binary);
+  const nlohmann::json json = gltf_json(data, binary, file);
   check_gltf_uris(json, file);
   check_gltf_extensions(json, file);
   const tinygltf::Model model = load_model(data, file, binary);
