@@ -5,6 +5,7 @@
 #include <mbi/io/io.hpp>
 
 #include "common/files.hpp"
+#include "common/run_mbi.hpp"
 #include "common/temp_dir.hpp"
 
 #include <catch2/catch.hpp>
@@ -152,6 +153,33 @@ TEST_CASE("glTF in: buffers and images only from the asset's folder or below", "
   std::ofstream(f.asset / "t.glb", std::ios::binary) << glb;
   CHECK_THAT(error_of(f.asset / "t.glb"), Catch::Contains("t.glb: buffer 0: uri '../secret.bin' is not read"));
   CHECK_FALSE(watch.opened());
+}
+
+TEST_CASE("mbi deform: a glTF whose image buffer lies outside its folder is refused, nothing written", "[io][gltf]") {
+  Folders f;
+  // one tetrahedron around the triangle, at rest
+  std::ofstream(f.root / "cage.node") << "4 3 0 0\n1 -1 -1 -1\n2 3 -1 -1\n3 -1 3 -1\n4 -1 -1 3\n";
+  std::ofstream(f.root / "cage.ele") << "1 4 0\n1 1 2 3 4\n";
+  json asset = triangle_asset("in.bin");
+  asset["buffers"].push_back({{"byteLength", 44}, {"uri", "in.bin"}});
+  asset["bufferViews"].push_back({{"buffer", 1}, {"byteOffset", 0}, {"byteLength", 44}});
+  asset["images"] = json::array({{{"bufferView", 2}, {"mimeType", "image/png"}}});
+  asset["textures"] = json::array({{{"source", 0}}});
+  asset["materials"] = json::array({{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}}}});
+  asset["meshes"][0]["primitives"][0]["material"] = 0;
+  write_json(f.asset / "t.gltf", asset);
+  const std::string deform = "deform --method bi --control cage --deformed cage.node --mesh asset/t.gltf --out out.glb";
+  auto r = mbi::test::run_mbi(deform, f.root, "", f.root.path());
+  INFO(r.err);
+  REQUIRE(r.code == 0);  // the image's bytes travel into the output
+  CHECK(mbi::test::slurp(f.root / "out.glb").find(triangle_bytes()) != std::string::npos);
+  fs::remove(f.root / "out.glb");
+  asset["buffers"][1]["uri"] = "../secret.bin";  // the same bytes, outside the asset's folder
+  write_json(f.asset / "t.gltf", asset);
+  r = mbi::test::run_mbi(deform, f.root, "", f.root.path());
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("t.gltf: buffer 1: uri '../secret.bin' is not read"));
+  CHECK_FALSE(fs::exists(f.root / "out.glb"));
 }
 
 TEST_CASE("glTF in: drawn buffer uris are read exactly when they name a file in the asset's folder", "[io][gltf]") {
