@@ -15,7 +15,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A uri as it may appear in a message: long data URIs cut short.
+// A uri as it may appear in a message: a long one (a data URI) cut short.
 std::string shown(const std::string& uri) {
   return "'" + (uri.size() > 80 ? uri.substr(0, 77) + "..." : uri) + "'";
 }
