@@ -17,8 +17,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <fstream>
 #include <string>
+#include <vector>
 
 namespace fs = std::filesystem;
 using namespace mbi::io;
@@ -247,4 +249,62 @@ TEST_CASE("4OFF: each vertex is (x, y, z) / w", "[io][files][off]") {
   CHECK_THROWS_WITH(read_surface(tmp / "w0.off"), Catch::Contains("w0.off:3: vertex 0: w = 0"));
   write_bytes(tmp / "tiny.off", "4OFF\n1 0 0\n1e200 0 0 1e-200\n");
   CHECK_THROWS_AS(read_surface(tmp / "tiny.off"), IoError);  // x / w overflows the limit
+}
+
+TEST_CASE("PC2 and MDD from floats on a full disk: the frames that fit are kept, the file readable", "[io][files][pc2]") {
+  for (const std::string name : {"dense.pc2", "dense.mdd"}) {
+    INFO(name);
+    TempDir tmp("cache-full");
+    const fs::path file = tmp / name;
+    // a child with a file size limit (a full disk) appends float frames until a write fails
+    const pid_t pid = ::fork();
+    REQUIRE(pid >= 0);
+    if (pid == 0) {
+      ::signal(SIGXFSZ, SIG_IGN);
+      const rlimit lim{10000, 10000};
+      ::setrlimit(RLIMIT_FSIZE, &lim);
+      try {
+        const std::vector<float> xyz(300, 0.5f);
+        auto fill = [&](auto& w) {
+          try {
+            for (int s = 0; s < 100; ++s) w.append(xyz.data());
+          } catch (const IoError&) {
+          }
+          w.finish();
+          ::_exit(w.samples());
+        };
+        if (name == "dense.pc2") {
+          Pc2Writer w(file, 100);
+          fill(w);
+        }
+        MddWriter w(file, 100, std::vector<float>(100, 0.0f));
+        fill(w);
+      } catch (...) {
+        ::_exit(255);
+      }
+    }
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    REQUIRE(WIFEXITED(status));
+    const int samples = WEXITSTATUS(status);
+    CHECK(samples > 0);
+    CHECK(samples < 100);
+    const PointCache c = name == "dense.pc2" ? read_pc2(file) : read_mdd(file);
+    CHECK(static_cast<int>(c.frames.size()) == samples);
+    CHECK(temporaries(tmp.path()) == 0);
+  }
+}
+
+TEST_CASE("glTF animation times must be finite and strictly increasing as float32", "[io][files][gltf]") {
+  TempDir tmp("gltf-times");
+  const SurfaceMesh m = tet_surface(1);
+  GltfWriter w(tmp / "a.glb", m);
+  w.append(0.0, m.V);
+  CHECK_THROWS_WITH(w.append(1e300, m.V), Catch::Contains("frame 1: time 1e+300 s is not finite as float32"));
+  CHECK_THROWS_WITH(w.append(1e-300, m.V), Catch::Contains("frame 1: time 1e-300 s is not after the previous frame's (0 s) as float32"));
+  CHECK_THROWS_WITH(w.append(std::nan(""), m.V), Catch::Contains("is not finite"));
+  w.append(1.0, m.V);
+  CHECK_THROWS_WITH(w.append(1.0 + 1e-12, m.V), Catch::Contains("frame 2: time 1 s is not after"));
+  w.finish();
+  CHECK(w.samples() == 2);
 }
