@@ -295,8 +295,7 @@ int run_deform(const DeformArgs& a) {
   const std::vector<std::size_t> i_outs = reserve_outputs(a, outputs);
   const std::size_t i_stats = a.stats.empty() ? 0 : outputs.add(a.stats, "--stats");
   if (example && a.outs.size() > 1) throw std::runtime_error("--example writes one --out");
-  if (a.alpha_given && !(a.alpha > 0) )
-    throw std::runtime_error("--alpha must be > 0 (E_disc alone has extra null modes)");
+  if (a.alpha_given) check_option("--alpha", [&] { interp::check_alpha(a.alpha); });
 
   Problem pb = example ? load_example(a.example) : load_files(a);
   const int d = static_cast<int>(pb.U.cols());
@@ -315,7 +314,7 @@ int run_deform(const DeformArgs& a) {
   Eigen::MatrixXd rest_normals;
   if (d == 3) rest_normals = pb.dense.normals();  // when a part has normals
   po.normals = rest_normals.rows() > 0;
-  po.interp.alpha = a.alpha_given ? a.alpha : 0.0;
+  if (a.alpha_given) po.interp.alpha = a.alpha;
   po.interp.pin_boundary = a.pin_boundary;
   // One element has no interior face: BI and Phong need none; modified-BI minimises the
   // discontinuity across interior faces and needs at least one.

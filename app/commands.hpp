@@ -3,6 +3,7 @@
 // Registrar; main.cpp builds the CLI11 app from the registry. A subcommand reports bad input by
 // throwing any std::exception: main prints "mbi <sub>: error: <message>" on one line and exits 2.
 #include <mbi/base/names.hpp>
+#include <mbi/error.hpp>
 #include <mbi/interp/threads.hpp>
 
 #include <CLI/CLI.hpp>
@@ -51,16 +52,30 @@ CLI::Option* add_choice(CLI::App& sub, const std::string& name, T& value, const 
   return sub.add_option_function<std::string>(name, set, description)->check(CLI::IsMember(names.names()));
 }
 
+/// Runs the check of the layer that owns an option's value (interp's alpha, threads, ...): its
+/// mbi::Error becomes an error naming the option, so the command fails before any work.
+template <typename Check>
+void check_option(const std::string& option, Check&& check) {
+  try {
+    check();
+  } catch (const mbi::Error& e) {
+    throw std::runtime_error(option + ": " + e.what());
+  }
+}
+
 /// --threads N: how many threads the command's computations run on (mbi::interp::set_threads,
-/// set when the option is parsed, before the command runs); 0, the default: the cores this
-/// process may run on. Every subcommand takes it.
+/// which checks the count, set when the option is parsed, before the command runs); 0, the
+/// default: the cores this process may run on. Every subcommand takes it.
 inline CLI::Option* add_threads_option(CLI::App& sub) {
   // decimal digits only: CLI11 would take 0x10 as 16 and 010 as 8
   auto set = [](const std::string& s) {
-    const bool digits = !s.empty() && s.size() <= 4 && s.find_first_not_of("0123456789") == std::string::npos;
-    if (!digits || std::stoi(s) > 1024)
-      throw CLI::ValidationError("--threads " + s + ": give a whole number of threads from 0 to 1024 in decimal digits");
-    interp::set_threads(std::stoi(s));
+    const bool digits = !s.empty() && s.size() <= 5 && s.find_first_not_of("0123456789") == std::string::npos;
+    if (!digits) throw CLI::ValidationError("--threads " + s + ": give a whole number of threads in decimal digits");
+    try {
+      interp::set_threads(std::stoi(s));
+    } catch (const mbi::Error& e) {
+      throw CLI::ValidationError("--threads " + s + ": " + e.what());
+    }
   };
   return sub.add_option_function<std::string>("--threads", set,
                                               "threads to compute on, the calling one included (default 0: the cores this process may run on)");

@@ -444,7 +444,7 @@ pipeline::Deformer make_deformer(const SequenceArgs& a, const Model& m, bool nor
   if (a.max_outside) refuse_far_points(emb, m.control.U, m.control.T, m.P, *a.max_outside, m.dense.names(), a.control);
   test_signal_at("precompute");
   pipeline::DeformerOptions opt{.method = a.method, .interp = {}};
-  opt.interp.alpha = a.alpha.value_or(0.0);
+  opt.interp.alpha = a.alpha;
   opt.interp.pin_boundary = a.pin_boundary;
   t0 = Clock::now();
   try {
@@ -549,7 +549,7 @@ int run_deform_sequence(const SequenceArgs& a) {
   if (a.meshes.empty() || a.outs.size() != a.meshes.size())
     throw std::runtime_error("give one --out for each --mesh (" + std::to_string(a.meshes.size()) + " --mesh, " +
                              std::to_string(a.outs.size()) + " --out)");
-  if (a.alpha && !(*a.alpha > 0)) throw std::runtime_error("--alpha must be > 0 (E_disc alone has extra null modes)");
+  if (a.alpha) check_option("--alpha", [&] { interp::check_alpha(*a.alpha); });
   if (!(a.fps > 0) || !std::isfinite(a.fps)) throw std::runtime_error("--fps " + short_number(a.fps) + ": must be > 0");
   std::vector<Out> outs;
   for (const std::string& o : a.outs) outs.push_back({.name = o, .kind = out_kind(o)});

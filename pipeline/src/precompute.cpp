@@ -80,18 +80,13 @@ const interp::Phong& Precompute::phong() {
 }
 
 void Precompute::set_alpha(double alpha) {
-  interp::Options o = options_;
-  o.alpha = alpha;
+  interp::check_alpha(alpha);
   if (solver_) {
     const auto t0 = Clock::now();
     solver_->set_alpha(alpha);
     precompute_ms_ = ms_since(t0);
-  } else if (alpha == 0) {
-    throw Error("alpha must be a finite number > 0, got 0");
-  } else {
-    interp::resolve_alpha(o, dim());
   }
-  options_ = o;
+  options_.alpha = alpha;
 }
 
 }  // namespace mbi::pipeline

@@ -53,7 +53,7 @@ def embedded_positions(U: ArrayLike, T: ArrayLike, embedding: Embedding) -> Floa
 class Deformer:
     """Embedding and the method's precompute, once; then poses to dense positions."""
     def __init__(self, U: ArrayLike, T: ArrayLike, P: ArrayLike, *, method: Method = "modified-bi",
-                 alpha: float = 0.0, beta: float = 0.0, pin_boundary: bool = False,
+                 alpha: Optional[float] = None, beta: float = 0.0, pin_boundary: bool = False,
                  rest_normals: Optional[ArrayLike] = None, threads: int = 0) -> None: ...
     def deform(self, X: ArrayLike, *, out: Optional[np.ndarray] = None, normals: bool = False,
                normals_out: Optional[np.ndarray] = None, dtype: Any = None) -> Any:
@@ -87,7 +87,7 @@ class Deformer:
 
 class ModifiedBI:
     """Modified-BI's precompute (assembly, gauge, sparse Cholesky factor)."""
-    def __init__(self, U: ArrayLike, T: ArrayLike, *, alpha: float = 0.0, beta: float = 0.0,
+    def __init__(self, U: ArrayLike, T: ArrayLike, *, alpha: Optional[float] = None, beta: float = 0.0,
                  pin_boundary: bool = False, solve_path: str = "automatic", factorization: str = "automatic") -> None: ...
     def solve(self, X: ArrayLike, *, out: Optional[np.ndarray] = None) -> FloatArray: """M ((n d), d) at X (n, d)"""
     def bezier(self, X: ArrayLike, M: ArrayLike, *, out: Optional[np.ndarray] = None) -> FloatArray: ...
@@ -255,7 +255,7 @@ class Simulator:
 class HandleDriver:
     """Control vertices dragged without physics; M solved with the positions."""
     def __init__(self, U: ArrayLike, T: ArrayLike, handles: ArrayLike, *, mode: Literal["hard", "soft"] = "hard",
-                 alpha: float = 0.0, beta: float = 0.0, pin_boundary: bool = False, gamma: float = 0.0,
+                 alpha: Optional[float] = None, beta: float = 0.0, pin_boundary: bool = False, gamma: float = 0.0,
                  regularization: float = 1e-6) -> None: ...
     def set_targets(self, targets: ArrayLike) -> None: """(handles, d) positions"""
     @property
@@ -276,7 +276,7 @@ class FramePipeline:
     """Per frame: drive the control mesh, solve M, Bezier points, dense points (CPU, float64)."""
     def __init__(self, U: ArrayLike, T: ArrayLike, P: ArrayLike,
                  driver: Union[None, Simulator, HandleDriver, GivenDriver] = None, *, method: Method = "modified-bi",
-                 alpha: float = 0.0, beta: float = 0.0, pin_boundary: bool = False,
+                 alpha: Optional[float] = None, beta: float = 0.0, pin_boundary: bool = False,
                  rest_normals: Optional[ArrayLike] = None) -> None: ...
     def step(self, evaluate: bool = True) -> FrameResult: """the next frame (frame 0 first: the initial pose)"""
     def run(self, frames: int) -> FloatArray: """(frames, p, d) positions of `frames` steps"""

@@ -11,7 +11,7 @@ using pipeline::Deformer;
 using Bound = Guarded<Deformer>;
 
 std::unique_ptr<Bound> make_deformer(const py::object& U, const py::object& T, const py::object& P,
-                                     const std::string& method, double alpha, double beta, bool pin_boundary,
+                                     const std::string& method, std::optional<double> alpha, double beta, bool pin_boundary,
                                      const py::object& rest_normals, int threads) {
   const Mesh c = control_mesh(U, T);
   const Input p = float_matrix(P, "P", {-1, c.U.map.cols()});
@@ -105,10 +105,10 @@ void bind_deformer(py::module_& m) {
   py::class_<Bound>(m, "Deformer",
                     "Bind once, deform many: the dense points P embedded in a rest control mesh (U, T) and the "
                     "method's precompute, made once; deform() maps poses X (n, d) to positions (p, d).")
-      .def(py::init(&make_deformer), "U"_a, "T"_a, "P"_a, py::kw_only(), "method"_a = "modified-bi", "alpha"_a = 0.0,
+      .def(py::init(&make_deformer), "U"_a, "T"_a, "P"_a, py::kw_only(), "method"_a = "modified-bi", "alpha"_a = py::none(),
            "beta"_a = 0.0, "pin_boundary"_a = false, "rest_normals"_a = py::none(), "threads"_a = 0,
            "U (n, d) rest control vertices, T (m, d+1) elements, P (p, d) dense rest points (units of U). method: "
-           "bi, modified-bi or phong; alpha, beta, pin_boundary: modified-BI's (0: defaults); rest_normals: unit "
+           "bi, modified-bi or phong; alpha (None: 0.1 in 3D, 0.2 in 2D), beta (0: automatic), pin_boundary: modified-BI's; rest_normals: unit "
            "normals (p, d) for deform(..., normals=True); threads: 0 = all cores.")
       .def("deform", &deform, "X"_a, py::kw_only(), "out"_a = py::none(), "normals"_a = false,
            "normals_out"_a = py::none(), "dtype"_a = py::none(),

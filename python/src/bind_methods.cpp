@@ -15,7 +15,7 @@ using interp::ModifiedBI;
 using interp::Phong;
 using Solver = Guarded<ModifiedBI>;
 
-std::unique_ptr<Solver> make_solver(const py::object& U, const py::object& T, double alpha, double beta,
+std::unique_ptr<Solver> make_solver(const py::object& U, const py::object& T, std::optional<double> alpha, double beta,
                                     bool pin_boundary, const std::string& solve_path, const std::string& factorization) {
   const Mesh c = control_mesh(U, T);
   interp::Options o;
@@ -60,9 +60,9 @@ void bind_modified_bi(py::module_& m) {
   py::class_<Solver> c(m, "ModifiedBI",
                        "Modified-BI's precompute for one rest control mesh (assembly, gauge, sparse Cholesky "
                        "factor); solve() gives M per pose.");
-  c.def(py::init(&make_solver), "U"_a, "T"_a, py::kw_only(), "alpha"_a = 0.0, "beta"_a = 0.0,
+  c.def(py::init(&make_solver), "U"_a, "T"_a, py::kw_only(), "alpha"_a = py::none(), "beta"_a = 0.0,
         "pin_boundary"_a = false, "solve_path"_a = "automatic", "factorization"_a = "automatic",
-        "U (n, d) rest vertices, T (m, d+1) elements. alpha: weight of E_vibr (0: 0.1 in 3D, 0.2 in 2D); "
+        "U (n, d) rest vertices, T (m, d+1) elements. alpha: weight of E_vibr (None: 0.1 in 3D, 0.2 in 2D); "
         "beta: weight of E_disc (0: automatic); pin_boundary: M = 0 on boundary vertices; solve_path: "
         "automatic, sparse or dense; factorization: automatic, eigen or cholmod.");
   c.def(

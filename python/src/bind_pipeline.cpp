@@ -72,7 +72,7 @@ std::unique_ptr<Driver> driver_of(const py::object& driver, const ConstMap& U) {
               py::str(py::type::of(driver)).cast<std::string>());
 }
 
-interp::Options interp_options(double alpha, double beta, bool pin_boundary) {
+interp::Options interp_options(std::optional<double> alpha, double beta, bool pin_boundary) {
   interp::Options o;
   o.alpha = alpha;
   o.beta = beta;
@@ -83,7 +83,7 @@ interp::Options interp_options(double alpha, double beta, bool pin_boundary) {
 using Object = Guarded<FramePipeline>;
 
 std::unique_ptr<Object> make_pipeline(const py::object& U, const py::object& T, const py::object& P,
-                                      const py::object& driver, const std::string& method, double alpha, double beta,
+                                      const py::object& driver, const std::string& method, std::optional<double> alpha, double beta,
                                       bool pin_boundary, const py::object& rest_normals) {
   const Mesh c = control_mesh(U, T);
   const Input p = float_matrix(P, "P", {-1, c.U.map.cols()});
@@ -139,7 +139,7 @@ void bind_drivers(py::module_& m) {
   py::class_<HandleDriverObject, std::shared_ptr<HandleDriverObject>>(m, "HandleDriver",
       "Control vertices dragged without physics (hard or soft handles); M solved with the positions.")
       .def(py::init([](const py::object& U, const py::object& T, const py::object& handles, const std::string& mode,
-                       double alpha, double beta, bool pin_boundary, double gamma, double regularization) {
+                       std::optional<double> alpha, double beta, bool pin_boundary, double gamma, double regularization) {
              const Mesh c = control_mesh(U, T);
              interp::ControlOptions o;
              o.interp = interp_options(alpha, beta, pin_boundary);
@@ -149,7 +149,7 @@ void bind_drivers(py::module_& m) {
              std::vector<int> h = index_list(handles, "handles");
              return without_gil([&] { return std::make_shared<HandleDriverObject>(c.U.map, c.T, std::move(h), o); });
            }), py::arg("U"), py::arg("T"), py::arg("handles"), py::kw_only(), py::arg("mode") = "hard",
-           py::arg("alpha") = 0.0, py::arg("beta") = 0.0, py::arg("pin_boundary") = false, py::arg("gamma") = 0.0,
+           py::arg("alpha") = py::none(), py::arg("beta") = 0.0, py::arg("pin_boundary") = false, py::arg("gamma") = 0.0,
            py::arg("regularization") = 1e-6)
       .def("set_targets", [](HandleDriverObject& h, const py::object& targets) {
         const Input t = float_matrix(targets, "targets", {static_cast<Eigen::Index>(h.object.handles().size()), -1});
@@ -184,7 +184,7 @@ void bind_frame_pipeline(py::module_& m) {
   py::class_<Object>(m, "FramePipeline",
       "Per frame: drive the control mesh, solve M, Bezier points, dense points (CPU, float64).")
       .def(py::init(&make_pipeline), py::arg("U"), py::arg("T"), py::arg("P"), py::arg("driver") = py::none(),
-           py::kw_only(), py::arg("method") = "modified-bi", py::arg("alpha") = 0.0, py::arg("beta") = 0.0,
+           py::kw_only(), py::arg("method") = "modified-bi", py::arg("alpha") = py::none(), py::arg("beta") = 0.0,
            py::arg("pin_boundary") = false, py::arg("rest_normals") = py::none())
       .def("step", [](Object& b, bool evaluate) { return b.run([&](FramePipeline& x) { return x.step(evaluate); }); },
            py::arg("evaluate") = true, "Computes the next frame (the first call gives frame 0, the initial pose).")

@@ -524,7 +524,14 @@ DragSpec parse_drag(Table& t) {
 
 void parse_interpolation(Table t, InterpolationSpec& i) {
   i.method = t.choice("method", i.method, pipeline::kMethodNames);
-  i.options.alpha = t.number("alpha", 0.0, 0, 1e6, true);
+  if (t.has("alpha")) {
+    const double alpha = t.number("alpha", 0.0);
+    try {
+      i.options.alpha = interp::check_alpha(alpha);
+    } catch (const interp::Error& e) {
+      t.fail("alpha", e.what());
+    }
+  }
   i.options.pin_boundary = t.boolean("pin_boundary", false);
   i.compare_pinned = t.boolean("compare_pinned", false);
   i.gpu = t.choice("gpu", i.gpu, kGpuUseNames);

@@ -382,11 +382,13 @@ double default_alpha(int d) {
   throw Error("dimension must be 2 or 3, got " + std::to_string(d));
 }
 
-double resolve_alpha(const Options& options, int d) {
-  const double alpha = options.alpha == 0 ? default_alpha(d) : options.alpha;
-  if (!(alpha > 0) || !std::isfinite(alpha))
-    throw Error("alpha must be a finite number > 0 (0 selects the default), got " + std::to_string(options.alpha));
+double check_alpha(double alpha) {
+  if (!(alpha > 0) || !std::isfinite(alpha)) throw Error("alpha must be a finite number > 0, got " + std::to_string(alpha));
   return alpha;
+}
+
+double resolve_alpha(const Options& options, int d) {
+  return options.alpha ? check_alpha(*options.alpha) : default_alpha(d);
 }
 
 void check_beta(const Options& options) {
@@ -634,10 +636,7 @@ ModifiedBI::ModifiedBI(ModifiedBI&&) noexcept = default;
 ModifiedBI& ModifiedBI::operator=(ModifiedBI&&) noexcept = default;
 
 void ModifiedBI::set_alpha(double alpha) {
-  Options o = impl_->opt;
-  o.alpha = alpha;
-  if (alpha == 0) throw Error("alpha must be a finite number > 0, got 0");
-  impl_->factor(resolve_alpha(o, impl_->d));
+  impl_->factor(check_alpha(alpha));
   warm_up();
 }
 

@@ -12,6 +12,7 @@
 
 #include <Eigen/SparseCore>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -38,7 +39,7 @@ inline constexpr auto kFactorizationNames = name_table<Factorization>(
 bool cholmod_available();
 
 struct Options {
-  double alpha = 0.0;         ///< weight of E_vibr; 0 = default (0.1 in 3D, 0.2 in 2D); < 0 rejected
+  std::optional<double> alpha = std::nullopt;  ///< weight of E_vibr; unset: default_alpha(d); check_alpha() bounds it
   double beta = 0.0;          ///< weight of E_disc; 0 = automatic (equal Frobenius norms, fact 7); < 0 rejected
   bool pin_boundary = false;  ///< M_i = 0 on boundary vertices (fact 9)
   SolvePath solve_path = SolvePath::Automatic;
@@ -47,8 +48,10 @@ struct Options {
 
 /// Default alpha for dimension d (0.1 in 3D, 0.2 in 2D).
 double default_alpha(int d);
-/// The alpha that options give in dimension d: options.alpha, or default_alpha(d) when it is 0.
-/// The one check of alpha: throws Error unless the result is finite and > 0.
+/// The one check of alpha: returns it, or throws Error unless it is finite and > 0 (E_disc alone
+/// has extra null modes).
+double check_alpha(double alpha);
+/// The alpha that options give in dimension d: options.alpha (checked), or default_alpha(d).
 double resolve_alpha(const Options& options, int d);
 /// beta's check: throws Error unless options.beta is finite and >= 0 (0 = automatic).
 void check_beta(const Options& options);
