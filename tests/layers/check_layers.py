@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The layers of mbi, checked from the source: every #include of a library, door or test may reach
-only its own target and the targets below it (README "The tree"). Exit 1 with one line per
+only its own target and the targets below it (README "Layout"). Exit 1 with one line per
 include that reaches up or sideways, naming the file and line.
 
     python3 tests/layers/check_layers.py [SOURCE_DIR]

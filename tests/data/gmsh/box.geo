@@ -1,4 +1,4 @@
-// A 1 x 1 x 2 box, meshed coarsely: the gmsh fixtures of tests/scenes/io (see README.md).
+// A 1 x 1 x 2 box, meshed coarsely: the gmsh fixtures of tests/io (see README.md).
 SetFactory("OpenCASCADE");
 Box(1) = {0, 0, 0, 1, 1, 2};
 Mesh.MeshSizeMin = 0.6;
