@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """compare-outputs.py A B: compares two folders written by scripts/capture-outputs.sh (two builds
 of mbi on the same scenes). Numbers in text files (OBJ, VTK, point lists) and in the JSON files
-(timings excluded: keys ending in _ms, timings_ms, seconds, scene_file) must agree within 1e-12
+(measurements excluded: keys ending in _ms, timings_ms, seconds, rss_kb, scene_file) must agree within 1e-12
 relative (absolute below 1); PC2 caches are compared as float32; any other file byte for byte.
 Exit 0 when everything agrees."""
 import json, os, re, struct, sys
@@ -15,8 +15,8 @@ def close(x, y, where):
     if d > TOL: bad.append(f'{where}: {x} vs {y}')
 def walk_json(a, b, where):
     if isinstance(a, dict):
-        ka = {k for k in a if not (k.endswith('_ms') or k in ('timings_ms', 'seconds', 'scene_file'))}
-        kb = {k for k in b if not (k.endswith('_ms') or k in ('timings_ms', 'seconds', 'scene_file'))}
+        ka = {k for k in a if not (k.endswith('_ms') or k in ('timings_ms', 'seconds', 'rss_kb', 'scene_file'))}
+        kb = {k for k in b if not (k.endswith('_ms') or k in ('timings_ms', 'seconds', 'rss_kb', 'scene_file'))}
         if ka != kb: bad.append(f'{where}: keys differ {sorted(ka ^ kb)}')
         for k in ka & kb: walk_json(a[k], b[k], where + '/' + k)
     elif isinstance(a, list):
