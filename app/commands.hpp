@@ -1,5 +1,5 @@
 #pragma once
-// Subcommands of the mbi executable. Each cli/cmd_*.cpp registers one subcommand with a static
+// Subcommands of the mbi executable. Each app/cmd_*.cpp registers one subcommand with a static
 // Registrar; main.cpp builds the CLI11 app from the registry. A subcommand reports bad input by
 // throwing any std::exception: main prints "mbi <sub>: error: <message>" on one line and exits 2.
 #include <mbi/base/names.hpp>
