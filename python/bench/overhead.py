@@ -1,7 +1,10 @@
 """What the Python layer costs: the same C++ calls timed from Python and from C++, and the
 vector-Jacobian product against the forward map.
 
+    cmake --preset release -DMBI_PYTHON_TIMING=ON && cmake --build --preset release --target mbi_python
     PYTHONPATH=build/release/python python3 python/bench/overhead.py [--calls N] [--points P]
+
+The module needs the benchmark's clocks (CMake MBI_PYTHON_TIMING=ON; the shipped one has none).
 
 1. Per-call overhead (medians over N calls, default 10,000, each timed alone): ModifiedBI.solve
    at 448 control vertices (a 7 x 7 x 6-cell box) and FastEvaluator.evaluate of P points (default
@@ -66,6 +69,9 @@ def main():
     parser.add_argument("--points", type=int, default=1_000_000)
     parser.add_argument("--vjp-calls", type=int, default=30)
     args = parser.parse_args()
+    if not hasattr(_mbi, "_timing"):
+        parser.exit(2, "overhead.py: this module has no clocks: build it with "
+                       "cmake --preset release -DMBI_PYTHON_TIMING=ON\n")
 
     U, T = mbi.box_mesh(7, 7, 6)
     rng = np.random.default_rng(0)

@@ -17,7 +17,7 @@ mbi.run_scene (a scene file, as `mbi run`); mbi.batch (runs on a Dask cluster).
 Every error of the libraries and every refused argument raises mbi.Error (a ValueError) with the
 message of the C++ library; a file that cannot be read or written raises mbi.FileError (an
 mbi.Error and an OSError) naming it. PyTorch autograd: mbi.torch (imported on its own).
-docs/python.md documents the whole API; __init__.pyi gives editors its signatures.
+docs/python.md documents the whole API; _mbi.pyi gives editors and type checkers the signatures of the module.
 """
 from ._mbi import (
     INTEGRATORS,

@@ -15,13 +15,14 @@ void bind_embedding(py::module_& m);   // bind_embedding.cpp: Embedding, embed, 
 void bind_methods(py::module_& m);     // bind_methods.cpp: ModifiedBI, Phong, Bezier points, metrics
 void bind_evaluate(py::module_& m);    // bind_evaluate.cpp: evaluate, FastEvaluator, transposes
 void bind_deformer(py::module_& m);    // bind_deformer.cpp: Deformer
-void bind_timing(py::module_& m);      // timing.cpp: C++ baselines of the overhead benchmark
+void bind_timing(py::module_& m);      // timing.cpp: C++ baselines of the overhead benchmark (MBI_PYTHON_TIMING)
 void bind_sim(py::module_& m);         // bind_sim.cpp: Simulator
 void bind_pipeline(py::module_& m);    // bind_pipeline.cpp: FramePipeline and its drivers
 void bind_io(py::module_& m);          // bind_io.cpp: file readers and writers
 void bind_cage(py::module_& m);        // bind_cage.cpp: cage
 void bind_scene(py::module_& m);       // bind_scene.cpp: run_scene
 
+#ifdef MBI_PYTHON_TIMING
 /// Seconds the calling thread last spent in a section without the GIL: the C++ part of its last
 /// call, which python/bench/overhead.py subtracts from the call's time seen from Python.
 inline thread_local double last_section_seconds = 0;
@@ -31,13 +32,16 @@ struct SectionClock {
   Clock::time_point t0 = Clock::now();
   ~SectionClock() { last_section_seconds = ms_since(t0) * 1e-3; }
 };
+#else
+struct SectionClock {};  // the shipped module reads no clock (CMake MBI_PYTHON_TIMING)
+#endif
 
 /// Runs f() without the GIL (every call that does real work), so that other Python threads run
 /// meanwhile; nothing in f may touch a Python object.
 template <class F>
 auto without_gil(F&& f) {
   py::gil_scoped_release release;
-  SectionClock clock;
+  [[maybe_unused]] SectionClock clock;
   return f();
 }
 
@@ -65,7 +69,7 @@ struct Guarded {
   template <class F>
   auto run(F&& f) {
     py::gil_scoped_release release;
-    SectionClock clock;
+    [[maybe_unused]] SectionClock clock;
     std::lock_guard<std::mutex> lock(mutex);
     return f(object);
   }

@@ -37,7 +37,9 @@ PYBIND11_MODULE(_mbi, m) {
   mbi::python::bind_methods(m);
   mbi::python::bind_evaluate(m);
   mbi::python::bind_deformer(m);
+#ifdef MBI_PYTHON_TIMING
   mbi::python::bind_timing(m);
+#endif
   mbi::python::bind_sim(m);
   mbi::python::bind_pipeline(m);
   mbi::python::bind_io(m);
