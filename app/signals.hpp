@@ -1,14 +1,15 @@
 #pragma once
-// What SIGINT (Ctrl-C) and SIGTERM do to an mbi command. mbi run makes the next frame its last
-// and finishes its outputs up to it (metrics.json records the signal), and so does deform on a
-// trajectory; cage and single-pose deform, whose outputs are all or nothing, stop at once. Either way no temporary file stays behind, no
-// partial file appears under a final name, and the exit code is 128 + the signal (130, 143), as
-// a shell reports a process the signal ended.
+// What SIGINT (Ctrl-C) and SIGTERM do to an mbi command. mbi run and mbi deform (one pose is a
+// trajectory of one frame) make the frame in progress their last and finish their outputs up to
+// it (metrics.json and --stats record the signal); before the frames, and in cage, whose outputs
+// are all or nothing, a signal ends the process at once. Either way no temporary file stays
+// behind, no partial file appears under a final name, and the exit code is 128 + the signal
+// (130, 143), as a shell reports a process the signal ended.
 #include <atomic>
 
 namespace mbi::cli {
 
-/// Handles SIGINT and SIGTERM from now on. With `stop` (run, deform on a trajectory), the first signal stores its
+/// Handles SIGINT and SIGTERM from now on. With `stop` (run, deform's frames), the first signal stores its
 /// number there and says on stderr that the run stops after the next frame; a second signal, or
 /// any signal without `stop`, removes this process's temporary files (io::remove_temporaries_now)
 /// and ends the process at once with exit code 128 + signal. SIGXFSZ is ignored: a file past

@@ -80,7 +80,9 @@ TEST_CASE("mbi deform on files matches the library and writes complete stats", "
   CHECK(j["control_vertices"] == f.U.rows());
   CHECK(j["points"] == f.V.rows());
   CHECK(j["alpha"].get<double>() == Approx(0.1));
-  for (const char* t : {"embed", "precompute", "solve", "evaluate"}) CHECK(j["timings_ms"].contains(t));
+  for (const char* t : {"embed", "precompute", "read", "deform", "write"}) CHECK(j["timings_ms"].contains(t));
+  CHECK(j["frames"] == 1);  // one pose: a trajectory of one frame
+  CHECK(j["frames_in_trajectory"] == 1);
   for (const char* s : {"bi", "modified_bi", "ratio"})
     for (const char* v : {"mean", "std", "max"}) CHECK(j["disc"][s].contains(v));
   CHECK(j["disc"]["bi"]["mean"].get<double>() > j["disc"]["modified_bi"]["mean"].get<double>());

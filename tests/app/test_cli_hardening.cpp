@@ -610,7 +610,8 @@ TEST_CASE("deform --stats has the documented keys for each method, ratio null at
   mbi::io::write_points(dir / "p.txt", U * 0.9 + Eigen::MatrixXd::Constant(U.rows(), 3, 0.05));
   const std::set<std::string> want = {"method", "dim", "alpha", "beta", "pin_boundary", "control_vertices",
                                       "elements", "points", "outside_points", "max_outside_distance",
-                                      "null_space_dim", "disc", "e_vibr", "e_disc", "e_total", "timings_ms"};
+                                      "null_space_dim", "disc", "e_vibr", "e_disc", "e_total", "frames",
+                                      "frames_in_trajectory", "timings_ms"};
   for (const std::string method : {"bi", "modified-bi", "phong"})
     for (const std::string x : {"rest", "bent"}) {
       INFO(method << " " << x);
@@ -623,7 +624,8 @@ TEST_CASE("deform --stats has the documented keys for each method, ratio null at
       const json j = json::parse(slurp(dir / stats));
       CHECK(keys(j) == want);
       CHECK(keys(j["timings_ms"]) ==
-            std::set<std::string>{"embed", "precompute", "phong_precompute", "solve", "evaluate"});
+            std::set<std::string>{"embed", "precompute", "phong_precompute", "read", "deform", "write", "read_per_frame",
+                                  "deform_per_frame", "write_per_frame"});
       check_disc(j["disc"], true, x == "rest");
       std::vector<std::string> found;
       nulls(j, "", found);

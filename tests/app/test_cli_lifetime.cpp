@@ -89,6 +89,30 @@ TEST_CASE("lifetime: a signal at every stage of a sequence leaves the finished o
   }
 }
 
+TEST_CASE("lifetime: a signal at every stage of one pose leaves the finished output or none", "[app][sequence][signal]") {
+  // one pose is a trajectory of one frame: a signal during its frame lets that frame finish
+  for (const std::string stage : {"load", "precompute", "frame", "finish", "frame:TERM"}) {
+    INFO(stage);
+    TempDir dir("life");
+    const fs::path out = dir / "out";
+    fs::create_directory(out);
+    const auto r = run_mbi(deform(data("twist_0001.txt"), q(out / "o.obj"), "--stats " + q(out / "s.json")), dir,
+                           "MBI_TEST_SIGNAL_AT=" + stage);
+    INFO(r.err);
+    CHECK(r.code == 128 + (stage == "frame:TERM" ? SIGTERM : SIGINT));
+    CHECK(temporaries(out) == 0);
+    if (stage == "load" || stage == "precompute") {
+      CHECK(fs::is_empty(out));  // exits at once: nothing written
+      continue;
+    }
+    CHECK(mbi::io::read_surface(out / "o.obj").V.rows() == 144);  // complete
+    CHECK_THAT(r.err, Catch::Contains("(outputs up to frame 0 kept: every frame was done, the outputs are finished)"));
+    const nlohmann::json j = nlohmann::json::parse(slurp(out / "s.json"));
+    CHECK(j["frames"] == 1);
+    CHECK(j["interrupted_by_signal"] == (stage == "frame:TERM" ? SIGTERM : SIGINT));
+  }
+}
+
 TEST_CASE("lifetime: two identical runs into x.glb give identical bytes, the root node named x", "[app][sequence]") {
   TempDir dir("life");
   fs::create_directory(dir / "a");

@@ -10,6 +10,9 @@
 #include <csignal>
 #include <cstdlib>
 #include <fstream>
+#include <set>
+
+#include <nlohmann/json.hpp>
 
 namespace fs = std::filesystem;
 using mbi::test::q;
@@ -183,4 +186,31 @@ TEST_CASE("mbi deform --max-outside refuses points far outside, naming how many 
   CHECK(r.code == 2);
   CHECK_THAT(r.err, Catch::Contains("2 of 3 points lie farther outside"));
   CHECK(run_mbi(base + q(data("twist.pc2")) + " --out " + q(dir / "o.pc2") + " --max-outside 0.5", dir).code == 0);
+}
+
+TEST_CASE("sequence: one pose is a trajectory of one frame: same positions, table and --stats keys", "[app][sequence]") {
+  TempDir dir("seq");
+  const auto seq = run_mbi(deform(data("twist_%04d.txt"), dir / "n_%d.obj", "--stats " + q(dir / "seq.json")), dir);
+  INFO(seq.err);
+  REQUIRE(seq.code == 0);
+  const auto one = run_mbi(deform(data("twist_0002.txt"), dir / "one.obj", "--stats " + q(dir / "one.json")), dir);
+  INFO(one.err);
+  REQUIRE(one.code == 0);
+  // the last frame of the series and the pose alone: the same double evaluation
+  CHECK(max_diff(mbi::io::read_surface(dir / "n_2.obj").V, mbi::io::read_surface(dir / "one.obj").V) == 0.0);
+  const nlohmann::json js = nlohmann::json::parse(mbi::test::slurp(dir / "seq.json"));
+  const nlohmann::json jo = nlohmann::json::parse(mbi::test::slurp(dir / "one.json"));
+  std::set<std::string> ks, ko;
+  for (auto it = js.begin(); it != js.end(); ++it) ks.insert(it.key());
+  for (auto it = jo.begin(); it != jo.end(); ++it) ko.insert(it.key());
+  CHECK(ks == ko);
+  CHECK(js["frames"] == 3);
+  CHECK(jo["frames"] == 1);
+  CHECK(js["disc"] == jo["disc"]);  // the sequence's table is its last frame's
+  CHECK(js["e_total"] == jo["e_total"]);
+  CHECK(js["disc"]["modified_bi"]["mean"].get<double>() < js["disc"]["bi"]["mean"].get<double>());
+  // both summaries print the table; only the one pose names its file
+  for (const std::string& out : {seq.out, one.out}) CHECK_THAT(out, Catch::Contains("face discontinuity over"));
+  CHECK_THAT(seq.out, Catch::Contains("frames:  3 of 3") && Catch::Contains("the last frame"));
+  CHECK_THAT(one.out, Catch::Contains("wrote "));
 }
