@@ -496,7 +496,7 @@ long long grid_cap(int target) {
 }
 
 [[noreturn]] void unreachable_target(int target, int best, long long cap) {
-  throw CageError("cannot reach " + std::to_string(target) +
+  throw Error("cannot reach " + std::to_string(target) +
                   " control vertices: grids of up to " + std::to_string(cap) +
                   " cells give at most " + std::to_string(best) +
                   " (the model's bounding box is mostly empty: too few points, parts far apart or "
@@ -590,7 +590,7 @@ CageResult make_cage_tetgen(const Eigen::MatrixXd& P, const Eigen::MatrixXi& Fi,
     if (best_dist <= target / 10) break;
   }
   if (best.U.rows() == 0)
-    throw CageError("no TetGen cage with every dihedral angle >= 5 degrees, every vertex inside "
+    throw Error("no TetGen cage with every dihedral angle >= 5 degrees, every vertex inside "
                     "and within 30% of " + std::to_string(target) + " vertices (last: " + last_why +
                     "); use the voxel mesher");
   best.mesher = Mesher::TetGen;
@@ -603,7 +603,7 @@ const char* mesher_name(Mesher m) { return kMesherNames.name(m); }
 
 Mesher parse_mesher(const std::string& name) {
   if (const std::optional<Mesher> m = kMesherNames.find(name)) return *m;
-  throw CageError("mesher: " + kMesherNames.unknown(name));
+  throw Error("mesher: " + kMesherNames.unknown(name));
 }
 
 bool is_planar(const Eigen::Ref<const Eigen::MatrixXd>& V) {
@@ -651,29 +651,29 @@ CageResult make_cage(const Eigen::Ref<const Eigen::MatrixXd>& V,
                      const Eigen::Ref<const Eigen::MatrixXi>& F, const CageOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   if (V.rows() == 0 || V.cols() != 3)
-    throw CageError("V must be n x 3 with n > 0, got " + std::to_string(V.rows()) + " x " +
+    throw Error("V must be n x 3 with n > 0, got " + std::to_string(V.rows()) + " x " +
                     std::to_string(V.cols()));
   for (Eigen::Index i = 0; i < V.rows(); ++i)
     if (!V.row(i).allFinite())
-      throw CageError("vertex " + std::to_string(i) + " is not finite");
+      throw Error("vertex " + std::to_string(i) + " is not finite");
   if (F.rows() > 0 && F.cols() != 3)
-    throw CageError("F must be t x 3");
+    throw Error("F must be t x 3");
   for (Eigen::Index t = 0; t < F.rows(); ++t)
     for (int c = 0; c < 3; ++c)
       if (F(t, c) < 0 || F(t, c) >= V.rows())
-        throw CageError("face " + std::to_string(t) + " index " + std::to_string(F(t, c)) +
+        throw Error("face " + std::to_string(t) + " index " + std::to_string(F(t, c)) +
                         " out of range");
   if (options.search_steps < 0 || options.search_steps > 10000)
-    throw CageError("search_steps out of range [0, 10000]");
+    throw Error("search_steps out of range [0, 10000]");
   if (options.mesher == Mesher::TetGen && !detail::have_tetgen())
-    throw CageError("this build has no TetGen (MBI_WITH_TETGEN=OFF): use the voxel mesher");
+    throw Error("this build has no TetGen (MBI_WITH_TETGEN=OFF): use the voxel mesher");
 
   const double zspan = V.col(2).maxCoeff() - V.col(2).minCoeff();
   const bool tetgen = options.mesher == Mesher::TetGen;
   const int d = (zspan == 0.0 && !options.force_3d && !tetgen) ? 2 : 3;
   const int min_target = d == 3 ? 8 : 4;
   if (options.target_vertices < min_target || options.target_vertices > 1000000)
-    throw CageError("target_vertices " + std::to_string(options.target_vertices) +
+    throw Error("target_vertices " + std::to_string(options.target_vertices) +
                     " out of range [" + std::to_string(min_target) + ", 1000000]");
 
   // Scale-free: the cage is built for the model moved to the centre of its bounding box and
@@ -689,12 +689,12 @@ CageResult make_cage(const Eigen::Ref<const Eigen::MatrixXd>& V,
     return std::string(b);
   };
   if (!(L > 0))
-    throw CageError("degenerate model: all " + std::to_string(V.rows()) +
+    throw Error("degenerate model: all " + std::to_string(V.rows()) +
                     " vertices are the same point (" + fmt(V(0, 0)) + ", " + fmt(V(0, 1)) + ", " +
                     fmt(V(0, 2)) + "); a cage needs a model with an extent");
   const double offset = std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
   if (L < kMinRelativeExtent * offset)
-    throw CageError("the model's extent " + fmt(L) + " is below the precision of its "
+    throw Error("the model's extent " + fmt(L) + " is below the precision of its "
                     "coordinates at offset " + fmt(offset) + " (at least " +
                     fmt(kMinRelativeExtent) + " of the offset is needed); move it near the origin");
   Eigen::MatrixXd Pn = (V.rowwise() - center) / L;
@@ -706,7 +706,7 @@ CageResult make_cage(const Eigen::Ref<const Eigen::MatrixXd>& V,
   const interp::Embedding emb = interp::embed(r.U, r.T, V.leftCols(d));
   r.outside_points = static_cast<int>(emb.outside.size());
   if (r.outside_points != 0)
-    throw CageError(std::to_string(r.outside_points) +
+    throw Error(std::to_string(r.outside_points) +
                     " vertices fall outside the cage once it is moved back to the model's offset " +
                     fmt(offset) + " (rounding); move the model near the origin");
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -811,7 +811,7 @@ CageResult make_cage_normalised(const Eigen::MatrixXd& P, const Eigen::MatrixXi&
     if (res.outside_points == 0) break;
   }
   if (res.U.rows() == 0 || res.outside_points != 0)
-    throw CageError("no cell size found whose cage contains every vertex (" +
+    throw Error("no cell size found whose cage contains every vertex (" +
                     std::to_string(res.outside_points) + " outside)");
   res.min_dihedral_deg = min_dihedral_angle_deg(res.U, res.T);
   return res;

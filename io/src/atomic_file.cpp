@@ -22,7 +22,7 @@ namespace mbi::io {
 namespace {
 
 [[noreturn]] void fail(const std::filesystem::path& target, const std::string& what) {
-  throw IoError(target.string() + ": " + what);
+  throw Error(target.string() + ": " + what);
 }
 
 std::atomic<unsigned> counter{0};
@@ -203,7 +203,7 @@ void check_file_name(const std::filesystem::path& target, const std::string& wha
   const std::string named = what.empty() ? target.string() : what + " " + target.string();
   const std::filesystem::path name = target.filename();
   if (name.empty() || name == "." || name == "..")
-    throw IoError(named + ": names a folder, not a file (give a file name, e.g. " +
+    throw Error(named + ": names a folder, not a file (give a file name, e.g. " +
                   (target / "out").string() + ")");
 }
 
@@ -261,8 +261,8 @@ void refuse_held_folder(const std::filesystem::path& target, const std::string& 
   std::error_code ec;
   try {
     if (std::filesystem::is_directory(dir, ec)) FolderLock probe(dir, kCommitWait);
-  } catch (const IoError& err) {
-    throw IoError(named + ": " + err.what());
+  } catch (const Error& err) {
+    throw Error(named + ": " + err.what());
   }
 }
 
@@ -304,7 +304,7 @@ std::size_t OutputSet::add(const std::filesystem::path& target, const std::strin
   if (const auto id = file_id(target)) {
     for (const auto& in : inputs_)
       if (file_id(in) == id)
-        throw IoError(named + ": is an input (" + in.string() +
+        throw Error(named + ": is an input (" + in.string() +
                       "); an input is never overwritten, not even with --force");
   }
   // another output of this command
@@ -312,13 +312,13 @@ std::size_t OutputSet::add(const std::filesystem::path& target, const std::strin
   for (const Entry& e : entries_)
     if (e.target == target || (here && where(e.target) == here) ||
         (file_id(target) && file_id(target) == file_id(e.target)))
-      throw IoError(named + ": is also another output of this command (" + e.target.string() + ")");
+      throw Error(named + ": is also another output of this command (" + e.target.string() + ")");
   if (present) {
-    if (std::filesystem::is_directory(target, ec)) throw IoError(named + ": is a folder");
+    if (std::filesystem::is_directory(target, ec)) throw Error(named + ": is a folder");
     // a FIFO, socket or device is refused as such: --force would not change that
     if (!std::filesystem::is_regular_file(st) && !std::filesystem::is_symlink(st))
-      throw IoError(named + ": exists and is not a regular file (" + kind_of(st.type()) + ")");
-    if (!force_) throw IoError(named + ": exists (use --force to overwrite)");
+      throw Error(named + ": exists and is not a regular file (" + kind_of(st.type()) + ")");
+    if (!force_) throw Error(named + ": exists (use --force to overwrite)");
   }
   refuse_held_folder(target, named);
   Entry e;
@@ -337,9 +337,9 @@ std::size_t OutputSet::add(const std::filesystem::path& target, const std::strin
     try {
       const int fd = create_temporary(target, staging_suffix(target), e.staging, e.slot);
       ::close(fd);
-    } catch (const IoError& err) {
+    } catch (const Error& err) {
       if (what.empty()) throw;
-      throw IoError(what + " " + err.what());
+      throw Error(what + " " + err.what());
     }
   }
   e.reserved = file_id(e.staging);  // a writer replaces the file (a new inode) or fills it
@@ -355,20 +355,20 @@ void OutputSet::write(std::size_t i, const std::function<void(const std::filesys
   const Entry& e = entries_.at(i);
   try {
     body(e.staging);
-  } catch (const IoError& err) {
-    throw IoError(name_targets(err.what()));
+  } catch (const Error& err) {
+    throw Error(name_targets(err.what()));
   }
 }
 
 void OutputSet::commit() {
-  if (committed_) throw IoError("outputs committed twice");
+  if (committed_) throw Error("outputs committed twice");
   std::error_code ec;
   for (const Entry& e : entries_) {
     const bool file = std::filesystem::is_regular_file(std::filesystem::symlink_status(e.staging, ec));
     // still the empty reservation: never written (committing it would replace the target by
     // an empty file)
     const bool untouched = file && file_id(e.staging) == e.reserved && std::filesystem::file_size(e.staging, ec) == 0;
-    if (!file || untouched) throw IoError(e.target.string() + ": was not written");
+    if (!file || untouched) throw Error(e.target.string() + ": was not written");
   }
   // The folders' locks while the files move into place: two commands writing the same outputs
   // leave one's complete set, never a mix (another command's commit takes milliseconds; a run
@@ -391,7 +391,7 @@ void OutputSet::commit() {
   // target's symbolic link, if any, is replaced, never followed.
   for (const Entry& e : entries_) {
     std::filesystem::rename(e.staging, e.target, ec);
-    if (ec) throw IoError(e.target.string() + ": cannot move the finished file into place: " + ec.message());
+    if (ec) throw Error(e.target.string() + ": cannot move the finished file into place: " + ec.message());
   }
   committed_ = true;
 }

@@ -28,7 +28,7 @@ struct CacheLayout {
 /// The first n bytes of a file (fewer when it is shorter).
 using HeadReader = std::function<std::string(std::size_t n)>;
 
-/// A PC2 file's layout from its first bytes and its size; throws IoError naming what is wrong.
+/// A PC2 file's layout from its first bytes and its size; throws Error naming what is wrong.
 CacheLayout pc2_layout(const HeadReader& head, unsigned long long size, const std::filesystem::path& file);
 /// An MDD file's layout (a Blender export's extra rest frame skipped).
 /// `with_times`: the times are read too (else only their place is given).
@@ -36,7 +36,7 @@ CacheLayout mdd_layout(const HeadReader& head, unsigned long long size, const st
                        bool with_times = true);
 
 /// One frame of `points` float32 triples at `bytes` (big or little endian) into out (points x 3);
-/// throws IoError "<file>: frame k: point i: non-finite coordinate" (and for magnitudes above
+/// throws Error "<file>: frame k: point i: non-finite coordinate" (and for magnitudes above
 /// kMaxCoordinate, which float32 cannot reach).
 void decode_cache_frame(const char* bytes, int points, bool big_endian, Eigen::MatrixXd& out,
                         const std::filesystem::path& file, int frame);

@@ -57,7 +57,7 @@ FolderLock::FolderLock(const std::filesystem::path& dir, std::chrono::millisecon
   const std::filesystem::path shown = dir.empty() ? "." : dir;
   fd_ = ::open(shown.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (fd_ < 0)
-    throw IoError(shown.string() + ": cannot open this folder to lock it (" + std::strerror(errno) + ")");
+    throw Error(shown.string() + ": cannot open this folder to lock it (" + std::strerror(errno) + ")");
   const auto until = std::chrono::steady_clock::now() + wait;
   for (;;) {
     if (::flock(fd_, LOCK_EX | LOCK_NB) == 0) return;
@@ -69,9 +69,9 @@ FolderLock::FolderLock(const std::filesystem::path& dir, std::chrono::millisecon
     ::close(fd_);
     fd_ = -1;
     if (err != EWOULDBLOCK)
-      throw IoError(shown.string() + ": cannot lock this folder (" + std::strerror(err) + ")");
+      throw Error(shown.string() + ": cannot lock this folder (" + std::strerror(err) + ")");
     const std::string holder = folder_lock_holder(shown);
-    throw IoError(shown.string() + ": another process is writing into this folder (" +
+    throw Error(shown.string() + ": another process is writing into this folder (" +
                   (holder.empty() ? "which one is not known" : holder) +
                   "); wait until it ends, or choose another folder");
   }

@@ -16,16 +16,16 @@ namespace mbi::io::detail {
 constexpr int kMaxGltfNesting = 64;
 
 /// The asset's JSON: a .glb's first chunk, or the whole text; discarded when it cannot be parsed
-/// (tinygltf then reports why). Throws IoError naming `file` when it nests deeper than
+/// (tinygltf then reports why). Throws Error naming `file` when it nests deeper than
 /// kMaxGltfNesting.
 nlohmann::json gltf_json(std::string_view data, bool binary, const std::filesystem::path& file);
 
-/// Throws IoError naming `file`, the buffer or image, and its uri, unless every uri of `j` is
+/// Throws Error naming `file`, the buffer or image, and its uri, unless every uri of `j` is
 /// a data: URI or a relative path that, percent-decoded and with its symbolic links followed,
 /// lies in `file`'s folder or below.
 void check_gltf_uris(const nlohmann::json& j, const std::filesystem::path& file);
 
-/// Throws IoError naming the extension unless every one in `extensionsRequired` is read by mbi
+/// Throws Error naming the extension unless every one in `extensionsRequired` is read by mbi
 /// (KHR_mesh_quantization) or used only by materials, textures, samplers and images (written
 /// back as they are).
 void check_gltf_extensions(const nlohmann::json& j, const std::filesystem::path& file);

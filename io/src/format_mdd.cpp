@@ -87,7 +87,7 @@ void MddWriter::append(const float* xyz) {
   try {
     out_->write(buffer_.data(), buffer_.size());
     out_->flush();
-  } catch (const IoError&) {
+  } catch (const Error&) {
     out_->truncate(end);
     throw;
   }

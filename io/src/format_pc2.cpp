@@ -68,7 +68,7 @@ void Pc2Writer::append(const Eigen::Ref<const Eigen::MatrixXd>& P) {
       out_->write(buf.data(), buf.size() * sizeof(float));
     }
     out_->flush();
-  } catch (const IoError&) {
+  } catch (const Error&) {
     out_->truncate(end);
     throw;
   }
@@ -90,7 +90,7 @@ void Pc2Writer::append(const float* xyz) {
       out_->write(xyz, n * sizeof(float));
     }
     out_->flush();
-  } catch (const IoError&) {
+  } catch (const Error&) {
     out_->truncate(end);
     throw;
   }

@@ -22,7 +22,7 @@ void fail(const std::filesystem::path& file, int line, const std::string& what) 
   std::string msg = file.string();
   if (line > 0) msg += ":" + std::to_string(line);
   msg += ": " + what;
-  throw IoError(msg);
+  throw Error(msg);
 }
 
 namespace {

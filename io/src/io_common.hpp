@@ -16,15 +16,15 @@
 
 namespace mbi::io::detail {
 
-/// Throws IoError "<file>:<line>: what" (line > 0) or "<file>: what".
+/// Throws Error "<file>:<line>: what" (line > 0) or "<file>: what".
 [[noreturn]] void fail(const std::filesystem::path& file, int line, const std::string& what);
 
 /// The whole file as bytes. Only regular files are read: a directory, a FIFO, a device
 /// (/dev/zero) or a socket is refused before it is opened (and the file is opened with
 /// O_NONBLOCK, so a FIFO swapped in between cannot block), as is a file larger than
-/// kMaxFileBytes. Throws IoError naming the file and what it is.
+/// kMaxFileBytes. Throws Error naming the file and what it is.
 std::string slurp(const std::filesystem::path& file);
-/// Throws IoError unless `file` is a regular file (naming what it is: a directory, a FIFO, ...).
+/// Throws Error unless `file` is a regular file (naming what it is: a directory, a FIFO, ...).
 void require_regular_file(const std::filesystem::path& file);
 
 /// `data` without a leading UTF-8 byte-order mark (EF BB BF), if it has one.
@@ -97,7 +97,7 @@ std::string fmt(double x);
 void write_atomic(const std::filesystem::path& target,
                   const std::function<void(std::FILE*)>& body);
 
-/// fwrite / fputs that throw IoError on failure.
+/// fwrite / fputs that throw Error on failure.
 void put(std::FILE* f, const void* data, std::size_t bytes, const std::filesystem::path& file);
 void put(std::FILE* f, const std::string& s, const std::filesystem::path& file);
 

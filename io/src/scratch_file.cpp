@@ -30,7 +30,7 @@ int unnamed_file(const std::filesystem::path& dir, const std::string& what) {
     }
     if (errno != EEXIST) break;
   }
-  throw IoError(what + ": cannot make a scratch file in " + dir.string() + " (" + errno_text() + ")");
+  throw Error(what + ": cannot make a scratch file in " + dir.string() + " (" + errno_text() + ")");
 }
 
 }  // namespace
@@ -55,21 +55,21 @@ void ScratchFile::append(const void* data, std::size_t bytes) {
     const std::string why = n == 0 ? "nothing written" : errno_text();
     // the partial record goes (shortening needs no space); reads never go past size_ anyway
     [[maybe_unused]] const int ignored = ::ftruncate(fd_, size_);
-    throw IoError(what_ + ": write error in its scratch file (" + why + ")");
+    throw Error(what_ + ": write error in its scratch file (" + why + ")");
   }
   size_ += static_cast<long>(bytes);
 }
 
 void ScratchFile::truncate(long size) {
-  if (size < 0 || size > size_) throw IoError(what_ + ": truncate past the end of its scratch file");
+  if (size < 0 || size > size_) throw Error(what_ + ": truncate past the end of its scratch file");
   if (::ftruncate(fd_, size) != 0)
-    throw IoError(what_ + ": cannot shorten its scratch file (" + errno_text() + ")");
+    throw Error(what_ + ": cannot shorten its scratch file (" + errno_text() + ")");
   size_ = size;
 }
 
 void ScratchFile::read(long offset, void* data, std::size_t bytes) const {
   if (offset < 0 || offset + static_cast<long>(bytes) > size_)
-    throw IoError(what_ + ": read past the end of its scratch file");
+    throw Error(what_ + ": read past the end of its scratch file");
   char* p = static_cast<char*>(data);
   std::size_t done = 0;
   while (done < bytes) {
@@ -79,7 +79,7 @@ void ScratchFile::read(long offset, void* data, std::size_t bytes) const {
       continue;
     }
     if (n < 0 && errno == EINTR) continue;
-    throw IoError(what_ + ": read error in its scratch file (" + (n == 0 ? "end of file" : errno_text()) + ")");
+    throw Error(what_ + ": read error in its scratch file (" + (n == 0 ? "end of file" : errno_text()) + ")");
   }
 }
 

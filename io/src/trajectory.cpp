@@ -215,8 +215,8 @@ Eigen::MatrixXd Trajectory::read(int k) {
   if (I.cache) return I.cache->frame(k);
   try {
     return read_positions(I.files.at(static_cast<std::size_t>(k)));
-  } catch (const IoError& e) {
-    throw IoError("frame " + std::to_string(k) + ": " + e.what());
+  } catch (const Error& e) {
+    throw Error("frame " + std::to_string(k) + ": " + e.what());
   }
 }
 

@@ -171,8 +171,7 @@ Eigen::MatrixXd Deformer::vjp(const interp::ConstPointsRef<double>& G) const {
   I.check_points("dL/dpositions", G.rows(), G.cols());
   const interp::BezierPoints GB = interp::evaluate_transpose(I.embedding, G, elements(), I.options.threads);
   interp::BezierTranspose t = interp::bezier_transpose(I.pre.rest_positions(), I.pre.elements(), GB);
-  if (method() == Method::ModifiedBI) t.X += I.pre.built_solver()->solve_transpose(t.M);
-  else if (method() == Method::Phong) t.X += I.pre.built_phong()->M_transpose(t.M);
+  t.X += I.pre.M_transpose(method(), t.M);  // zero for BI
   return std::move(t.X);
 }
 

@@ -61,6 +61,19 @@ interp::BezierPoints Precompute::bezier(Method method, const Eigen::Ref<const Ei
   return interp::bezier_bi(X, T_);
 }
 
+Eigen::MatrixXd Precompute::M_transpose(Method method, const interp::VertexMatrices& G) const {
+  switch (method) {
+    case Method::ModifiedBI:
+      if (!solver_) throw Error("modified-BI's precompute was not built");
+      return solver_->solve_transpose(G);
+    case Method::Phong:
+      if (!phong_) throw Error("Phong's vertex weights were not built");
+      return phong_->M_transpose(G);
+    case Method::BI: break;
+  }
+  return Eigen::MatrixXd::Zero(U_.rows(), U_.cols());
+}
+
 const interp::ModifiedBI& Precompute::solver() {
   if (!solver_) {
     const auto t0 = Clock::now();

@@ -167,7 +167,7 @@ void write_cache(const fs::path& p, const Input& x, Eigen::Index frames, Eigen::
     for (Eigen::Index k = 0; k < frames; ++k) w.append(x.map.middleRows(k * n, n));
     return w.finish();
   }
-  if (ext != ".mdd") throw io::IoError(p.string() + ": a point cache is .pc2 or .mdd");
+  if (ext != ".mdd") throw io::Error(p.string() + ": a point cache is .pc2 or .mdd");
   if (t.empty())
     for (Eigen::Index k = 0; k < frames; ++k) t.push_back(static_cast<float>(k) / rate);
   if (static_cast<Eigen::Index>(t.size()) != frames)
@@ -188,7 +188,7 @@ void bind_caches(py::module_& m) {
     return without_gil([&] {
       if (io::lower_extension(p) == ".mdd") return io::read_mdd(p);
       if (io::lower_extension(p) == ".pc2") return io::read_pc2(p);
-      throw io::IoError(p.string() + ": a point cache is .pc2 or .mdd");
+      throw io::Error(p.string() + ": a point cache is .pc2 or .mdd");
     });
   }, py::arg("path"), "Reads a .pc2 or .mdd point cache.");
   m.def("write_point_cache", [](const py::object& path, const py::object& frames, float start_frame, float sample_rate,
@@ -218,7 +218,7 @@ void bind_caches(py::module_& m) {
       for (int k = 0; k < t.frames(); ++k) {
         list.push_back(t.read(k));
         if (list.back().rows() != list[0].rows() || list.back().cols() != list[0].cols())
-          throw io::IoError(t.where(k) + ": not the shape of the first frame");
+          throw io::Error(t.where(k) + ": not the shape of the first frame");
       }
       return std::make_pair(std::move(list), t.times());
     });

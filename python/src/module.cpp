@@ -19,7 +19,7 @@ void register_file_error(pybind11::module_& m, const pybind11::handle& error) {
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
-    } catch (const mbi::io::IoError& e) {
+    } catch (const mbi::io::Error& e) {
       PyErr_SetString(type.ptr(), e.what());
     }
   });

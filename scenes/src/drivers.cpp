@@ -17,7 +17,7 @@ namespace {
 
 void check_mode(const Scene& sc, const SceneModels& m) {
   if (sc.mode == Mode::Simulate && m.dim() != 3)
-    throw SceneError(sc.file.string() + ": mode = \"" + mode_name(Mode::Simulate) +
+    throw Error(sc.file.string() + ": mode = \"" + mode_name(Mode::Simulate) +
                      "\" needs a 3D control mesh (use mode = \"" + mode_name(Mode::Drag) + "\" in 2D)");
 }
 
@@ -66,10 +66,10 @@ void add_pokes(const Scene& sc, const SceneModels& m, pipeline::SimulatorDriver&
     try {
       e = interp::embed(m.U, m.T, q);
     } catch (const interp::Error& err) {
-      throw SceneError(sc.file.string() + ": " + point + ": " + err.what());
+      throw Error(sc.file.string() + ": " + point + ": " + err.what());
     }
     if (!e.outside.empty())
-      throw SceneError(sc.file.string() + ": " + point + " is outside the control mesh");
+      throw Error(sc.file.string() + ": " + point + " is outside the control mesh");
     const Eigen::Vector4d bary = e.bary.row(0).transpose();
     if (ps.force) {
       driver.add_scripted_force(ps.first, ps.last, e.element(0), bary, *ps.force);
@@ -110,10 +110,10 @@ void drag_handles(const Scene& sc, const SceneModels& m, std::vector<int>& verti
     const std::string where = sc.file.string() + ": drags[" + std::to_string(k) + "]: ";
     for (int v : vs) {
       if (v >= m.U.rows())
-        throw SceneError(where + "vertex " + std::to_string(v) + " out of range (control mesh has " +
+        throw Error(where + "vertex " + std::to_string(v) + " out of range (control mesh has " +
                          std::to_string(m.U.rows()) + ")");
       if (std::find(vertices.begin(), vertices.end(), v) != vertices.end())
-        throw SceneError(where + "control vertex " + std::to_string(v) + " is dragged twice");
+        throw Error(where + "control vertex " + std::to_string(v) + " is dragged twice");
       vertices.push_back(v);
       drag_of.push_back(static_cast<int>(k));
     }

@@ -12,8 +12,8 @@ Evaluation make_evaluator(GpuUse use, const std::function<void(const std::string
   } else if (use != GpuUse::Off) {
     try {
       e.context = gpu::Context::headless();
-    } catch (const gpu::GlError& err) {
-      if (use == GpuUse::On) throw SceneError(std::string("gpu = ") + gpu_name(use) + ", but " + err.what());
+    } catch (const gpu::Error& err) {
+      if (use == GpuUse::On) throw Error(std::string("gpu = ") + gpu_name(use) + ", but " + err.what());
       warn(std::string("note: ") + err.what() + "; evaluating and drawing on the CPU");
     }
   }

@@ -58,7 +58,7 @@ bool FrameLoop::frame(int f, RunResult& res, bool stopping) {
     return false;
   }
   nlohmann::json record = metrics_.start_frame(f);
-  if (pinned_ && !pinned_->step(false).ok) throw SceneError("the boundary-pinned comparison failed");
+  if (pinned_ && !pinned_->step(false).ok) throw Error("the boundary-pinned comparison failed");
   const bool last = f == sc_.simulation.frames || stopping;
   const bool write_now = last || out_.due(f, sc_.simulation.frames);
   std::vector<const Eigen::MatrixXd*> shown;
@@ -73,7 +73,7 @@ bool FrameLoop::frame(int f, RunResult& res, bool stopping) {
   // numbers stay numbers: positions or energies that overflow fail this step (exit 3, what
   // was reached is kept), before anything of this frame is written
   if (!pipe_.positions().allFinite() || !pipe_.control_positions().allFinite())
-    throw SceneError("the positions overflow (not finite)");
+    throw Error("the positions overflow (not finite)");
   std::optional<interp::DiscontinuityTable> table;
   if (sc_.output.metrics || last) table = metrics_.add_discontinuity(record);
   const Eigen::MatrixXd* normals = write_now && pipe_.options().normals ? &pipe_.normals() : nullptr;

@@ -115,7 +115,7 @@ void check_run_size(const std::string& where, long long dense_vertices, long lon
                     long long control_elements, int d) {
   const char* kind = d == 3 ? " tetrahedra" : " triangles";
   if (control_vertices > kMaxControlVertices || control_elements > kMaxControlElements)
-    throw SceneError(where + ": the control mesh has " + std::to_string(control_vertices) +
+    throw Error(where + ": the control mesh has " + std::to_string(control_vertices) +
                      " vertices and " + std::to_string(control_elements) + kind +
                      ", over the cap of " + std::to_string(kMaxControlVertices) + " vertices and " +
                      std::to_string(kMaxControlElements) + kind +
@@ -124,7 +124,7 @@ void check_run_size(const std::string& where, long long dense_vertices, long lon
   bool by_group = false;
   const double have = usable_memory(by_group);
   if (have > 0 && need > 0.75 * have)
-    throw SceneError(where + ": the run needs about " + gib(need) + " of memory (" +
+    throw Error(where + ": the run needs about " + gib(need) + " of memory (" +
                      std::to_string(dense_vertices) + " dense vertices, " +
                      std::to_string(control_vertices) + " control vertices), over 3/4 of " +
                      (by_group ? "this process's control group limit of " : "this machine's ") + gib(have));

@@ -104,11 +104,11 @@ interp::DiscontinuityTable RunMetrics::add_discontinuity(nlohmann::json& record)
   try {
     t = table();
   } catch (const interp::OverflowError& e) {  // a run error (exit 3), not a library one
-    throw SceneError(e.what());
+    throw Error(e.what());
   }
   record["disc"] = disc_json(t, roundoff_);  // throws on a non-finite value
   if (!std::isfinite(t.e_vibr) || !std::isfinite(t.e_disc))
-    throw SceneError("E_vibr or E_disc is not finite");
+    throw Error("E_vibr or E_disc is not finite");
   record["e_vibr"] = t.e_vibr;
   record["e_disc"] = t.e_disc;
   record["metrics_ms"] = ms_since(t0);

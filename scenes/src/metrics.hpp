@@ -31,11 +31,11 @@ class RunMetrics {
   /// The frame's timings (ms) into its record.
   void add_timings(nlohmann::json& record, int f);
   /// The discontinuity table at the frame's control positions (BI against modified-BI, and
-  /// Phong in a Phong run) into its record; throws SceneError when a value is not finite.
+  /// Phong in a Phong run) into its record; throws Error when a value is not finite.
   interp::DiscontinuityTable add_discontinuity(nlohmann::json& record);
   /// Adds the frame's record, with the process's resident memory now (rss_kb). When metrics.json
   /// is written, records wait in a scratch file in the output folder (memory stays bounded over
-  /// any number of frames); added whole or not at all (throws io::IoError on a full disk).
+  /// any number of frames); added whole or not at all (throws io::Error on a full disk).
   void add_frame(nlohmann::json record);
   /// Forgets the record add_frame() added last (a later part of that frame failed).
   void discard_last();

@@ -17,7 +17,7 @@ namespace {
 // Loop subdivision when the scene asks for it.
 void subdivide(const Scene& sc, const DenseSpec& d, io::SurfaceMesh& s) {
   if (d.subdivide == 0) return;
-  if (s.V.cols() != 3) throw SceneError(sc.file.string() + ": dense.subdivide: only for 3D surfaces");
+  if (s.V.cols() != 3) throw Error(sc.file.string() + ": dense.subdivide: only for 3D surfaces");
   generate::loop_subdivide(s, d.subdivide);
   s.N.resize(0, 0);  // the file's normals and attributes belong to the unrefined mesh
   s.attributes.reset();
@@ -53,7 +53,7 @@ void load_dense(const Scene& sc, const fs::path& mesh_override, SceneModels& m) 
     m.image = std::move(img);
   }
   subdivide(sc, sc.dense, m.dense);
-  if (m.dense.V.rows() == 0) throw SceneError(m.dense_name + ": the dense model has no vertices");
+  if (m.dense.V.rows() == 0) throw Error(m.dense_name + ": the dense model has no vertices");
 }
 
 // [[dense]]: the other models' files joined after the first (deform_parts in the app does the
@@ -64,7 +64,7 @@ void add_more_dense(const Scene& sc, SceneModels& m) {
     const fs::path p = resolve_path(sc, d.path);
     io::SurfaceMesh s = io::read_surface(p);
     subdivide(sc, d, s);
-    if (s.V.rows() == 0) throw SceneError(p.string() + ": the dense model has no vertices");
+    if (s.V.rows() == 0) throw Error(p.string() + ": the dense model has no vertices");
     m.dense_parts.push_back({p.string(), m.dense_parts.back().first + m.dense_parts.back().rows, s.V.rows(), s});
   }
   io::SurfaceMesh joined;
@@ -98,12 +98,12 @@ void drop_flat_z(const Scene& sc, bool force_3d, const std::optional<io::Control
   const std::string flat = m.dense_name + ": the model is flat (every z = " + format_num(m.dense.V(0, 2)) +
                            "), a 2D input";
   if (sc.control.builtin == ControlBuiltin::Box && sc.control.path.empty())
-    throw SceneError(flat + ", but control.builtin = \"" + builtin_name(sc.control.builtin) +
+    throw Error(flat + ", but control.builtin = \"" + builtin_name(sc.control.builtin) +
                      "\" is 3D: use \"" + builtin_name(ControlBuiltin::Grid2D) +
                      "\" or generate_vertices, or --force-3d");
   if (sc.control.path.empty() && sc.control.builtin == ControlBuiltin::None &&
       sc.control.mesher == generate::Mesher::TetGen)
-    throw SceneError(flat + "; control.mesher = \"" + generate::mesher_name(sc.control.mesher) +
+    throw Error(flat + "; control.mesher = \"" + generate::mesher_name(sc.control.mesher) +
                      "\" makes tetrahedra only: use the voxel mesher for a 2D triangle cage, or "
                      "--force-3d");
   m.flat_z = m.dense.V(0, 2);
@@ -131,8 +131,8 @@ void generate_control(const Scene& sc, bool force_3d, SceneModels& m) {
   generate::CageResult cage;
   try {
     cage = generate::make_cage(V3, m.dense.F, co);
-  } catch (const generate::CageError& e) {  // named by the scene key that asked for it
-    throw SceneError(sc.file.string() + ": control.generate_vertices = " +
+  } catch (const generate::Error& e) {  // named by the scene key that asked for it
+    throw Error(sc.file.string() + ": control.generate_vertices = " +
                      std::to_string(co.target_vertices) + ": " + e.what());
   }
   m.U = cage.U;
@@ -157,12 +157,12 @@ void load_control(const Scene& sc, bool force_3d, std::optional<io::ControlMesh>
     m.control_name = "built-in paper bar control (35 vertices)";
   } else if (sc.control.builtin == ControlBuiltin::Box) {
     if (two_d)
-      throw SceneError(where + ": " + builtin + " is 3D; use \"" +
+      throw Error(where + ": " + builtin + " is 3D; use \"" +
                        builtin_name(ControlBuiltin::Grid2D) + "\"");
     m.U = padded_box_control(m.dense.V, sc.control.cells, m.T);
     m.control_name = "built-in box control";
   } else if (sc.control.builtin == ControlBuiltin::Grid2D) {
-    if (!two_d) throw SceneError(where + ": " + builtin + " needs a 2D dense model");
+    if (!two_d) throw Error(where + ": " + builtin + " needs a 2D dense model");
     const Eigen::Vector2d lo = m.dense.V.colwise().minCoeff().transpose();
     const Eigen::Vector2d hi = m.dense.V.colwise().maxCoeff().transpose();
     Eigen::MatrixXd G;
@@ -186,7 +186,7 @@ SceneModels load_models(const Scene& sc, const fs::path& mesh_override, bool for
   load_control(sc, force_3d, std::move(from_file), m);
   const std::string where = sc.file.string();
   if (m.U.cols() != m.dense.V.cols())
-    throw SceneError(where + ": the control mesh is " + std::to_string(m.U.cols()) +
+    throw Error(where + ": the control mesh is " + std::to_string(m.U.cols()) +
                      "D but the dense model is " + std::to_string(m.dense.V.cols()) + "D");
   // before the embedding, the assembly and the factorisation allocate anything
   check_run_size(where, m.dense.V.rows(), m.U.rows(), m.T.rows(), static_cast<int>(m.U.cols()));

@@ -39,7 +39,7 @@ void check_inputs_outside(const std::vector<fs::path>& inputs, const fs::path& d
     for (const auto& e : fs::directory_iterator(dir, ec)) {
       if (!std::regex_match(e.path().filename().string(), output_names())) continue;
       if (io::file_id(e.path()) == id)
-        throw SceneError(in.string() + ": is an input and also " + e.path().string() +
+        throw Error(in.string() + ": is an input and also " + e.path().string() +
                          ", a file this run writes; an input is never overwritten, not even with --force");
     }
   }
@@ -52,7 +52,7 @@ void check_parent(const fs::path& dir) {
     const auto ps = fs::status(p, ec);
     if (fs::exists(ps)) {
       if (!fs::is_directory(ps))
-        throw SceneError(dir.string() + ": cannot make this folder: " + p.string() + " is not a folder");
+        throw Error(dir.string() + ": cannot make this folder: " + p.string() + " is not a folder");
       break;
     }
     if (p == p.parent_path()) break;
@@ -75,7 +75,7 @@ fs::path output_folder(const Scene& sc, const fs::path& out_dir) {
   if (bad) {
     std::string shown;
     for (char c : n) shown += static_cast<unsigned char>(c) < 0x20 || c == 0x7f ? '?' : c;
-    throw SceneError(sc.file.string() + ": name = \"" + shown +
+    throw Error(sc.file.string() + ": name = \"" + shown +
                      "\" cannot name an output folder: it must be one file name (no '/', '\\', "
                      "control characters, leading '.', at most 200 bytes); give --out DIR to "
                      "choose the folder");
@@ -115,7 +115,7 @@ std::vector<fs::path> make_folders(const fs::path& dir) {
   std::vector<fs::path> made;
   for (auto it = missing.rbegin(); it != missing.rend(); ++it) {
     if (fs::create_directory(*it, ec)) made.push_back(*it);
-    else if (ec) throw SceneError(dir.string() + ": cannot make this folder (" + ec.message() + ")");
+    else if (ec) throw Error(dir.string() + ": cannot make this folder (" + ec.message() + ")");
   }
   return made;
 }
@@ -127,11 +127,11 @@ OutputFolder::OutputFolder(const Scene& sc, const fs::path& out_dir, bool force,
   std::error_code ec;
   const auto st = fs::symlink_status(path_, ec);
   if (out_dir.empty() && fs::is_symlink(st))
-    throw SceneError(path_.string() +
+    throw Error(path_.string() +
                      ": is a symbolic link; a scene's default output folder is never reached "
                      "through one (give --out to choose a folder)");
   const bool exists = fs::exists(st) || fs::is_symlink(st);
-  if (exists && !fs::is_directory(path_, ec)) throw SceneError(path_.string() + ": exists and is not a folder");
+  if (exists && !fs::is_directory(path_, ec)) throw Error(path_.string() + ": exists and is not a folder");
   if (!exists) check_parent(path_);
   made_ = make_folders(path_);
   // a folder made here by a run that then loses the lock belongs to the winner: left alone
@@ -151,7 +151,7 @@ OutputFolder::~OutputFolder() {
 void OutputFolder::check_existing(bool force, const std::vector<fs::path>& inputs) const {
   std::error_code ec;
   if (!fs::is_empty(path_, ec) && !force)
-    throw SceneError(path_.string() + ": exists and is not empty (use --force to overwrite)");
+    throw Error(path_.string() + ": exists and is not empty (use --force to overwrite)");
   check_inputs_outside(inputs, path_);
 }
 

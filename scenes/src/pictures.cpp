@@ -35,7 +35,7 @@ void check_picture_size(const Scene& sc, const SceneModels& m) {
   const long long oh = static_cast<long long>(m.image->height) * 3 / 2;
   const long long w = panels * ow + 8 * (panels - 1);
   if (w > io::kMaxImageSide || oh > io::kMaxImageSide)
-    throw SceneError(m.dense_name + ": a " + std::to_string(m.image->width) + " x " +
+    throw Error(m.dense_name + ": a " + std::to_string(m.image->width) + " x " +
                      std::to_string(m.image->height) + " image makes " + std::to_string(w) + " x " +
                      std::to_string(oh) + " pictures (" + std::to_string(panels) +
                      " panels at 1.5 times its size), more than " + std::to_string(io::kMaxImageSide) +
@@ -64,7 +64,7 @@ const char* Pictures3D::renderer() const { return renderer_ ? "gpu" : "cpu"; }
 
 void Pictures3D::add(int f, pipeline::FramePipeline& pipe, const std::vector<interp::BezierPoints>& panels) {
   const Eigen::MatrixXd& X = pipe.control_positions();
-  if (X.cols() != 3) throw SceneError("3D pictures need 3D control positions");
+  if (X.cols() != 3) throw Error("3D pictures need 3D control positions");
   std::vector<Eigen::VectorXd> jumps;
   if (creases_)
     for (pipeline::Method k : picture_methods(pipe.method())) jumps.push_back(creases_->face_jumps(pipe, k));

@@ -28,7 +28,7 @@ std::vector<pipeline::Method> picture_methods(pipeline::Method method);
 
 /// Pictures that could not be written fail at load, not after frame 0: 2D panels are the
 /// image's size x 1.5 each, side by side with 8-pixel gaps; io::Image holds at most 16384 x
-/// 16384. Throws SceneError.
+/// 16384. Throws Error.
 void check_picture_size(const Scene& sc, const SceneModels& m);
 
 /// The 3D pictures of a run: the Bezier points of each written frame's panels wait in a scratch
@@ -49,7 +49,7 @@ class Pictures3D {
   const char* renderer() const;
   /// Frame f's panels (Bezier points, picture_methods of pipe's method) at pipe's control
   /// positions, with each panel's face jumps when output.creases: stored whole, or not at all
-  /// (throws io::IoError when the disk is full).
+  /// (throws io::Error when the disk is full).
   void add(int f, pipeline::FramePipeline& pipe, const std::vector<interp::BezierPoints>& panels);
   /// Forgets the frame add() stored last (a later part of that frame failed).
   void discard_last();

@@ -26,7 +26,7 @@ namespace {
 Scene with_overrides(const Scene& scene, const RunOptions& opt) {
   // the scene file's own range for simulation.frames; 0 keeps the scene's
   if (opt.frames < 0 || opt.frames > 1000000)
-    throw SceneError("frames = " + std::to_string(opt.frames) + ": give 1 to 1000000 frames, or 0 for the scene's own");
+    throw Error("frames = " + std::to_string(opt.frames) + ": give 1 to 1000000 frames, or 0 for the scene's own");
   Scene sc = scene;
   if (opt.method) sc.interpolation.method = *opt.method;
   if (opt.frames > 0) sc.simulation.frames = opt.frames;
@@ -101,7 +101,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   const double load_ms = ms_since(t0);
   check_picture_size(sc, m);
   if (interp::interior_faces(m.T).rows() == 0)
-    throw SceneError(m.control_name + ": the control mesh has no interior face (one element); a run "
+    throw Error(m.control_name + ": the control mesh has no interior face (one element); a run "
                      "compares BI with modified-BI at every frame (metrics.json, pictures, and the "
                      "handles' solve in drag scenes), which needs at least two face-adjacent elements "
                      "(mbi deform --method bi or phong takes one element)");

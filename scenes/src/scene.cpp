@@ -58,7 +58,7 @@ class Table {
   }
   [[noreturn]] void fail(const std::string& key, const std::string& msg) {
     const toml_value& v = v_.as_table().count(key) ? v_.as_table().at(key) : v_;
-    throw SceneError(where(v) + ": " + key_name(key) + ": " + msg);
+    throw Error(where(v) + ": " + key_name(key) + ": " + msg);
   }
 
   double number(const std::string& key, double def, double lo = -HUGE_VAL, double hi = HUGE_VAL,
@@ -143,7 +143,7 @@ class Table {
     const auto& arr = v.as_array();
     for (size_t i = 0; i < arr.size(); ++i) {
       if (!arr[i].is_table())
-        throw SceneError(where(arr[i]) + ": " + key_name(key) + "[" + std::to_string(i) +
+        throw Error(where(arr[i]) + ": " + key_name(key) + "[" + std::to_string(i) +
                          "]: expected a table");
       out.emplace_back(arr[i], key_name(key) + "[" + std::to_string(i) + "]", file_);
     }
@@ -157,7 +157,7 @@ class Table {
     if (unknown.empty()) return;
     std::sort(unknown.begin(), unknown.end());
     const toml_value& v = v_.as_table().at(unknown.front());
-    throw SceneError(where(v) + ": " + key_name(unknown.front()) + ": unknown key");
+    throw Error(where(v) + ": " + key_name(unknown.front()) + ": unknown key");
   }
   const std::string& file() const { return file_; }
   const toml_value& value() const { return v_; }
@@ -205,7 +205,7 @@ Selection parse_selection(Table t) {
     }
   }
   if (!s.box && !s.box_relative && !s.half_space && s.indices.empty())
-    throw SceneError(s.where + ": " + t.key_name("") +
+    throw Error(s.where + ": " + t.key_name("") +
                      " needs box, box_relative, half_space or indices");
   t.finish();
   return s;
@@ -235,7 +235,7 @@ void check_characters(std::string_view t, const std::string& fname) {
     auto refuse = [&](const std::string& what) {
       char hex[8];
       std::snprintf(hex, sizeof hex, "0x%02X", c);
-      throw SceneError(fname + ":" + std::to_string(line) + ": syntax error: " + what + " (byte " +
+      throw Error(fname + ":" + std::to_string(line) + ": syntax error: " + what + " (byte " +
                        hex + ")");
     };
     if (c == '\n') {
@@ -272,7 +272,7 @@ void check_nesting(std::string_view t, const std::string& fname) {
   std::size_t i = 0;
   auto starts = [&](const char* s) { return t.compare(i, std::strlen(s), s) == 0; };
   auto refuse = [&](const char* what) {
-    throw SceneError(fname + ":" + std::to_string(line) + ": " + what + " nest deeper than " +
+    throw Error(fname + ":" + std::to_string(line) + ": " + what + " nest deeper than " +
                      std::to_string(kMaxSceneNesting) + " levels");
   };
   auto start_key = [&] {
@@ -325,12 +325,12 @@ void check_nesting(std::string_view t, const std::string& fname) {
 
 Scene load_scene(const std::filesystem::path& file) {
   std::error_code ec;
-  if (!std::filesystem::exists(file, ec)) throw SceneError(file.string() + ": no such scene file");
+  if (!std::filesystem::exists(file, ec)) throw Error(file.string() + ": no such scene file");
   std::string text;
   try {
     text = io::read_bytes(file);  // regular files only: a FIFO or a device is refused, not read
-  } catch (const io::IoError& e) {
-    throw SceneError(e.what());
+  } catch (const io::Error& e) {
+    throw Error(e.what());
   }
   return parse_scene(text, file);
 }
@@ -343,7 +343,7 @@ void parse_dense(Table t, DenseSpec& d) {
   if (t.has("path")) d.path = t.string("path", "");
   d.builtin = t.choice("builtin", DenseBuiltin::None, kDenseBuiltinNames);
   if (d.path.empty() == (d.builtin == DenseBuiltin::None))
-    throw SceneError(t.where(t.value()) + ": dense: give exactly one of path or builtin");
+    throw Error(t.where(t.value()) + ": dense: give exactly one of path or builtin");
   d.subdivide = t.integer("subdivide", 0, 0, 4);
   if (t.has("image")) d.image = t.string("image", "");
   d.grid = t.integer("grid", 128, 2, 4096);
@@ -354,12 +354,12 @@ void parse_dense(Table t, DenseSpec& d) {
 void parse_dense_models(Table& top, Scene& sc) {
   if (!top.at("dense").is_array()) return parse_dense(top.sub("dense"), sc.dense);
   std::vector<Table> entries = top.array_of_tables("dense");
-  if (entries.empty()) throw SceneError(top.where(top.at("dense")) + ": dense: give at least one [[dense]] entry");
+  if (entries.empty()) throw Error(top.where(top.at("dense")) + ": dense: give at least one [[dense]] entry");
   for (std::size_t k = 0; k < entries.size(); ++k) {
     DenseSpec d;
     parse_dense(entries[k], d);
     if (entries.size() > 1 && d.path.empty())
-      throw SceneError(entries[k].where(entries[k].value()) + ": dense: several dense models are files (path), not built-ins");
+      throw Error(entries[k].where(entries[k].value()) + ": dense: several dense models are files (path), not built-ins");
     if (k == 0) sc.dense = d;
     else sc.more_dense.push_back(d);
   }
@@ -401,7 +401,7 @@ void parse_control(Table t, ControlSpec& c) {
   const int given = int(!c.path.empty()) + int(c.builtin != ControlBuiltin::None) +
                     int(c.generate_vertices > 0);
   if (given != 1)
-    throw SceneError(t.where(t.value()) +
+    throw Error(t.where(t.value()) +
                      ": control: give exactly one of path, builtin or generate_vertices");
   c.cells = parse_cells(t, c.builtin);
   t.finish();
@@ -437,7 +437,7 @@ void parse_simulation(Table t, SimulationSpec& s) {
 ConstraintSpec parse_constraint(Table& t) {
   ConstraintSpec c;
   c.kind = t.choice("type", ConstraintSpec::Kind::Fixed, kConstraintKindNames);
-  if (!t.has("select")) throw SceneError(t.where(t.value()) + ": " + t.key_name("select") + ": missing");
+  if (!t.has("select")) throw Error(t.where(t.value()) + ": " + t.key_name("select") + ": missing");
   c.select = parse_selection(t.sub("select"));
   if (t.has("motion")) {
     if (c.kind != ConstraintSpec::Kind::Kinematic)
@@ -465,7 +465,7 @@ PokeSpec parse_poke(Table& t) {
   if (p.last < p.first) t.fail("last", "last must be >= first");
   const bool has_point = t.has("point"), has_at = t.has("at");
   if (has_point == has_at)
-    throw SceneError(t.where(t.value()) + ": " + t.key_name("") + ": give exactly one of point or at");
+    throw Error(t.where(t.value()) + ": " + t.key_name("") + ": give exactly one of point or at");
   p.relative = has_at;
   p.point = has_at ? t.vec("at", p.point) : t.vec("point", p.point);
   if (t.has("force")) p.force = t.vec("force", Eigen::Vector3d::Zero());
@@ -483,7 +483,7 @@ PokeSpec parse_poke(Table& t) {
   }
   p.stiffness = t.number("stiffness", 0.0, 0, 1e15);
   if (p.force.has_value() == p.target.has_value())
-    throw SceneError(t.where(t.value()) + ": " + t.key_name("") + ": give exactly one of force or target");
+    throw Error(t.where(t.value()) + ": " + t.key_name("") + ": give exactly one of force or target");
   if (p.target && p.stiffness <= 0) t.fail("stiffness", "a target poke needs stiffness > 0 (N/m)");
   t.finish();
   return p;
@@ -495,9 +495,9 @@ DragSpec parse_drag(Table& t) {
   if (t.has("near")) d.near = t.vec("near", Eigen::Vector3d::Zero(), 2);
   if (t.has("select")) d.select = parse_selection(t.sub("select"));
   if (int(d.vertex >= 0) + int(d.near.has_value()) + int(d.select.has_value()) != 1)
-    throw SceneError(t.where(t.value()) + ": " + t.key_name("") +
+    throw Error(t.where(t.value()) + ": " + t.key_name("") +
                      ": give exactly one of vertex, near or select");
-  if (!t.has("keys")) throw SceneError(t.where(t.value()) + ": " + t.key_name("keys") + ": missing");
+  if (!t.has("keys")) throw Error(t.where(t.value()) + ": " + t.key_name("keys") + ": missing");
   const toml_value& keys = t.at("keys");
   if (!keys.is_array() || keys.as_array().empty())
     t.fail("keys", "expected an array of [frame, x, y(, z)] arrays");
@@ -559,10 +559,10 @@ toml_value parse_toml(std::string_view text, const std::string& fname) {
     std::istringstream in{std::string(text) + "\n"};
     return toml::parse(in, fname);
   } catch (const toml::exception& e) {
-    throw SceneError(fname + ":" + std::to_string(e.location().line()) +
+    throw Error(fname + ":" + std::to_string(e.location().line()) +
                      ": syntax error: " + first_line(e.what()));
   } catch (const std::exception& e) {
-    throw SceneError(fname + ": " + first_line(e.what()));
+    throw Error(fname + ": " + first_line(e.what()));
   }
 }
 
@@ -579,9 +579,9 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& file) {
   Table top(root, "", fname);
   sc.name = top.string("name", file.stem().string());
   sc.mode = top.choice("mode", Mode::Simulate, kModeNames);
-  if (!top.has("dense")) throw SceneError(fname + ":1: dense: missing table [dense]");
+  if (!top.has("dense")) throw Error(fname + ":1: dense: missing table [dense]");
   parse_dense_models(top, sc);
-  if (!top.has("control")) throw SceneError(fname + ":1: control: missing table [control]");
+  if (!top.has("control")) throw Error(fname + ":1: control: missing table [control]");
   parse_control(top.sub("control"), sc.control);
   if (top.has("material")) parse_material(top.sub("material"), sc.material);
   if (top.has("simulation")) parse_simulation(top.sub("simulation"), sc.simulation);
@@ -592,9 +592,9 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& file) {
   if (top.has("output")) parse_output(top.sub("output"), sc.output);
   top.finish();
   if (sc.mode == Mode::Drag && sc.drags.empty())
-    throw SceneError(fname + ":1: drags: a drag scene needs at least one [[drags]] entry");
+    throw Error(fname + ":1: drags: a drag scene needs at least one [[drags]] entry");
   if (sc.mode == Mode::Simulate && !sc.drags.empty())
-    throw SceneError(fname + ":1: drags: only drag scenes (mode = \"" + mode_name(Mode::Drag) +
+    throw Error(fname + ":1: drags: only drag scenes (mode = \"" + mode_name(Mode::Drag) +
                      "\") take [[drags]]");
   // the drag driver has no forces: pokes and constraints would be ignored
   for (const std::string key : {"pokes", "constraints"})
@@ -609,7 +609,7 @@ std::vector<int> select_nodes(const Selection& s, const Eigen::Ref<const Eigen::
   const int d = static_cast<int>(U.cols());
   for (int i : s.indices) {
     if (i >= U.rows())
-      throw SceneError(s.where + ": select.indices: node " + std::to_string(i) +
+      throw Error(s.where + ": select.indices: node " + std::to_string(i) +
                        " out of range (control mesh has " + std::to_string(U.rows()) + ")");
     on[static_cast<size_t>(i)] = 1;
   }
@@ -641,7 +641,7 @@ std::vector<int> select_nodes(const Selection& s, const Eigen::Ref<const Eigen::
   std::vector<int> out;
   for (size_t i = 0; i < on.size(); ++i)
     if (on[i]) out.push_back(static_cast<int>(i));
-  if (out.empty()) throw SceneError(s.where + ": select: selects no control node");
+  if (out.empty()) throw Error(s.where + ": select: selects no control node");
   return out;
 }
 

@@ -1,6 +1,6 @@
 #pragma once
 // Shared by the libFuzzer targets (tests/fuzz/fuzz_*.cpp, docs/hardening.md): what a reader
-// may do with any bytes is return a valid result or throw mbi::io::IoError. Any other
+// may do with any bytes is return a valid result or throw mbi::io::Error. Any other
 // exception escapes LLVMFuzzerTestOneInput and libFuzzer reports it; a result that breaks the
 // readers' guarantees (mbi/io/parse.hpp) is reported by invariant() as a crash.
 #include <mbi/io/parse.hpp>

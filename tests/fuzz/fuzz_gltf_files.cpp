@@ -67,7 +67,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string_view in = mbi::fuzz::bytes(data, size);
   try {
     mbi::fuzz::check_surface(mbi::io::parse_surface(in, tree.asset / "fuzz.gltf"));
-  } catch (const mbi::io::IoError&) {
+  } catch (const mbi::io::Error&) {
   }
   mbi::fuzz::invariant(!tree.outside_opened(), "a file outside the asset's folder was opened");
   return 0;

@@ -6,7 +6,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     mbi::fuzz::check_positions(mbi::io::parse_gmsh_nodes(in, "fuzz.msh"));
     mbi::fuzz::check_control(mbi::io::parse_gmsh(in, "fuzz.msh"));
-  } catch (const mbi::io::IoError&) {
+  } catch (const mbi::io::Error&) {
   }
   return 0;
 }

@@ -10,7 +10,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       mbi::fuzz::invariant(f.cols() == 3, "MDD frame not n x 3");
       mbi::fuzz::check_positions(f);
     }
-  } catch (const mbi::io::IoError&) {
+  } catch (const mbi::io::Error&) {
   }
   return 0;
 }

@@ -6,7 +6,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     const mbi::io::PointCache pc = mbi::io::parse_pc2(in, "fuzz.pc2");
     for (const auto& f : pc.frames) mbi::fuzz::invariant(f.cols() == 3, "PC2 frame not n x 3");
-  } catch (const mbi::io::IoError&) {
+  } catch (const mbi::io::Error&) {
   }
   return 0;
 }

@@ -10,7 +10,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                          "image size");
     mbi::fuzz::invariant(img.rgb.size() == static_cast<std::size_t>(img.width) * img.height * 3,
                          "image buffer size");
-  } catch (const mbi::io::IoError&) {
+  } catch (const mbi::io::Error&) {
   }
   return 0;
 }

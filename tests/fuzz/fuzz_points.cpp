@@ -6,7 +6,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     const Eigen::MatrixXd P = mbi::io::parse_points(in, "fuzz.txt");
     mbi::fuzz::check_positions(P);
-  } catch (const mbi::io::IoError&) {
+  } catch (const mbi::io::Error&) {
   }
   return 0;
 }

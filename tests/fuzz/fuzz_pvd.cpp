@@ -11,7 +11,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       mbi::fuzz::invariant(k == 0 || e[k - 1].time < e[k].time, "timesteps not increasing");
       mbi::fuzz::invariant(!e[k].file.empty(), "empty file name");
     }
-  } catch (const mbi::io::IoError&) {
+  } catch (const mbi::io::Error&) {
   }
   return 0;
 }

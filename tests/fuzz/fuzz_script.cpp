@@ -1,6 +1,6 @@
 // libFuzzer target: viewer scripts (`mbi view --script`) through mbi::viewer::parse_script
 // (nothing read from disk; docs/hardening.md, seeds in tests/fuzz/script/). What it may do with
-// any text: return events within the script's bounds, in frame order, or throw ViewerError naming
+// any text: return events within the script's bounds, in frame order, or throw mbi::viewer::Error naming
 // the file; every event read is written back by format() to a line that reads as the same event.
 #include <mbi/viewer/script.hpp>
 

@@ -10,7 +10,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const Eigen::MatrixXd X = mbi::io::parse_node(node, "fuzz.node");
     mbi::fuzz::check_positions(X);
     mbi::fuzz::check_control(mbi::io::parse_tetgen(node, ele, "fuzz"));
-  } catch (const mbi::io::IoError&) {
+  } catch (const mbi::io::Error&) {
   }
   return 0;
 }

@@ -326,7 +326,7 @@ TEST_CASE("mesher names", "[cage]") {
   REQUIRE(std::string(mesher_name(Mesher::TetGen)) == "tetgen");
   REQUIRE(parse_mesher("tetgen") == Mesher::TetGen);
   REQUIRE(parse_mesher("voxel") == Mesher::Voxel);
-  REQUIRE_THROWS_AS(parse_mesher("delaunay"), CageError);
+  REQUIRE_THROWS_AS(parse_mesher("delaunay"), mbi::generate::Error);
   REQUIRE(CageOptions{}.mesher == Mesher::Voxel);
 }
 
@@ -371,15 +371,15 @@ TEST_CASE("make_cage rejects bad input", "[cage]") {
   CageOptions opt;
   Eigen::MatrixXd V = s.V;
   V(3, 1) = std::nan("");
-  REQUIRE_THROWS_AS(make_cage(V, s.F, opt), CageError);
+  REQUIRE_THROWS_AS(make_cage(V, s.F, opt), mbi::generate::Error);
   Eigen::MatrixXi F = s.F;
   F(2, 2) = static_cast<int>(s.V.rows());
-  REQUIRE_THROWS_AS(make_cage(s.V, F, opt), CageError);
+  REQUIRE_THROWS_AS(make_cage(s.V, F, opt), mbi::generate::Error);
   opt.target_vertices = 3;
-  REQUIRE_THROWS_AS(make_cage(s.V, s.F, opt), CageError);
+  REQUIRE_THROWS_AS(make_cage(s.V, s.F, opt), mbi::generate::Error);
   opt.target_vertices = 100;
   REQUIRE_THROWS_AS(make_cage(Eigen::MatrixXd(0, 3), Eigen::MatrixXi(0, 3), opt),
-                    CageError);
+                    mbi::generate::Error);
 }
 
 TEST_CASE("cages of the real models", "[cage][models]") {

@@ -159,7 +159,7 @@ TEST_CASE("TetGen is fenced: a cube with a vertex at z = 1e99 does not reach its
       const CageResult c = make_cage(V, F, opt);
       CHECK(c.outside_points == 0);
       CHECK(mbi::interp::embed(c.U, c.T, V).outside.empty());
-    } catch (const CageError& e) {
+    } catch (const mbi::generate::Error& e) {
       CHECK_FALSE(std::string(e.what()).empty());
     }
   }

@@ -59,7 +59,7 @@ fs::path write_json(const fs::path& p, const json& j) {
 std::string error_of(const fs::path& p) {
   try {
     mbi::io::read_surface(p);
-  } catch (const mbi::io::IoError& e) {
+  } catch (const mbi::io::Error& e) {
     return e.what();
   }
   return "no error";

@@ -66,14 +66,14 @@ void require_same(const SurfaceMesh& a, const SurfaceMesh& b) {
   REQUIRE(a.F == b.F);
 }
 
-/// Expects an IoError whose message starts with the file name (and ":<line>:" when line > 0)
+/// Expects an mbi::io::Error whose message starts with the file name (and ":<line>:" when line > 0)
 /// and contains `what`.
 template <typename F>
 void require_io_error(F&& f, const fs::path& file, int line, const std::string& what) {
   try {
     f();
-    FAIL("no IoError for " << file << " (expected: " << what << ")");
-  } catch (const IoError& e) {
+    FAIL("no mbi::io::Error for " << file << " (expected: " << what << ")");
+  } catch (const mbi::io::Error& e) {
     const std::string msg = e.what();
     INFO(msg);
     const std::string prefix = file.string() + (line > 0 ? ":" + std::to_string(line) + ":" : ":");
@@ -268,7 +268,7 @@ TEST_CASE("PC2: header layout, appended frames, atomic finish", "[io]") {
       w.append(P);
       REQUIRE_FALSE(fs::exists(tmp / "a.pc2"));  // not visible before finish()
     }
-    REQUIRE_THROWS_AS(w.append(Eigen::MatrixXd::Zero(5, 3)), IoError);
+    REQUIRE_THROWS_AS(w.append(Eigen::MatrixXd::Zero(5, 3)), mbi::io::Error);
     w.finish();
   }
   REQUIRE(fs::file_size(tmp / "a.pc2") == 32u + 3u * 6u * 12u);
@@ -297,14 +297,14 @@ TEST_CASE("PC2: header layout, appended frames, atomic finish", "[io]") {
   Pc2Writer w(tmp / "c.pc2", 1);
   Eigen::MatrixXd bad(1, 3);
   bad << 0, std::nan(""), 0;
-  REQUIRE_THROWS_AS(w.append(bad), IoError);
+  REQUIRE_THROWS_AS(w.append(bad), mbi::io::Error);
 }
 
 TEST_CASE("frame sequences: names and contents", "[io]") {
   TempDir tmp("frames");
   REQUIRE(frame_path(tmp / "bunny", 7, ".obj") == tmp / "bunny_0007.obj");
   REQUIRE(frame_path("x", 12345, ".ply", 3) == fs::path("x_12345.ply"));
-  REQUIRE_THROWS_AS(frame_path("x", -1, ".obj"), IoError);
+  REQUIRE_THROWS_AS(frame_path("x", -1, ".obj"), mbi::io::Error);
   const SurfaceMesh m = awkward_mesh(false);
   const Eigen::MatrixXd V2 = 2.0 * m.V;
   for (const char* ext : {".obj", ".ply"}) {
@@ -313,7 +313,7 @@ TEST_CASE("frame sequences: names and contents", "[io]") {
     REQUIRE((r.V.array() == V2.array()).all());
     REQUIRE(r.polygons == m.polygons);
   }
-  REQUIRE_THROWS_AS(write_frame(tmp / "f", 4, ".obj", m, V2.topRows(3)), IoError);
+  REQUIRE_THROWS_AS(write_frame(tmp / "f", 4, ".obj", m, V2.topRows(3)), mbi::io::Error);
 }
 
 TEST_CASE("writers reject bad data and leave the target untouched", "[io]") {
@@ -337,7 +337,7 @@ TEST_CASE("writers reject bad data and leave the target untouched", "[io]") {
   REQUIRE_FALSE(fs::exists(tmp / "c.node"));
 }
 
-TEST_CASE("malformed text files: IoError naming file, line and field", "[io][robustness]") {
+TEST_CASE("malformed text files: mbi::io::Error naming file, line and field", "[io][robustness]") {
   TempDir tmp("bad");
   struct Case {
     const char* name;
@@ -526,7 +526,7 @@ TEST_CASE("real models: read, write, read again gives the same mesh", "[io][mode
   }
 }
 
-TEST_CASE("truncated and corrupted files of every format: IoError or success, nothing else",
+TEST_CASE("truncated and corrupted files of every format: mbi::io::Error or success, nothing else",
           "[io][robustness]") {
   TempDir tmp("fuzz");
   const SurfaceMesh m = awkward_mesh(true);
@@ -585,7 +585,7 @@ TEST_CASE("truncated and corrupted files of every format: IoError or success, no
       try {
         r.read(orig);
         ++successes;
-      } catch (const IoError& e) {
+      } catch (const mbi::io::Error& e) {
         ++errors;
         REQUIRE(std::string(e.what()).find(orig.string()) != std::string::npos);
       }

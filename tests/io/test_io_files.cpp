@@ -93,9 +93,9 @@ TEST_CASE("a write error names the output, not its staging file", "[io][files]")
   OutputSet out({}, true);
   const std::size_t i = out.add(tmp / "model.obj", "--out");
   try {
-    out.write(i, [](const fs::path& p) { throw IoError(p.string() + ": write error (No space left on device)"); });
+    out.write(i, [](const fs::path& p) { throw mbi::io::Error(p.string() + ": write error (No space left on device)"); });
     FAIL("no error");
-  } catch (const IoError& e) {
+  } catch (const mbi::io::Error& e) {
     const std::string what = e.what();
     CHECK(what == (tmp / "model.obj").string() + ": write error (No space left on device)");
     CHECK(what.find(kTemporaryPrefix) == std::string::npos);
@@ -159,7 +159,7 @@ TEST_CASE("a scratch file has no name, keeps what it was given, and takes back t
   CHECK(std::string(buf, 5) == "world");
   s.truncate(mark);
   CHECK(s.size() == 6);
-  CHECK_THROWS_AS(s.read(mark, buf, 5), IoError);
+  CHECK_THROWS_AS(s.read(mark, buf, 5), mbi::io::Error);
 }
 
 TEST_CASE("remove_temporaries_now removes what this process is writing", "[io][files]") {
@@ -188,7 +188,7 @@ TEST_CASE("PC2 on a full disk: a sample is written whole or not at all", "[io][f
       const Eigen::MatrixXd P = Eigen::MatrixXd::Constant(100, 3, 0.5);
       try {
         for (int s = 0; s < 100; ++s) w.append(P);
-      } catch (const IoError&) {
+      } catch (const mbi::io::Error&) {
       }
       w.finish();
       ::_exit(w.samples());
@@ -248,7 +248,7 @@ TEST_CASE("4OFF: each vertex is (x, y, z) / w", "[io][files][off]") {
   write_bytes(tmp / "w0.off", "4OFF\n1 0 0\n1 2 3 0\n");
   CHECK_THROWS_WITH(read_surface(tmp / "w0.off"), Catch::Contains("w0.off:3: vertex 0: w = 0"));
   write_bytes(tmp / "tiny.off", "4OFF\n1 0 0\n1e200 0 0 1e-200\n");
-  CHECK_THROWS_AS(read_surface(tmp / "tiny.off"), IoError);  // x / w overflows the limit
+  CHECK_THROWS_AS(read_surface(tmp / "tiny.off"), mbi::io::Error);  // x / w overflows the limit
 }
 
 TEST_CASE("PC2 and MDD from floats on a full disk: the frames that fit are kept, the file readable", "[io][files][pc2]") {
@@ -268,7 +268,7 @@ TEST_CASE("PC2 and MDD from floats on a full disk: the frames that fit are kept,
         auto fill = [&](auto& w) {
           try {
             for (int s = 0; s < 100; ++s) w.append(xyz.data());
-          } catch (const IoError&) {
+          } catch (const mbi::io::Error&) {
           }
           w.finish();
           ::_exit(w.samples());

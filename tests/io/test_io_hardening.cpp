@@ -2,7 +2,7 @@
 // (byte-order mark, CR LF, lone CR, tabs, no final newline, very long lines), inputs that are not
 // regular files, header counts checked before looping, coordinate limits, and a replay of the
 // fuzz corpora (tests/fuzz/<target>/: seeds and every input a fuzzer crashed on) as regression
-// tests: each must give a result or an IoError naming the file, nothing else.
+// tests: each must give a result or an mbi::io::Error naming the file, nothing else.
 #include <mbi/io/atomic_file.hpp>
 #include <mbi/io/io.hpp>
 #include <mbi/io/parse.hpp>
@@ -34,7 +34,7 @@ namespace {
 std::string error_of(const std::function<void()>& f) {
   try {
     f();
-  } catch (const IoError& e) {
+  } catch (const mbi::io::Error& e) {
     return e.what();
   }
   return "(no error)";
@@ -280,7 +280,7 @@ TEST_CASE("PNG: only PNG reaches the decoder, sizes checked from the header", "[
                Catch::Contains("big.png: ") && Catch::Contains("at most 16384 x 16384"));
 }
 
-TEST_CASE("fuzz corpora replayed: every seed and every input a fuzzer found, result or IoError",
+TEST_CASE("fuzz corpora replayed: every seed and every input a fuzzer found, result or mbi::io::Error",
           "[io][hardening][fuzz]") {
   // tests/fuzz/<target>/ holds the seeds and the inputs that crashed a reader before it was
   // fixed (crash-*, leak-*, timeout-*, oom-*): each is a regression test here.
@@ -329,7 +329,7 @@ TEST_CASE("fuzz corpora replayed: every seed and every input a fuzzer found, res
       bool ok = true;
       try {
         parse(bytes);
-      } catch (const IoError& err) {
+      } catch (const mbi::io::Error& err) {
         ok = false;
         REQUIRE_THAT(err.what(), Catch::StartsWith("fuzz"));
       }

@@ -52,7 +52,7 @@ TEST_CASE("vtu: messages name the file, the line and what is wrong", "[io][vtu]"
   auto message = [](const std::string& bytes) {
     try {
       parse_vtu_mesh(bytes, "x.vtu");
-    } catch (const IoError& e) {
+    } catch (const mbi::io::Error& e) {
       return std::string(e.what());
     }
     return std::string("no error");

@@ -7,6 +7,8 @@
 
 #include "common/grid_meshes.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 
 using namespace mbi;
@@ -95,5 +97,21 @@ TEST_CASE("Precompute: poses of the wrong shape or with NaN are refused for ever
   for (Method method : pipeline::all_methods()) {
     CHECK_THROWS_WITH(pre.bezier(method, X), Catch::Contains("control vertex 2"));
     CHECK_THROWS_WITH(pre.bezier(method, m.U.topRows(3)), Catch::Contains("X must be"));
+  }
+}
+
+TEST_CASE("Precompute: M_transpose is the transpose of M for every method", "[precompute]") {
+  const test::Mesh m = mesh(3);
+  Precompute pre(m.U, m.T, Method::ModifiedBI);
+  pre.phong();
+  const Eigen::MatrixXd X = pose(m.U);
+  // <G, M(X)> = <M_transpose(G), X> for the linear maps X -> M
+  const Eigen::MatrixXd G = Eigen::MatrixXd::NullaryExpr(
+      m.U.rows() * 3, 3, [](Eigen::Index i, Eigen::Index j) { return std::sin(1.0 + double(i) + 3.0 * double(j)); });
+  for (Method method : pipeline::all_methods()) {
+    CAPTURE(pipeline::method_name(method));
+    const double lhs = (G.array() * pre.M(method, X).array()).sum();
+    const double rhs = (pre.M_transpose(method, G).array() * X.array()).sum();
+    CHECK(std::abs(lhs - rhs) <= 1e-9 * std::max(1.0, std::abs(lhs)));
   }
 }

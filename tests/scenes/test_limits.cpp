@@ -45,7 +45,7 @@ TEST_CASE("scenes over the control-mesh caps are refused at load within a second
     CHECK(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < 10.0);
   }
   // at the cap: 27 x 27 x 26 cells is 28 * 28 * 27 = 21168 vertices (over); 26^3 cells fit
-  CHECK_THROWS_AS(load_scene(write_scene("c.toml", head + "builtin = \"box\"\ncells = [27, 27, 26]\n")), SceneError);
+  CHECK_THROWS_AS(load_scene(write_scene("c.toml", head + "builtin = \"box\"\ncells = [27, 27, 26]\n")), mbi::scenes::Error);
   CHECK_NOTHROW(load_scene(write_scene("c.toml", head + "builtin = \"box\"\ncells = [26, 26, 26]\n")));
   CHECK_NOTHROW(load_scene(write_scene("c.toml", head + "generate_vertices = 20000\n")));
 }

@@ -1,7 +1,7 @@
 // The headless runner: every shipped scene runs a few frames, its metrics parse, its timings
 // fit in the run's wall time, and modified-BI's mean face discontinuity is below BI's; the
 // written meshes agree with BI / modified-BI evaluated here from the written control meshes;
-// bad input throws SceneError naming the culprit before anything is written; outputs are
+// bad input throws mbi::scenes::Error naming the culprit before anything is written; outputs are
 // complete and protected; the README's caption numbers come from the twist-bar test below.
 #include <catch2/catch.hpp>
 
@@ -79,15 +79,15 @@ VtkMesh parse_vtk(const fs::path& p) {
   return m;
 }
 
-/// The what() of the SceneError that f throws (any other exception escapes and fails the test).
+/// The what() of the mbi::scenes::Error that f throws (any other exception escapes and fails the test).
 template <typename F>
 std::string scene_error(F&& f) {
   try {
     f();
-  } catch (const SceneError& e) {
+  } catch (const mbi::scenes::Error& e) {
     return e.what();
   }
-  FAIL("no SceneError thrown");
+  FAIL("no mbi::scenes::Error thrown");
   return {};
 }
 
@@ -337,10 +337,10 @@ mesh_format = "none"
 }
 
 // ------------------------------------------------------------------------------------------------
-// The runner's own errors: SceneError (an mbi::Error) naming the culprit, thrown before anything
+// The runner's own errors: mbi::scenes::Error (an mbi::Error) naming the culprit, thrown before anything
 // is written.
 
-static_assert(std::is_base_of_v<mbi::Error, SceneError>);
+static_assert(std::is_base_of_v<mbi::Error, mbi::scenes::Error>);
 
 namespace {
 
@@ -353,7 +353,7 @@ builtin = "paper-bar"
 frames = 2
 )";
 
-/// The SceneError of make_pipeline for the scene text, checked to be the one run_scene throws
+/// The mbi::scenes::Error of make_pipeline for the scene text, checked to be the one run_scene throws
 /// too, with no output folder created.
 std::string pipeline_error(const mbi::test::TempDir& dir, const std::string& text) {
   const fs::path file = dir / "bad.toml";
@@ -373,7 +373,7 @@ std::string pipeline_error(const mbi::test::TempDir& dir, const std::string& tex
 
 }  // namespace
 
-TEST_CASE("a poke outside the control mesh is a SceneError naming the point", "[runner][errors]") {
+TEST_CASE("a poke outside the control mesh is a mbi::scenes::Error naming the point", "[runner][errors]") {
   mbi::test::TempDir dir("run");
   const std::string msg = pipeline_error(dir, std::string(paper_bar) + R"(
 [[pokes]]
@@ -415,7 +415,7 @@ keys = [[0, 0, 0, 0], [2, 0.1, 0, 0]]
                         Catch::Contains("dragged twice"));
 }
 
-TEST_CASE("mode simulate with a 2D model is a SceneError naming the mode", "[runner][errors]") {
+TEST_CASE("mode simulate with a 2D model is a mbi::scenes::Error naming the mode", "[runner][errors]") {
   mbi::test::TempDir dir("run");
   const std::string msg = pipeline_error(dir, R"(
 [dense]
@@ -477,7 +477,7 @@ TEST_CASE("a run that fails while loading leaves no folder it made", "[runner][e
   CHECK_FALSE(fs::exists(dir / "a"));
 }
 
-TEST_CASE("an output folder that is not empty, or a file, is a SceneError naming it", "[runner][errors]") {
+TEST_CASE("an output folder that is not empty, or a file, is a mbi::scenes::Error naming it", "[runner][errors]") {
   mbi::test::TempDir dir("run");
   const fs::path file = dir / "s.toml";
   std::ofstream(file) << paper_bar;

@@ -10,7 +10,6 @@
 
 namespace fs = std::filesystem;
 using mbi::scenes::load_scene;
-using mbi::scenes::SceneError;
 
 namespace {
 
@@ -36,7 +35,7 @@ builtin = "paper-bar"
 std::string error_of(const fs::path& p) {
   try {
     load_scene(p);
-  } catch (const SceneError& e) {
+  } catch (const mbi::scenes::Error& e) {
     return e.what();
   }
   FAIL("no error for " << p);

@@ -13,7 +13,6 @@
 
 namespace fs = std::filesystem;
 using mbi::scenes::parse_scene;
-using mbi::scenes::SceneError;
 
 namespace {
 
@@ -22,7 +21,7 @@ const std::string minimal = "[dense]\nbuiltin = \"paper-bar\"\n[control]\nbuilti
 std::string error_of(const std::string& text) {
   try {
     parse_scene(text, "s.toml");
-  } catch (const SceneError& e) {
+  } catch (const mbi::scenes::Error& e) {
     return e.what();
   }
   return "(no error)";
@@ -95,7 +94,7 @@ TEST_CASE("scene text: bytes that are not UTF-8 and control characters are refus
                Catch::Contains("note") && !Catch::Contains("syntax error"));
 }
 
-TEST_CASE("scene fuzz corpus replayed: a scene or a SceneError, nothing else", "[scene][hardening][fuzz]") {
+TEST_CASE("scene fuzz corpus replayed: a scene or a mbi::scenes::Error, nothing else", "[scene][hardening][fuzz]") {
   const char* src = std::getenv("MBI_SOURCE_DIR");
   REQUIRE(src != nullptr);
   int files = 0;

@@ -27,7 +27,7 @@ namespace {
 std::string error_of(const std::string& text) {
   try {
     parse_script(text, "s.txt");
-  } catch (const ViewerError& e) {
+  } catch (const mbi::viewer::Error& e) {
     return e.what();
   }
   return "";
@@ -101,7 +101,7 @@ TEST_CASE("viewer scripts: only regular files of at most 16 MiB are read, withou
   CHECK_THROWS_WITH(read_script(dir / "fifo"), Catch::Contains("is a FIFO (named pipe)"));
 }
 
-TEST_CASE("viewer script fuzz corpus replayed: events within the bounds or a ViewerError", "[viewer][script][fuzz]") {
+TEST_CASE("viewer script fuzz corpus replayed: events within the bounds or a mbi::viewer::Error", "[viewer][script][fuzz]") {
   int files = 0, read = 0;
   for (const auto& e : fs::directory_iterator(source_dir() / "tests" / "fuzz" / "script")) {
     INFO(e.path());
@@ -113,7 +113,7 @@ TEST_CASE("viewer script fuzz corpus replayed: events within the bounds or a Vie
         REQUIRE(parse_script(format(ev), "again.txt").size() == 1);
       }
       ++read;
-    } catch (const ViewerError& err) {
+    } catch (const mbi::viewer::Error& err) {
       REQUIRE_THAT(err.what(), Catch::StartsWith("fuzz.txt"));
     }
   }

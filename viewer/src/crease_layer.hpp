@@ -20,7 +20,7 @@ struct CreaseView {
 
 class CreaseLayer {
  public:
-  /// Needs the viewer's OpenGL context current. Throws ViewerError when its shaders fail.
+  /// Needs the viewer's OpenGL context current. Throws Error when its shaders fail.
   CreaseLayer(const Stage& stage);
   ~CreaseLayer();
   CreaseLayer(const CreaseLayer&) = delete;

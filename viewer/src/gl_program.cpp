@@ -18,7 +18,7 @@ GLuint shader(const char* what, GLenum kind, const char* source) {
     char log[1024] = {};
     glGetShaderInfoLog(s, sizeof log, nullptr, log);
     glDeleteShader(s);
-    throw ViewerError(std::string(what) + ": shader: " + log);
+    throw Error(std::string(what) + ": shader: " + log);
   }
   return s;
 }
@@ -46,7 +46,7 @@ GLuint link_program(const char* what, const char* vertex, const char* fragment) 
     char log[1024] = {};
     glGetProgramInfoLog(p, sizeof log, nullptr, log);
     glDeleteProgram(p);
-    throw ViewerError(std::string(what) + ": shader: " + log);
+    throw Error(std::string(what) + ": shader: " + log);
   }
   return p;
 }

@@ -5,7 +5,7 @@
 namespace mbi::viewer {
 
 /// Links a program from a vertex and a fragment shader ("#version 330 core" prepended). Throws
-/// ViewerError "<what>: shader: <log>" when one does not compile or link.
+/// Error "<what>: shader: <log>" when one does not compile or link.
 GLuint link_program(const char* what, const char* vertex, const char* fragment);
 
 }  // namespace mbi::viewer

@@ -14,16 +14,16 @@ namespace mbi::viewer {
 class Recordings {
  public:
   explicit Recordings(SessionFiles& files) : files_(files) {}
-  /// Starts --video, if asked, for frames of the window's framebuffer size. Throws ViewerError.
+  /// Starts --video, if asked, for frames of the window's framebuffer size. Throws Error.
   void start(const std::filesystem::path& video, int fb_width, int fb_height);
   /// The video key at `frame`; returns what to tell the user. Never throws: a video that cannot
   /// be started or written is said.
   std::string toggle(int frame, int fb_width, int fb_height);
-  /// Sends this frame (the back buffer) to the running video, if any. Throws ViewerError
+  /// Sends this frame (the back buffer) to the running video, if any. Throws Error
   /// (--video); a key's video that fails is dropped and said in `message`.
   void add_frame(std::string& message);
   /// Ends the videos: --video's ffmpeg must succeed before the session's files are moved into
-  /// place (throws ViewerError); a key's video is written.
+  /// place (throws Error); a key's video is written.
   void finish();
   bool recording() const { return (session_ && !paused_) || key_; }
 

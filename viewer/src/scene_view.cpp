@@ -57,7 +57,7 @@ void run(ViewerOptions options, std::unique_ptr<SessionFiles> files, Loaded firs
     if (dropped.empty()) return;
     try {
       if (!scenes::is_model(dropped))
-        throw ViewerError("not a model (" + io::extensions_of(io::FileKind::surface) + ")");
+        throw Error("not a model (" + io::extensions_of(io::FileKind::surface) + ")");
       current = load_model(dropped);
       viewer.options().up = current.scene.output.up;
     } catch (const std::exception& e) {

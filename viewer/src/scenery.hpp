@@ -34,7 +34,7 @@ void cast_shadow(Ground& ground, const Eigen::MatrixXd& X);
 
 class Scenery {
  public:
-  /// Needs the viewer's GL context current. Throws ViewerError.
+  /// Needs the viewer's GL context current. Throws Error.
   Scenery();
   ~Scenery();
   Scenery(const Scenery&) = delete;

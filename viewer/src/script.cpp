@@ -11,7 +11,7 @@ namespace mbi::viewer {
 namespace {
 
 [[noreturn]] void fail(const std::filesystem::path& name, long long line, const std::string& what) {
-  throw ViewerError(name.string() + (line > 0 ? ":" + std::to_string(line) : "") + ": " + what);
+  throw Error(name.string() + (line > 0 ? ":" + std::to_string(line) : "") + ": " + what);
 }
 
 // The words of a line before any '#' comment (separated by spaces and tabs).
@@ -152,8 +152,8 @@ std::deque<Event> read_script(const std::filesystem::path& file) {
   }
   try {
     return parse_script(io::read_bytes(file), file);
-  } catch (const io::IoError& e) {
-    throw ViewerError(e.what());
+  } catch (const io::Error& e) {
+    throw Error(e.what());
   }
 }
 

@@ -40,7 +40,7 @@ void write_png_for(const fs::path& staging, const io::Image& image, const std::s
   try {
     io::write_png(staging, image);
   } catch (const mbi::Error& e) {
-    throw ViewerError(about(e.what(), staging, target));
+    throw Error(about(e.what(), staging, target));
   }
 }
 
@@ -63,7 +63,7 @@ SessionFiles::SessionFiles(const ViewerOptions& o) : inputs_(o.inputs), force_(o
     try {
       script_ = read_script(o.script);
     } catch (const mbi::Error& e) {
-      throw ViewerError(std::string("--script ") + e.what());
+      throw Error(std::string("--script ") + e.what());
     }
   }
   // a header line: a recording of no event is still written (and replays as nothing)
@@ -82,7 +82,7 @@ void SessionFiles::open(Stream& s, const std::string& option, std::size_t output
   s.target = outputs_->target(output);
   s.file = std::fopen(outputs_->staging(output).c_str(), "wb");
   if (!s.file)
-    throw ViewerError(option + " " + s.target.string() + ": cannot open for writing (" + std::strerror(errno) + ")");
+    throw Error(option + " " + s.target.string() + ": cannot open for writing (" + std::strerror(errno) + ")");
   write(s, first);
 }
 
@@ -92,7 +92,7 @@ void SessionFiles::write(Stream& s, const std::string& text) {
 }
 
 void SessionFiles::fail(const Stream& s) const {
-  throw ViewerError(s.option + " " + s.target.string() + ": write error (" + std::strerror(s.error) + ")");
+  throw Error(s.option + " " + s.target.string() + ": write error (" + std::strerror(s.error) + ")");
 }
 
 void SessionFiles::close(Stream& s) {
@@ -122,7 +122,7 @@ std::unique_ptr<io::OutputSet> SessionFiles::reserve(const fs::path& name) const
   const fs::path here = fs::absolute(name).lexically_normal();
   for (const fs::path& t : targets_)
     if (fs::absolute(t).lexically_normal() == here)
-      throw ViewerError(name.string() + ": is also an output of this session (" + t.string() + ")");
+      throw Error(name.string() + ": is also an output of this session (" + t.string() + ")");
   auto one = std::make_unique<io::OutputSet>(inputs_, force_);
   one->add(name, "");
   return one;

@@ -26,7 +26,7 @@ namespace mbi::viewer {
 /// FIFO or a device is refused), an existing file only with `force`, in a folder that exists.
 /// The recording and the report are written as the session goes (memory stays bounded) into
 /// their reserved files, which finish() moves into place with the screenshot. A write error is
-/// an error (ViewerError naming the option); destroyed without finish(), no output is created
+/// an error (Error naming the option); destroyed without finish(), no output is created
 /// or replaced.
 class SessionFiles {
  public:
@@ -46,7 +46,7 @@ class SessionFiles {
   bool screenshot_at_end() const { return screenshot_.has_value(); }
   /// Appends one frame to the report.
   void report(const nlohmann::json& frame);
-  /// Once a frame: flushes the recording; throws ViewerError on a write error of either file.
+  /// Once a frame: flushes the recording; throws Error on a write error of either file.
   void check();
   /// Writes `image` to `name` at once (the p key), under the same rules: an existing file only
   /// with `force`, never an input or an output of this session. Throws mbi::Error.
@@ -59,7 +59,7 @@ class SessionFiles {
   const std::filesystem::path& ffmpeg() const { return ffmpeg_; }
   std::filesystem::path video_staging() const;
   /// Writes the screenshot, ends the report, moves every output into place. Throws
-  /// ViewerError, or io::IoError when an output cannot be moved into place.
+  /// Error, or io::Error when an output cannot be moved into place.
   void finish(const io::Image& last_shot);
 
  private:

@@ -14,12 +14,12 @@ namespace {
 gpu::GpuEvaluator& gpu_evaluator(pipeline::FramePipeline& pipe) {
   auto* gpu = dynamic_cast<gpu::GpuEvaluator*>(&pipe.evaluator());
   if (auto* drawn = dynamic_cast<DrawnEvaluator*>(&pipe.evaluator())) gpu = &drawn->buffers();
-  if (!gpu) throw ViewerError("the viewer shows pipelines built with Viewer::evaluator()");
+  if (!gpu) throw Error("the viewer shows pipelines built with Viewer::evaluator()");
   return *gpu;
 }
 
 const io::Image* checked_image(const Shown& shown) {
-  if (shown.pipe.dim() == 2 && !shown.image) throw ViewerError("a 2D pipeline needs an image to draw");
+  if (shown.pipe.dim() == 2 && !shown.image) throw Error("a 2D pipeline needs an image to draw");
   return shown.image;
 }
 

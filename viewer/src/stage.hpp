@@ -44,7 +44,7 @@ inline Eigen::Vector3d pad3(const Eigen::RowVectorXd& r) {
 }
 
 struct Stage {
-  /// Throws ViewerError: a pipeline not built with Viewer::evaluator(), 2D without an image.
+  /// Throws Error: a pipeline not built with Viewer::evaluator(), 2D without an image.
   explicit Stage(const Shown& shown);
 
   pipeline::FramePipeline& pipe;

@@ -31,7 +31,7 @@ constexpr int kWriteTimeoutMs = 10000, kFinishTimeoutMs = 60000;
 fs::path find_ffmpeg(const fs::path& file, const std::string& what) {
   const std::string ext = io::lower_extension(file);
   if (ext != ".mp4" && ext != ".mkv" && ext != ".mov" && ext != ".webm")
-    throw ViewerError(what + " " + file.string() + ": a video is written as " + kVideoExtensions);
+    throw Error(what + " " + file.string() + ": a video is written as " + kVideoExtensions);
   const char* path = std::getenv("PATH");
   std::string_view dirs = path ? path : "/usr/bin:/bin";
   while (true) {
@@ -41,7 +41,7 @@ fs::path find_ffmpeg(const fs::path& file, const std::string& what) {
     if (colon == std::string_view::npos) break;
     dirs.remove_prefix(colon + 1);
   }
-  throw ViewerError(what + " " + file.string() +
+  throw Error(what + " " + file.string() +
                     ": needs ffmpeg, which is not on PATH (Debian: apt-get install ffmpeg)");
 }
 
@@ -50,7 +50,7 @@ VideoRecorder::VideoRecorder(const fs::path& ffmpeg, const fs::path& file, std::
   // a stopped ffmpeg must be an error of the write, not a SIGPIPE that ends the viewer
   std::signal(SIGPIPE, SIG_IGN);
   int fds[2];
-  if (::pipe(fds) != 0) throw ViewerError(name_ + ": no pipe to ffmpeg (" + std::strerror(errno) + ")");
+  if (::pipe(fds) != 0) throw Error(name_ + ": no pipe to ffmpeg (" + std::strerror(errno) + ")");
   const std::string size = std::to_string(width_) + "x" + std::to_string(height_);
   const std::string fps = std::to_string(kVideoFps);
   // GL rows run bottom to top: vflip
@@ -71,7 +71,7 @@ VideoRecorder::VideoRecorder(const fs::path& ffmpeg, const fs::path& file, std::
   if (rc != 0) {
     ::close(fds[1]);
     pid_ = -1;
-    throw ViewerError(name_ + ": cannot start " + ffmpeg.string() + " (" + std::strerror(rc) + ")");
+    throw Error(name_ + ": cannot start " + ffmpeg.string() + " (" + std::strerror(rc) + ")");
   }
   ::fcntl(fds[1], F_SETFD, FD_CLOEXEC);
   ::fcntl(fds[1], F_SETFL, ::fcntl(fds[1], F_GETFL) | O_NONBLOCK);  // writes wait in poll(), bounded
@@ -104,11 +104,11 @@ void VideoRecorder::add_frame() {
       pollfd p{pipe_, POLLOUT, 0};
       const int ready = ::poll(&p, 1, kWriteTimeoutMs);
       if (ready == 0)
-        throw ViewerError(name_ + ": ffmpeg took no frame data for " + std::to_string(kWriteTimeoutMs / 1000) +
+        throw Error(name_ + ": ffmpeg took no frame data for " + std::to_string(kWriteTimeoutMs / 1000) +
                           " s; no video written");
       if (ready > 0 || errno == EINTR) continue;
     }
-    throw ViewerError(name_ + ": ffmpeg stopped taking frames (" + std::strerror(errno) + ")");
+    throw Error(name_ + ": ffmpeg stopped taking frames (" + std::strerror(errno) + ")");
   }
   ++frames_;
 }
@@ -126,14 +126,14 @@ void VideoRecorder::finish() {
       ::kill(pid_, SIGKILL);
       ::waitpid(pid_, &status, 0);
       pid_ = -1;
-      throw ViewerError(name_ + ": ffmpeg did not end " + std::to_string(kFinishTimeoutMs / 1000) +
+      throw Error(name_ + ": ffmpeg did not end " + std::to_string(kFinishTimeoutMs / 1000) +
                         " s after the last frame; no video written");
     }
     ::usleep(10000);
   }
   pid_ = -1;
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
-    throw ViewerError(name_ + ": ffmpeg failed (" +
+    throw Error(name_ + ": ffmpeg failed (" +
                       (WIFEXITED(status) ? "exit status " + std::to_string(WEXITSTATUS(status))
                                          : std::string("killed by a signal")) + "); no video written");
 }

@@ -16,7 +16,7 @@ inline constexpr const char* kVideoExtensions = ".mp4, .mkv, .mov or .webm";
 /// plays at the simulation's own speed whatever the viewer's frame rate was.
 inline constexpr int kVideoFps = 30;
 
-/// ffmpeg on PATH. Throws ViewerError "<what>: needs ffmpeg ..." when there is none, or when
+/// ffmpeg on PATH. Throws Error "<what>: needs ffmpeg ..." when there is none, or when
 /// `file`'s extension is not one of kVideoExtensions.
 std::filesystem::path find_ffmpeg(const std::filesystem::path& file, const std::string& what);
 
@@ -24,7 +24,7 @@ class VideoRecorder {
  public:
   /// Starts `ffmpeg` writing `file`; the frames are the window's lower left width x height
   /// pixels, rounded down to even sizes (what the common codecs need). `name` names the video
-  /// in messages. Throws ViewerError.
+  /// in messages. Throws Error.
   VideoRecorder(const std::filesystem::path& ffmpeg, const std::filesystem::path& file, std::string name,
                 int width, int height);
   /// Stops an unfinished ffmpeg (its file is then removed by its owner).
@@ -32,10 +32,10 @@ class VideoRecorder {
   VideoRecorder(const VideoRecorder&) = delete;
   VideoRecorder& operator=(const VideoRecorder&) = delete;
 
-  /// Sends the bound framebuffer's back buffer as the next frame. Throws ViewerError when ffmpeg
+  /// Sends the bound framebuffer's back buffer as the next frame. Throws Error when ffmpeg
   /// has stopped.
   void add_frame();
-  /// Ends the stream and waits for ffmpeg. Throws ViewerError unless it exits with 0.
+  /// Ends the stream and waits for ffmpeg. Throws Error unless it exits with 0.
   void finish();
 
   int width() const { return width_; }

@@ -48,7 +48,7 @@ GLFWwindow* open_window(const ViewerOptions& options, int samples) {
   if (!glfwInit()) {
     const char* why = nullptr;
     glfwGetError(&why);
-    throw ViewerError(std::string("no display: cannot open a window (") + (why ? why : "GLFW failed") + ")");
+    throw Error(std::string("no display: cannot open a window (") + (why ? why : "GLFW failed") + ")");
   }
   glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
   glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
@@ -61,7 +61,7 @@ GLFWwindow* open_window(const ViewerOptions& options, int samples) {
     const char* why = nullptr;
     glfwGetError(&why);
     glfwTerminate();
-    throw ViewerError(std::string("no OpenGL 3.3 window: ") + (why ? why : "GLFW failed"));
+    throw Error(std::string("no OpenGL 3.3 window: ") + (why ? why : "GLFW failed"));
   }
   glfwMakeContextCurrent(window);
   glfwSwapInterval(options.frames > 0 ? 0 : 1);

@@ -1,8 +1,9 @@
 #pragma once
-// The one error type of mbi. Every library's error derives from mbi::Error (mbi::interp::Error,
-// mbi::sim::Error, mbi::io::IoError, mbi::generate::CageError, mbi::scenes::SceneError,
-// mbi::pipeline errors), so a caller that wants any mbi failure catches this one type. Messages
-// name what is at fault (file and line, element, vertex, key or argument).
+// The one error type of mbi. Each library that has an error type of its own names it Error in its
+// namespace (mbi::interp::Error, mbi::sim::Error, mbi::io::Error, mbi::generate::Error,
+// mbi::scenes::Error, mbi::gpu::Error, mbi::viewer::Error), derived from mbi::Error, so a caller
+// that wants any mbi failure catches this one type. Messages name what is at fault (file and
+// line, element, vertex, key or argument).
 #include <stdexcept>
 
 namespace mbi {

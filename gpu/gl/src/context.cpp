@@ -67,7 +67,7 @@ bool try_display(EGLDisplay dpy, Context* /*unused*/, EGLDisplay& out_dpy, EGLCo
 
 std::unique_ptr<Context> Context::headless() {
   if (const char* v = std::getenv("MBI_GL"); v && std::strcmp(v, "none") == 0)
-    throw GlError("no OpenGL context: disabled by the environment (MBI_GL=none)");
+    throw Error("no OpenGL context: disabled by the environment (MBI_GL=none)");
   std::unique_ptr<Context> c(new Context);
   c->egl_ = std::make_unique<Egl>();
   std::string why = "EGL is not available";
@@ -88,7 +88,7 @@ std::unique_ptr<Context> Context::headless() {
                          c.get(), dpy, ctx, why);
   }
   if (!ok) ok = try_display(eglGetDisplay(EGL_DEFAULT_DISPLAY), c.get(), dpy, ctx, why);
-  if (!ok) throw GlError("no OpenGL context: " + why);
+  if (!ok) throw Error("no OpenGL context: " + why);
   c->egl_->display = dpy;
   c->egl_->context = ctx;
   c->init_gl();
@@ -104,10 +104,10 @@ std::unique_ptr<Context> Context::adopt_current() {
 void Context::init_gl() {
   const auto* r = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
   const auto* v = reinterpret_cast<const char*>(glGetString(GL_VERSION));
-  if (!r || !v) throw GlError("no OpenGL context is current");
+  if (!r || !v) throw Error("no OpenGL context is current");
   renderer_ = r;
   version_ = v;
-  if (epoxy_gl_version() < 33) throw GlError("OpenGL " + version_ + " is older than 3.3");
+  if (epoxy_gl_version() < 33) throw Error("OpenGL " + version_ + " is older than 3.3");
   software_ = renderer_.find("llvmpipe") != std::string::npos ||
               renderer_.find("softpipe") != std::string::npos ||
               renderer_.find("swrast") != std::string::npos;
@@ -118,7 +118,7 @@ void Context::init_gl() {
   glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, rbo_);
   if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-    throw GlError("OpenGL: cannot make a complete framebuffer (" + renderer_ + ")");
+    throw Error("OpenGL: cannot make a complete framebuffer (" + renderer_ + ")");
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 

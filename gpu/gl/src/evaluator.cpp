@@ -26,7 +26,7 @@ GLuint float_attribute(GLuint loc, const std::vector<float>& data, int comps) {
 
 GpuEvaluator::GpuEvaluator(Context& context, const GpuOptions& options)
     : context_(context), options_(options) {
-  if (options.chunk_points < 1) throw GlError("GpuEvaluator: chunk_points must be >= 1");
+  if (options.chunk_points < 1) throw Error("GpuEvaluator: chunk_points must be >= 1");
 }
 
 GpuEvaluator::~GpuEvaluator() { release(); }
@@ -50,19 +50,19 @@ void GpuEvaluator::release() {
 std::string GpuEvaluator::name() const { return "gpu (" + context_.renderer() + ")"; }
 
 void GpuEvaluator::set_points(const pipeline::PointSet& ps) {
-  if (!ps.embedding) throw GlError("GpuEvaluator: no embedding");
+  if (!ps.embedding) throw Error("GpuEvaluator: no embedding");
   const interp::Embedding& emb = *ps.embedding;
   const int d = emb.dim();
   const int K = (d + 1) * (d + 2) / 2;
-  if (d != 2 && d != 3) throw GlError("GpuEvaluator: points must be 2D or 3D");
+  if (d != 2 && d != 3) throw Error("GpuEvaluator: points must be 2D or 3D");
   if (ps.rest_positions.rows() != emb.size() || ps.rest_positions.cols() != d)
-    throw GlError("GpuEvaluator: rest positions must be " + std::to_string(emb.size()) + " x " +
+    throw Error("GpuEvaluator: rest positions must be " + std::to_string(emb.size()) + " x " +
                   std::to_string(d));
   if (ps.rest_bezier.cols() != d || ps.rest_bezier.rows() % K != 0)
-    throw GlError("GpuEvaluator: rest Bezier points have the wrong shape");
+    throw Error("GpuEvaluator: rest Bezier points have the wrong shape");
   have_rest_normals_ = ps.rest_normals.size() > 0;
   if (have_rest_normals_ && (ps.rest_normals.rows() != emb.size() || ps.rest_normals.cols() != d))
-    throw GlError("GpuEvaluator: rest normals must be " + std::to_string(emb.size()) + " x " +
+    throw Error("GpuEvaluator: rest normals must be " + std::to_string(emb.size()) + " x " +
                   std::to_string(d));
   release();
   dim_ = d;
@@ -141,12 +141,12 @@ void GpuEvaluator::set_points(const pipeline::PointSet& ps) {
 }
 
 void GpuEvaluator::evaluate(const interp::BezierPoints& B, bool normals) {
-  if (!program_) throw GlError("GpuEvaluator: evaluate() before set_points()");
+  if (!program_) throw Error("GpuEvaluator: evaluate() before set_points()");
   if (B.rows() != rest_bezier_.rows() || B.cols() != rest_bezier_.cols())
-    throw GlError("GpuEvaluator: Bezier points must be " + std::to_string(rest_bezier_.rows()) + " x " +
+    throw Error("GpuEvaluator: Bezier points must be " + std::to_string(rest_bezier_.rows()) + " x " +
                   std::to_string(rest_bezier_.cols()));
   if (normals && !have_rest_normals_)
-    throw GlError("GpuEvaluator: normals asked for, but no rest normals were given");
+    throw Error("GpuEvaluator: normals asked for, but no rest normals were given");
   // upload: the displacement control points as vec4 floats, into an orphaned buffer (a fresh
   // store, so the driver never waits for the last pass or copies to avoid stalling)
   auto t0 = Clock::now();
@@ -215,7 +215,7 @@ void GpuEvaluator::evaluate(const interp::BezierPoints& B, bool normals) {
   }
   detail::check("GpuEvaluator::evaluate");
   if (primitives_ != points_)
-    throw GlError("GpuEvaluator: the pass captured " + std::to_string(primitives_) + " of " +
+    throw Error("GpuEvaluator: the pass captured " + std::to_string(primitives_) + " of " +
                   std::to_string(points_) + " points (" + context_.renderer() + ")");
   have_normals_ = normals;
   evaluated_ = true;
@@ -225,7 +225,7 @@ void GpuEvaluator::evaluate(const interp::BezierPoints& B, bool normals) {
 void GpuEvaluator::set_results(const Eigen::MatrixXd& positions, const Eigen::MatrixXd& normals) {
   if (positions.rows() != points_ || positions.cols() != dim_ ||
       (normals.size() > 0 && (normals.rows() != points_ || normals.cols() != dim_)))
-    throw GlError("GpuEvaluator: results must be " + std::to_string(points_) + " x " + std::to_string(dim_));
+    throw Error("GpuEvaluator: results must be " + std::to_string(points_) + " x " + std::to_string(dim_));
   const size_t p = static_cast<size_t>(points_);
   std::vector<float>& buf = upload_;  // staging kept between frames (evaluate() refills it too)
   buf.assign(p * 3, 0.0f);
@@ -254,7 +254,7 @@ void GpuEvaluator::set_results(const Eigen::MatrixXd& positions, const Eigen::Ma
 }
 
 const Eigen::MatrixXd& GpuEvaluator::positions() {
-  if (!evaluated_) throw GlError("GpuEvaluator: positions() before evaluate()");
+  if (!evaluated_) throw Error("GpuEvaluator: positions() before evaluate()");
   if (!read_) {
     const size_t p = static_cast<size_t>(points_);
     std::vector<float> buf(p * 3);

@@ -16,7 +16,7 @@ GLuint shader(GLenum type, const std::string& source) {
     char log[4096] = {};
     glGetShaderInfoLog(s, sizeof log, nullptr, log);
     glDeleteShader(s);
-    throw GlError(std::string("OpenGL: shader does not compile: ") + log);
+    throw Error(std::string("OpenGL: shader does not compile: ") + log);
   }
   return s;
 }
@@ -46,7 +46,7 @@ GLuint program(const std::string& defines, const char* vs, const char* fs,
     char log[4096] = {};
     glGetProgramInfoLog(p, sizeof log, nullptr, log);
     glDeleteProgram(p);
-    throw GlError(std::string("OpenGL: program does not link: ") + log);
+    throw Error(std::string("OpenGL: program does not link: ") + log);
   }
   return p;
 }
@@ -56,7 +56,7 @@ void check(const char* what) {
   if (e != GL_NO_ERROR) {
     char code[16];
     std::snprintf(code, sizeof code, "0x%04x", e);
-    throw GlError(std::string("OpenGL error ") + code + " in " + what);
+    throw Error(std::string("OpenGL error ") + code + " in " + what);
   }
 }
 

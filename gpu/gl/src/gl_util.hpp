@@ -10,11 +10,11 @@
 namespace mbi::gpu::detail {
 
 /// Compiles and links a program from "#version 330 core" + `defines` + each source. Transform
-/// feedback varyings (if any) are set before linking. Throws GlError with the driver's log.
+/// feedback varyings (if any) are set before linking. Throws Error with the driver's log.
 GLuint program(const std::string& defines, const char* vs, const char* fs,
                const std::vector<const char*>& feedback = {});
 
-/// Throws GlError naming `what` if glGetError reports an error.
+/// Throws Error naming `what` if glGetError reports an error.
 void check(const char* what);
 
 }  // namespace mbi::gpu::detail

@@ -82,11 +82,11 @@ Renderer::~Renderer() {
 }
 
 void Renderer::set_faces(const Eigen::Ref<const Eigen::MatrixXi>& F) {
-  if (F.cols() != 3 && F.rows() > 0) throw GlError("Renderer: faces must be t x 3");
+  if (F.cols() != 3 && F.rows() > 0) throw Error("Renderer: faces must be t x 3");
   std::vector<GLuint> idx(static_cast<size_t>(F.rows()) * 3);
   for (Eigen::Index f = 0; f < F.rows(); ++f)
     for (int k = 0; k < 3; ++k) {
-      if (F(f, k) < 0) throw GlError("Renderer: negative face index");
+      if (F(f, k) < 0) throw Error("Renderer: negative face index");
       idx[3 * static_cast<size_t>(f) + static_cast<size_t>(k)] = static_cast<GLuint>(F(f, k));
     }
   glBindVertexArray(vao_);
@@ -113,7 +113,7 @@ void Renderer::ensure_target(int width, int height) {
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color_);
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_);
   if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-    throw GlError("Renderer: incomplete framebuffer of " + std::to_string(width) + " x " + std::to_string(height));
+    throw Error("Renderer: incomplete framebuffer of " + std::to_string(width) + " x " + std::to_string(height));
   width_ = width;
   height_ = height;
 }
@@ -126,7 +126,7 @@ void Renderer::draw(const GpuEvaluator& ev, const Eigen::Matrix4d& view_projecti
                     const Eigen::Vector3d& eye_direction, const Eigen::Vector3d& color,
                     const Eigen::MatrixXd* wire_X, const Eigen::MatrixXi* wire_T) {
   if (ev.dim() != 3 || !ev.has_normals())
-    throw GlError("Renderer: needs a 3D evaluation with normals");
+    throw Error("Renderer: needs a 3D evaluation with normals");
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   const Eigen::Matrix4f vp = relative_to(view_projection, ev.origin());
@@ -179,7 +179,7 @@ void Renderer::draw(const GpuEvaluator& ev, const Eigen::Matrix4d& view_projecti
 
 void Renderer::draw_textured(const GpuEvaluator& ev, const Eigen::Matrix4d& view_projection,
                              const io::Image& image) {
-  if (ev.dim() != 2) throw GlError("Renderer: textured drawing is for 2D evaluations");
+  if (ev.dim() != 2) throw Error("Renderer: textured drawing is for 2D evaluations");
   if (!texture_ || texture_image_ != &image) {
     if (!texture_) glGenTextures(1, &texture_);
     glBindTexture(GL_TEXTURE_2D, texture_);
@@ -244,7 +244,7 @@ io::Image Renderer::render(const GpuEvaluator& ev, const raster::View& view, int
                            const Eigen::Vector3d& color, const Eigen::MatrixXd* wire_X,
                            const Eigen::MatrixXi* wire_T) {
   if (width < 1 || height < 1 || width > 16384 || height > 16384)
-    throw GlError("Renderer: picture size " + std::to_string(width) + " x " + std::to_string(height) +
+    throw Error("Renderer: picture size " + std::to_string(width) + " x " + std::to_string(height) +
                   " out of range [1, 16384]");
   ensure_target(width, height);
   glBindFramebuffer(GL_FRAMEBUFFER, fbo_);

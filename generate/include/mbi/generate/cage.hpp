@@ -23,7 +23,7 @@
 // radius-edge bound only, which adds a few interior points). Since few vertices lie inside, the
 // same vertex budget buys a finer envelope: the cell size is searched on the TetGen vertex count.
 // A TetGen mesh whose smallest dihedral angle is below 5 degrees is rejected (other cell sizes and
-// switches are tried); if none qualifies make_cage throws CageError.
+// switches are tried); if none qualifies make_cage throws Error.
 #include <mbi/base/names.hpp>
 #include <mbi/error.hpp>
 
@@ -35,7 +35,7 @@ namespace mbi::generate {
 
 /// Every error of mbi::generate: bad input (empty or non-finite vertices, bad indices, a target
 /// out of range, an unknown mesher) or no cage that satisfies the guarantees.
-class CageError : public mbi::Error {
+class Error : public mbi::Error {
  public:
   using mbi::Error::Error;
 };
@@ -51,7 +51,7 @@ inline constexpr auto kMesherNames =
 
 /// kMesherNames' name of m.
 const char* mesher_name(Mesher m);
-/// Parses a name of kMesherNames; throws CageError otherwise.
+/// Parses a name of kMesherNames; throws Error otherwise.
 Mesher parse_mesher(const std::string& name);
 
 struct CageOptions {
@@ -75,7 +75,7 @@ struct CageResult {
 
 /// Builds a cage around the dense surface V (n x 3, finite), F (t x 3, 0-based; may be empty
 /// for a point cloud). Deterministic: the same input and options give the same mesh. Throws
-/// CageError on bad input (empty V, non-finite coordinates, bad indices, target out of range)
+/// Error on bad input (empty V, non-finite coordinates, bad indices, target out of range)
 /// and if no cell size contains every vertex (TetGen: or if no
 /// TetGen mesh has every dihedral angle >= 5 degrees within 30% of the target vertex count).
 CageResult make_cage(const Eigen::Ref<const Eigen::MatrixXd>& V,

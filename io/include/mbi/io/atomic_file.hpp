@@ -25,14 +25,14 @@ namespace mbi::io {
 
 class AtomicFile {
  public:
-  /// Opens a fresh temporary file beside `target`. Throws IoError naming the target if its
+  /// Opens a fresh temporary file beside `target`. Throws Error naming the target if its
   /// folder does not exist or is not writable.
   explicit AtomicFile(const std::filesystem::path& target);
   ~AtomicFile();
   AtomicFile(const AtomicFile&) = delete;
   AtomicFile& operator=(const AtomicFile&) = delete;
 
-  /// Appends bytes; throws IoError on a write error.
+  /// Appends bytes; throws Error on a write error.
   void write(const void* data, std::size_t bytes);
   void write(const std::string& text);
   /// Moves to an absolute byte offset (to patch a header before commit()).
@@ -69,7 +69,7 @@ inline constexpr const char* kTemporaryPrefix = ".mbi-tmp.";
 /// that then ends the process (_exit).
 void remove_temporaries_now() noexcept;
 
-/// Throws IoError ("<what> <target>: ...") unless `target` names a file: an empty last part
+/// Throws Error ("<what> <target>: ...") unless `target` names a file: an empty last part
 /// ("dir/"), "." or ".." name a folder.
 void check_file_name(const std::filesystem::path& target, const std::string& what);
 
@@ -112,20 +112,20 @@ class OutputSet {
   OutputSet& operator=(const OutputSet&) = delete;
 
   /// Checks `target` against the rule above and reserves its staging file; returns its index.
-  /// `what` names the option in messages (e.g. "--stats"). Throws IoError.
+  /// `what` names the option in messages (e.g. "--stats"). Throws Error.
   /// `stem_of`: the staging name is that of output `stem_of` with target's extension (for
   /// files written together from one base name, e.g. BASE.node and BASE.ele by write_tetgen).
   std::size_t add(const std::filesystem::path& target, const std::string& what,
                   std::optional<std::size_t> stem_of = std::nullopt);
   /// Where to write output i (beside its target, same extension, a short name).
   const std::filesystem::path& staging(std::size_t i) const { return entries_.at(i).staging; }
-  /// Runs body(staging(i)); an IoError it throws names target(i) instead of the staging file
+  /// Runs body(staging(i)); an Error it throws names target(i) instead of the staging file
   /// (a full disk names the user's file, not an internal one).
   void write(std::size_t i, const std::function<void(const std::filesystem::path&)>& body) const;
   /// `what` with every staging file's name replaced by its target's (for messages).
   std::string name_targets(std::string what) const;
   const std::filesystem::path& target(std::size_t i) const { return entries_.at(i).target; }
-  /// Renames every staging file over its target. Throws IoError if one is missing (not written).
+  /// Renames every staging file over its target. Throws Error if one is missing (not written).
   void commit();
 
  private:

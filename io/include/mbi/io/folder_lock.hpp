@@ -15,7 +15,7 @@ namespace mbi::io {
 class FolderLock {
  public:
   /// Locks the existing folder `dir`, waiting up to `wait` while another process holds it.
-  /// Throws IoError naming the folder and, when the system says which, the process holding it
+  /// Throws Error naming the folder and, when the system says which, the process holding it
   /// (its id and command line).
   explicit FolderLock(const std::filesystem::path& dir,
                       std::chrono::milliseconds wait = std::chrono::milliseconds(0));

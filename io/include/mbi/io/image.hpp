@@ -22,7 +22,7 @@ struct Image {
   }
 };
 
-/// Reads a PNG (any channel count; converted to RGB). Throws IoError naming the file.
+/// Reads a PNG (any channel count; converted to RGB). Throws Error naming the file.
 Image read_png(const std::filesystem::path& file);
 /// Writes a PNG atomically (AtomicFile: nothing under the final name on failure).
 void write_png(const std::filesystem::path& file, const Image& img);

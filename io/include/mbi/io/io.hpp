@@ -14,7 +14,7 @@
 // Conventions: positions are n x d Eigen::MatrixXd (d = 2 or 3), elements m x (d+1) 0-based
 // Eigen::MatrixXi, as in mbi::interp. Units are whatever the file uses (no scaling).
 //
-// Errors: every function throws IoError. The message starts with "<file>:<line>: " when a line
+// Errors: every function throws Error. The message starts with "<file>:<line>: " when a line
 // of a text file is at fault, "<file>: " otherwise, and names the field (header count, vertex,
 // face, element, index) at fault. Counts in headers are checked against the size of the file
 // before anything is allocated for them. Non-finite coordinates are rejected.
@@ -37,7 +37,7 @@
 namespace mbi::io {
 
 /// Every error of the IO functions (message: "<file>[:<line>]: <what is wrong>").
-class IoError : public mbi::Error {
+class Error : public mbi::Error {
  public:
   using mbi::Error::Error;
 };
@@ -134,7 +134,7 @@ enum class Encoding { ascii, binary, as_read };
 /// written fresh: float64 coordinates and normals, int32 indices; with attributes every
 /// property keeps its type. Binary STL: float32, the format's only precision. OBJ and OFF are
 /// always ASCII. STL writes the triangles F (polygons cannot be stored). A mesh without faces
-/// writes its vertices only (OBJ: `v` lines). Throws IoError on out-of-range indices or
+/// writes its vertices only (OBJ: `v` lines). Throws Error on out-of-range indices or
 /// non-finite positions (nothing written).
 void write_surface(const std::filesystem::path& file, const SurfaceMesh& mesh,
                    Encoding encoding = Encoding::as_read);
@@ -238,7 +238,7 @@ void write_vtk(const std::filesystem::path& file, const Eigen::Ref<const Eigen::
 // ----------------------------------------------------------------------------------------------
 
 /// "<base>_<frame, zero-padded to `digits`><ext>", e.g. frame_path("out/bunny", 7, ".obj") ->
-/// "out/bunny_0007.obj". Throws IoError on a negative frame.
+/// "out/bunny_0007.obj". Throws Error on a negative frame.
 std::filesystem::path frame_path(const std::filesystem::path& base, int frame,
                                  const std::string& ext, int digits = 4);
 /// Writes one frame of a sequence: the positions V (n x 3) and normals N (n x 3, or empty: no
@@ -267,7 +267,7 @@ class GltfWriter {
   GltfWriter& operator=(const GltfWriter&) = delete;
 
   /// One frame at `time` (s, after the previous frame's): V n x 3, N n x 3 or empty (no
-  /// normals; the same for every frame). Throws IoError (nothing kept of this frame).
+  /// normals; the same for every frame). Throws Error (nothing kept of this frame).
   void append(double time, const Eigen::Ref<const Eigen::MatrixXd>& V,
               const Eigen::Ref<const Eigen::MatrixXd>& N = Eigen::MatrixXd());
   /// Writes the frames appended so far, atomically.
@@ -295,7 +295,7 @@ class Pc2Writer {
   Pc2Writer& operator=(const Pc2Writer&) = delete;
 
   /// Appends one sample: P is numPoints x 3 (or x 2: z = 0), finite. All of it or, on a write
-  /// error (IoError: a full disk), none: the file keeps exactly samples() samples.
+  /// error (Error: a full disk), none: the file keeps exactly samples() samples.
   void append(const Eigen::Ref<const Eigen::MatrixXd>& P);
   /// The same from numPoints x 3 finite floats, row after row (interleaved x y z).
   void append(const float* xyz);
@@ -368,11 +368,11 @@ class PointCacheReader {
   /// PC2: the header's start frame and sample rate; MDD: 0 and 1.
   float start_frame() const { return start_frame_; }
   float sample_rate() const { return sample_rate_; }
-  /// MDD: each frame's time (s), read on the first call (IoError naming the file past 2^24
+  /// MDD: each frame's time (s), read on the first call (Error naming the file past 2^24
   /// frames); PC2: empty.
   const std::vector<float>& times();
   bool has_times() const { return times_offset_ > 0; }
-  /// Frame k (0-based), points() x 3. Throws IoError "<file>: frame k: point i: ..." on a
+  /// Frame k (0-based), points() x 3. Throws Error "<file>: frame k: point i: ..." on a
   /// non-finite coordinate or a file that changed under us.
   Eigen::MatrixXd frame(int k);
 
@@ -405,7 +405,7 @@ std::vector<PvdEntry> read_pvd(const std::filesystem::path& file);
 // ----------------------------------------------------------------------------------------------
 
 /// The file of number k of a printf pattern ("out/m_%04d.obj" -> "out/m_0007.obj"): one %d or
-/// %0Nd (N <= 12) in the file name, %% for a percent sign. Throws IoError on any other pattern.
+/// %0Nd (N <= 12) in the file name, %% for a percent sign. Throws Error on any other pattern.
 std::filesystem::path numbered_file(const std::string& pattern, int k);
 /// Whether `name` is a printf pattern: it has a %d or %0Nd; a '%' otherwise ("100%.obj") is
 /// part of a plain name.
@@ -437,7 +437,7 @@ class Trajectory {
   /// Where frame k comes from, for messages: "x_0007.vtk" or "traj.pc2: frame 7".
   std::string where(int k) const;
   /// Frame times (s) from an MDD or a .pvd; empty otherwise. An MDD's are read on the first
-  /// call (IoError naming the file past 2^24 frames: memory for them is not taken up front).
+  /// call (Error naming the file past 2^24 frames: memory for them is not taken up front).
   const std::vector<double>& times() const;
   /// Whether it has frame times (an MDD or a .pvd), without reading them.
   bool has_times() const;

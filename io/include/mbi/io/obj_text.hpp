@@ -8,7 +8,7 @@
 namespace mbi::io {
 
 /// The text of an OBJ file, read as read_surface reads a .obj (`name` names it in messages).
-/// Throws IoError as read_surface does.
+/// Throws Error as read_surface does.
 SurfaceMesh parse_obj_text(std::string_view text, const std::filesystem::path& name);
 
 }  // namespace mbi::io

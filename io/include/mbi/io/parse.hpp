@@ -7,7 +7,7 @@
 // what the fuzz targets (tests/fuzz/) call: they never touch the file system.
 //
 // What every reader guarantees, whatever the bytes (docs/hardening.md):
-//  - it returns a valid mesh or throws IoError ("<name>[:<line>]: <what>"), nothing else: no
+//  - it returns a valid mesh or throws Error ("<name>[:<line>]: <what>"), nothing else: no
 //    crash, no hang, no read outside the data, no undefined behaviour;
 //  - counts in headers are checked against the bytes (or lines) that remain AND against
 //    kMaxCount before anything is allocated or looped over for them (an element of a binary

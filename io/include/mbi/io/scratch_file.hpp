@@ -11,20 +11,20 @@ namespace mbi::io {
 
 class ScratchFile {
  public:
-  /// A new empty file in the existing folder `dir`; `what` names it in messages. Throws IoError.
+  /// A new empty file in the existing folder `dir`; `what` names it in messages. Throws Error.
   ScratchFile(const std::filesystem::path& dir, std::string what);
   ~ScratchFile();
   ScratchFile(const ScratchFile&) = delete;
   ScratchFile& operator=(const ScratchFile&) = delete;
 
   /// Appends bytes at the end, all or nothing: when the disk is full, what was written of them
-  /// is dropped and IoError thrown; the file holds what it held before.
+  /// is dropped and Error thrown; the file holds what it held before.
   void append(const void* data, std::size_t bytes);
   /// Bytes held.
   long size() const { return size_; }
   /// Drops the bytes from `size` on (size <= size()).
   void truncate(long size);
-  /// Reads `bytes` at byte `offset` (written before); throws IoError when they are not there.
+  /// Reads `bytes` at byte `offset` (written before); throws Error when they are not there.
   void read(long offset, void* data, std::size_t bytes) const;
 
  private:

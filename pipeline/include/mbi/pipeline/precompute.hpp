@@ -47,6 +47,9 @@ class Precompute {
                               const interp::VertexMatrices& M) const;
   /// M and the Bezier points at X in one call, for a method already built (BI forms no M).
   interp::BezierPoints bezier(Method method, const Eigen::Ref<const Eigen::MatrixXd>& X) const;
+  /// The transpose of M(method, X), which is linear in X: dL/dX (n x d) from G = dL/dM ((n d) x d),
+  /// for a method already built; zero for BI.
+  Eigen::MatrixXd M_transpose(Method method, const interp::VertexMatrices& G) const;
 
   /// Modified-BI's factorisation, built on first use (timed: precompute_ms()).
   const interp::ModifiedBI& solver();

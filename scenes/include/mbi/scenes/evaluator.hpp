@@ -23,7 +23,7 @@ struct Evaluation {
   std::unique_ptr<pipeline::Evaluator> evaluator;
 };
 
-/// The evaluator `use` asks for. Off: the CPU. On: the GPU, or SceneError "gpu = on, but <why
+/// The evaluator `use` asks for. Off: the CPU. On: the GPU, or Error "gpu = on, but <why
 /// no OpenGL context>". Auto: the GPU when a headless OpenGL context can be made, else the CPU,
 /// after warn("note: <why>; evaluating and drawing on the CPU"). With `context` (a window's, the
 /// viewer's), On and Auto evaluate in it instead of a headless one. `cpu`: the CPU evaluator's

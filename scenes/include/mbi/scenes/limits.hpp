@@ -38,7 +38,7 @@ double cgroup_memory_limit(const std::string& proc_self_cgroup, const std::files
 /// is smaller (a container). 0 when unknown.
 double usable_memory_bytes();
 
-/// Throws SceneError (message starts with `where`) when the control mesh exceeds the caps above
+/// Throws Error (message starts with `where`) when the control mesh exceeds the caps above
 /// or the run's estimated memory exceeds 3/4 of usable_memory_bytes(); the message gives the
 /// estimate and the cap.
 void check_run_size(const std::string& where, long long dense_vertices, long long control_vertices,

@@ -13,7 +13,7 @@
 namespace mbi::scenes {
 
 /// The output folder of a run: `out_dir` when given, else "out/<scene name>". The name must be
-/// one safe file name (no '/', '\\', control characters, leading '.'); otherwise SceneError
+/// one safe file name (no '/', '\\', control characters, leading '.'); otherwise Error
 /// (a downloaded scene never writes outside out/).
 std::filesystem::path output_folder(const Scene& scene, const std::filesystem::path& out_dir);
 
@@ -29,7 +29,7 @@ class OutputFolder {
   /// holds none of `inputs` (by file identity) under a name the run writes; a new one has a
   /// folder (or nothing yet) as its nearest existing parent, and is made now. Then the folder is
   /// locked (io::FolderLock) until this object goes: a folder another run (or mbi command)
-  /// writes into is refused at once, naming that process. Throws SceneError / io::IoError naming
+  /// writes into is refused at once, naming that process. Throws Error / io::Error naming
   /// the path.
   OutputFolder(const Scene& scene, const std::filesystem::path& out_dir, bool force,
                const std::vector<std::filesystem::path>& inputs);

@@ -51,7 +51,7 @@ struct SceneModels {
 };
 
 /// Loads (or builds) the dense model and the control mesh of a scene. mesh_override replaces the
-/// scene's dense model. Throws SceneError / io::IoError naming the file.
+/// scene's dense model. Throws Error / io::Error naming the file.
 ///
 /// 2D as everywhere in mbi: a dense model with 3 coordinates all at one z is flat, and runs in
 /// 2D (z dropped, kept in flat_z) unless `force_3d`, or unless the control mesh is read from a
@@ -62,7 +62,7 @@ SceneModels load_models(const Scene& scene, const std::filesystem::path& mesh_ov
 /// The frame pipeline of a scene: a SimulatorDriver (material, time stepping, constraints,
 /// scripted pokes) in simulate mode, a HandleDriver following the [[drags]] keyframes in drag
 /// mode; the scene's method, alpha and pin_boundary. Everything that runs a scene (the runner,
-/// benchmarks, the viewer) builds it here. evaluator: nullptr = CPU, double. Throws SceneError
+/// benchmarks, the viewer) builds it here. evaluator: nullptr = CPU, double. Throws Error
 /// (pokes outside the control mesh, drag vertices out of range or repeated, simulate in 2D).
 pipeline::FramePipeline make_pipeline(const Scene& scene, const SceneModels& models,
                                       interp::Embedding embedding,
@@ -104,8 +104,8 @@ struct RunResult {
   double roundoff = 0;    ///< round-off level of the discontinuities (report.hpp disc_roundoff)
 };
 
-/// Runs a scene headless. Throws on bad input before anything is written (mbi::Error: SceneError,
-/// io::IoError, interp::Error, sim::Error). A failing simulation step ends the run with
+/// Runs a scene headless. Throws on bad input before anything is written (mbi::Error: Error,
+/// io::Error, interp::Error, sim::Error). A failing simulation step ends the run with
 /// RunResult::failed and keeps what was written; RunOptions::stop ends it with
 /// RunResult::interrupted.
 ///

@@ -1,7 +1,7 @@
 #pragma once
 // Scene files (TOML): what to load, how to simulate or drag it, how to interpolate, what to write.
 // The format is documented key by key in docs/scene-format.md. load_scene() checks every key:
-// unknown keys, wrong types and out-of-range values throw SceneError "<file>:<line>: <key>: ...".
+// unknown keys, wrong types and out-of-range values throw Error "<file>:<line>: <key>: ...".
 // After parsing, a scene holds enums and typed values only: nothing downstream compares strings.
 #include <mbi/base/names.hpp>
 #include <mbi/error.hpp>
@@ -21,7 +21,7 @@
 namespace mbi::scenes {
 
 /// A scene file that cannot be used: "<file>:<line>: <key>: <what is wrong>".
-class SceneError : public mbi::Error {
+class Error : public mbi::Error {
  public:
   using mbi::Error::Error;
 };
@@ -194,7 +194,7 @@ struct Scene {
 inline constexpr int kMaxSceneNesting = 16;
 
 /// Reads and checks a scene file (a regular file: a directory, FIFO or device is refused).
-/// Throws SceneError naming file, line and key.
+/// Throws Error naming file, line and key.
 Scene load_scene(const std::filesystem::path& file);
 /// load_scene on the text of a scene; `file` names it in messages and is where relative paths
 /// of the scene start from. Nothing is read from disk.
@@ -204,7 +204,7 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& file);
 /// folder.
 std::filesystem::path resolve_path(const Scene& scene, const std::filesystem::path& p);
 
-/// Nodes of U (n x d) selected by s (sorted, unique). Throws SceneError if an index is out of
+/// Nodes of U (n x d) selected by s (sorted, unique). Throws Error if an index is out of
 /// range or nothing is selected.
 std::vector<int> select_nodes(const Selection& s, const Eigen::Ref<const Eigen::MatrixXd>& U);
 

@@ -6,7 +6,7 @@ namespace mbi::viewer {
 
 /// No display, no OpenGL 3.3 window, a bad script or a file the session cannot use: the message
 /// says which.
-class ViewerError : public mbi::Error {
+class Error : public mbi::Error {
  public:
   using mbi::Error::Error;
 };

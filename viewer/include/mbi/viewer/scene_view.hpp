@@ -11,7 +11,7 @@ namespace mbi::viewer {
 
 /// Opens the viewer on a scene (mesh_override replaces its dense model) until it closes. The
 /// scene's files (scene, models, image, control mesh) are inputs of the session: never outputs;
-/// the options' files are checked before the models are loaded. Throws ViewerError (no display,
+/// the options' files are checked before the models are loaded. Throws Error (no display,
 /// a write error), mbi::Error (bad scene, models or files).
 void view_scene(const scenes::Scene& scene, const std::filesystem::path& mesh_override, ViewerOptions options);
 

@@ -48,11 +48,11 @@ std::string format(const Event& e);
 
 /// The events of a script's text, in frame order (file order within a frame). `name` names it
 /// in messages only. A UTF-8 byte-order mark and CR LF line ends are read like the plain text.
-/// Throws ViewerError "<name>:<line>: <what>"; text over kMaxScriptBytes is refused.
+/// Throws Error "<name>:<line>: <what>"; text over kMaxScriptBytes is refused.
 std::deque<Event> parse_script(std::string_view text, const std::filesystem::path& name);
 
 /// parse_script on a file: a regular file only (a folder, FIFO or device is refused without
-/// blocking, as every reader of mbi does), at most kMaxScriptBytes. Throws ViewerError.
+/// blocking, as every reader of mbi does), at most kMaxScriptBytes. Throws Error.
 std::deque<Event> read_script(const std::filesystem::path& file);
 
 }  // namespace mbi::viewer

@@ -94,7 +94,7 @@ struct Shown {
 class Viewer {
  public:
   /// Checks the options' files (mbi::Error naming the option), then opens the window and its
-  /// OpenGL context. Throws ViewerError (no display: one line).
+  /// OpenGL context. Throws Error (no display: one line).
   explicit Viewer(const ViewerOptions& options = {});
   /// With the session's files checked already (internal: view_scene checks them before it
   /// loads the models, then opens the window).
@@ -108,8 +108,8 @@ class Viewer {
   std::unique_ptr<pipeline::Evaluator> evaluator();
 
   /// Shows `shown` until the window closes or options.frames pass, then writes the files the
-  /// options ask for (the first show() only). Throws ViewerError (a pipeline not built with
-  /// Viewer::evaluator(), 2D without an image, a write error), io::IoError.
+  /// options ask for (the first show() only). Throws Error (a pipeline not built with
+  /// Viewer::evaluator(), 2D without an image, a write error), io::Error.
   void show(const Shown& shown);
 
   /// The last frame's picture of the window (RGB), kept while Shown::per_frame is set or

@@ -11,7 +11,7 @@
 namespace mbi::gpu {
 
 /// No usable OpenGL (no driver, no display, too old a version, a shader that does not compile).
-class GlError : public mbi::Error {
+class Error : public mbi::Error {
  public:
   using mbi::Error::Error;
 };
@@ -19,7 +19,7 @@ class GlError : public mbi::Error {
 class Context {
  public:
   /// A headless context, made current on this thread. Tries EGL's surfaceless platform, then
-  /// each EGL device, then the default display. Throws GlError saying why none is usable. The
+  /// each EGL device, then the default display. Throws Error saying why none is usable. The
   /// environment variable MBI_GL=none makes it fail on purpose (tests, forcing the CPU path).
   static std::unique_ptr<Context> headless();
   /// The context current on this thread (made by GLFW or another toolkit); not owned.

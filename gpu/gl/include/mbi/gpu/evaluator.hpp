@@ -30,7 +30,7 @@ struct GpuOptions {
 class GpuEvaluator final : public pipeline::Evaluator {
  public:
   /// Needs `context` current whenever a member is called. Compiles the shaders for d = 2 and 3
-  /// on first use. Throws GlError.
+  /// on first use. Throws Error.
   explicit GpuEvaluator(Context& context, const GpuOptions& options = {});
   ~GpuEvaluator() override;
   GpuEvaluator(const GpuEvaluator&) = delete;

@@ -14,7 +14,7 @@ namespace mbi::gpu {
 
 class Renderer {
  public:
-  /// Needs `context` current whenever a member is called. Throws GlError.
+  /// Needs `context` current whenever a member is called. Throws Error.
   explicit Renderer(Context& context);
   ~Renderer();
   Renderer(const Renderer&) = delete;
