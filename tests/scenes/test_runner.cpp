@@ -386,7 +386,7 @@ force = [1, 0, 0]
                       Catch::Contains("outside the control mesh"));
 }
 
-TEST_CASE("drag vertices out of range or dragged twice are SceneErrors naming drag and vertex",
+TEST_CASE("drag vertices out of range or dragged twice are scenes::Error naming drag and vertex",
           "[runner][errors]") {
   mbi::test::TempDir dir("run");
   // the paper bar's control mesh has 35 vertices (0 to 34)
