@@ -69,7 +69,7 @@ def main():
     parser.add_argument("--points", type=int, default=1_000_000)
     parser.add_argument("--vjp-calls", type=int, default=30)
     args = parser.parse_args()
-    if not hasattr(_mbi, "_timing"):
+    if getattr(_mbi, "_timing", None) is None:
         parser.exit(2, "overhead.py: this module has no clocks: build it with "
                        "cmake --preset release -DMBI_PYTHON_TIMING=ON\n")
 

@@ -19,7 +19,18 @@ message of the C++ library; a file that cannot be read or written raises mbi.Fil
 mbi.Error and an OSError) naming it. PyTorch autograd: mbi.torch (imported on its own).
 docs/python.md documents the whole API; _mbi.pyi gives editors and type checkers the signatures of the module.
 """
-from ._mbi import (
+from typing import Literal, Tuple
+
+from . import _checks
+
+_checks.require_module()  # an ImportError naming the interpreter the module was built for
+_checks.require_numpy()
+
+from . import _errors, _mbi  # noqa: E402
+
+_errors.shorten_type_errors(_mbi)  # a call matching no signature: a one-line TypeError naming the argument
+
+from ._mbi import (  # noqa: E402
     INTEGRATORS,
     SOLVERS,
     Cage,
@@ -73,13 +84,14 @@ from ._mbi import (
     write_tetgen,
     write_vtk,
 )
-from .meshes import box_mesh
-from .scenes import run_scene
-from . import batch  # plain Python: importing it needs no Dask
+from .meshes import box_mesh  # noqa: E402
+from .scenes import run_scene  # noqa: E402
+from . import batch  # noqa: E402  (plain Python: importing it needs no Dask)
 
-__version__ = "0.1.0"
+__version__ = "0.1.0"  # the project's version (CMakeLists.txt; pip's metadata too)
 
-METHODS = ("bi", "modified-bi", "phong")
+Method = Literal["bi", "modified-bi", "phong"]
+METHODS: Tuple[Method, ...] = ("bi", "modified-bi", "phong")
 
 __all__ = [
     "Cage", "ControlMesh", "Deformer", "DiscontinuityTable", "Embedding", "Error", "FastEvaluator", "FileError",

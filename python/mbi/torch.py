@@ -9,11 +9,18 @@ positions X through Deformer.vjp (exact: the positions are linear in X for every
     loss.backward()                                # X.grad = dL/dX
 
 Computed in float64 on the CPU: X of another dtype or device is converted, the result and the
-gradient are converted back. Tensors of any strides are taken (expand()ed, t()ed, the
-zero-stride gradient of loss.sum()): mbi reads them as numpy views and copies what it cannot
+gradient are converted back. X may be a numpy array (or anything numpy.asarray takes): it is
+taken as a tensor that needs no gradient. Tensors of any strides are taken (expand()ed, t()ed,
+the zero-stride gradient of loss.sum()): mbi reads them as numpy views and copies what it cannot
 read in place. Importing this module needs torch; importing mbi does not.
 """
+from typing import Any, Optional, Tuple
+
+import numpy as np
+import numpy.typing as npt
 import torch
+
+from . import _mbi
 
 __all__ = ["deform", "Deform", "DeformFunction"]
 
@@ -22,35 +29,50 @@ class DeformFunction(torch.autograd.Function):
     """positions = deformer.deform(X); the backward pass is deformer.vjp(dL/dpositions)."""
 
     @staticmethod
-    def forward(ctx, X, deformer):
+    def forward(ctx: Any, X: torch.Tensor, deformer: _mbi.Deformer) -> torch.Tensor:  # type: ignore[override]
         ctx.deformer = deformer
         positions = torch.from_numpy(deformer.deform(_as_numpy(X)))
         return positions.to(X.device, X.dtype)
 
     @staticmethod
     @torch.autograd.function.once_differentiable
-    def backward(ctx, grad):
+    def backward(ctx: Any, grad: torch.Tensor) -> Tuple[torch.Tensor, None]:  # type: ignore[override]
         dX = torch.from_numpy(ctx.deformer.vjp(_as_numpy(grad)))
         return dX.to(grad.device, grad.dtype), None
 
 
-def _as_numpy(t):
+def _as_numpy(t: torch.Tensor) -> npt.NDArray[np.float64]:
     """t as a float64 numpy view on the CPU (its strides kept; a lazily negated or conjugated
     tensor materialised, which numpy cannot view)."""
-    return t.detach().to("cpu", torch.float64).resolve_conj().resolve_neg().numpy()
+    view: npt.NDArray[np.float64] = t.detach().to("cpu", torch.float64).resolve_conj().resolve_neg().numpy()
+    return view
 
 
-def deform(deformer, X):
-    """Dense positions of pose X ((n, d) or (frames, n, d)) as a differentiable tensor."""
-    return DeformFunction.apply(X, deformer)
+def _as_tensor(X: Any) -> torch.Tensor:
+    """X as a tensor: a tensor as it is; a numpy array or list as a float64 tensor sharing its memory
+    where it can (integer positions become float64)."""
+    if isinstance(X, torch.Tensor):
+        return X
+    array = np.asarray(X)
+    if array.dtype.kind in "iub":
+        array = array.astype(np.float64)
+    return torch.as_tensor(array)
+
+
+def deform(deformer: _mbi.Deformer, X: Any) -> torch.Tensor:
+    """Dense positions of pose X ((n, d) or (frames, n, d): a tensor, or a numpy array) as a
+    differentiable tensor."""
+    result: Optional[torch.Tensor] = DeformFunction.apply(_as_tensor(X), deformer)
+    assert result is not None
+    return result
 
 
 class Deform(torch.nn.Module):
     """The Deformer as a module: forward(X) = deform(deformer, X)."""
 
-    def __init__(self, deformer):
+    def __init__(self, deformer: _mbi.Deformer) -> None:
         super().__init__()
         self.deformer = deformer
 
-    def forward(self, X):
+    def forward(self, X: Any) -> torch.Tensor:
         return deform(self.deformer, X)

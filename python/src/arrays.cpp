@@ -11,6 +11,16 @@
 namespace mbi::python {
 namespace {
 
+// The letter docs/python.md gives the rows of an argument whose row count is not fixed: n
+// control vertices, p dense points, m elements, t triangles.
+const char* row_letter(const char* name) {
+  const std::string n = name;
+  if (n == "P" || n == "G" || n == "rest_normals" || n == "normals") return "p";
+  if (n == "T") return "m";
+  if (n == "F") return "t";
+  return "n";
+}
+
 std::string shape_text(Shape s, const char* rows = "n", const char* cols = "d") {
   auto one = [](Eigen::Index v, const char* dflt) { return v >= 0 ? std::to_string(v) : std::string(dflt); };
   return "(" + one(s.rows, rows) + ", " + one(s.cols, cols) + ")";
@@ -40,10 +50,13 @@ std::string dtype_of(const py::array& a) { return py::str(a.dtype()).cast<std::s
 py::array as_array(const py::handle& obj, const char* name) {
   if (obj.is_none()) throw Error(std::string(name) + " is missing (None)");
   if (py::isinstance<py::array>(obj)) return py::reinterpret_borrow<py::array>(obj);
+  if (py::hasattr(obj, "requires_grad") && py::bool_(obj.attr("requires_grad")))
+    throw Error(std::string(name) + " is a tensor that requires grad: numpy cannot read it; use mbi.torch " +
+                "(mbi.torch.deform(deformer, X)) for gradients, or pass " + name + ".detach()");
   try {
     return py::module_::import("numpy").attr("asarray")(obj);
-  } catch (py::error_already_set& e) {
-    throw Error(std::string(name) + " is not an array: " + e.what());
+  } catch (py::error_already_set& e) {  // the exception's message alone, without its traceback
+    throw Error(std::string(name) + " is not an array: " + py::str(e.value()).cast<std::string>());
   }
 }
 
@@ -51,12 +64,15 @@ void check_shape(const py::array& a, const char* name, Shape want, py::ssize_t f
   const Eigen::Index rows = a.shape(first_axis), cols = a.shape(first_axis + 1);
   if ((want.rows >= 0 && rows != want.rows) || (want.cols >= 0 && cols != want.cols))
     throw Error(std::string(name) + " must have shape " + (first_axis ? "(frames, " : "(") +
-                shape_text(want).substr(1) + ", got " + shape_of(a));
+                shape_text(want, row_letter(name)).substr(1) + ", got " + shape_of(a));
 }
 
+// Floats, or integers (exact in float64 up to 2^53: positions on a grid, lists of ints).
 void check_float_dtype(const py::array& a, const char* name) {
-  if (a.dtype().kind() != 'f')
-    throw Error(std::string(name) + " must be a float array (float64), got dtype " + dtype_of(a));
+  const char kind = a.dtype().kind();
+  if (kind != 'f' && kind != 'i' && kind != 'u')
+    throw Error(std::string(name) + " must be a float array (float64; integers are taken too), got dtype " +
+                dtype_of(a));
 }
 
 void check_finite(const ConstMap& A, const char* name) {
@@ -164,7 +180,8 @@ std::pair<std::uintptr_t, std::uintptr_t> extent(const py::array& a) {
 Input float_matrix(const py::handle& obj, const char* name, Shape shape, bool finite) {
   py::array a = as_array(obj, name);
   if (a.ndim() != 2)
-    throw Error(std::string(name) + " must be a 2D array " + shape_text(shape) + ", got shape " + shape_of(a));
+    throw Error(std::string(name) + " must be a 2D array " + shape_text(shape, row_letter(name)) + ", got shape " +
+                shape_of(a));
   check_shape(a, name, shape, 0);
   check_float_dtype(a, name);
   return read_floats(a, name, finite);
@@ -177,8 +194,8 @@ Input float_batch(const py::handle& obj, const char* name, Shape shape, Frames& 
     return float_matrix(a, name, shape, finite);
   }
   if (a.ndim() != 3)
-    throw Error(std::string(name) + " must be " + shape_text(shape) + " or a batch (frames, " +
-                shape_text(shape).substr(1) + ", got shape " + shape_of(a));
+    throw Error(std::string(name) + " must be " + shape_text(shape, row_letter(name)) + " or a batch (frames, " +
+                shape_text(shape, row_letter(name)).substr(1) + ", got shape " + shape_of(a));
   check_shape(a, name, shape, 1);
   check_float_dtype(a, name);
   frames = {a.shape(0), true};
@@ -189,15 +206,20 @@ Eigen::VectorXd float_vector(const py::handle& obj, const char* name, Eigen::Ind
   py::array a = as_array(obj, name);
   if (a.ndim() != 1 || a.shape(0) != size)
     throw Error(std::string(name) + " must have shape (" + std::to_string(size) + ",), got " + shape_of(a));
-  // (0, -9.81, 0) and (1, 0, 0) alike: integers are exact as float64 here
-  if (a.dtype().kind() == 'i' || a.dtype().kind() == 'u') a = a.attr("astype")("float64");
   const Input in = float_matrix(a.attr("reshape")(size, 1), name, {size, 1});
   return in.map.col(0);
 }
 
-std::vector<int> index_list(const py::handle& obj, const char* name) {
+std::vector<int> index_list(const py::handle& obj, const char* name, Eigen::Index size) {
   py::array a = as_array(obj, name);
-  if (a.ndim() != 1) throw Error(std::string(name) + " must be a 1D list of indices, got shape " + shape_of(a));
+  if (a.ndim() != 1)
+    throw Error(std::string(name) + " must be a 1D list of indices or a boolean mask, got shape " + shape_of(a));
+  if (a.dtype().kind() == 'b') {  // a mask: one entry a node, True where taken
+    if (size >= 0 && a.shape(0) != size)
+      throw Error(std::string(name) + " is a boolean mask of " + std::to_string(a.shape(0)) + " entries; it needs " +
+                  std::to_string(size) + ", one a node");
+    a = py::module_::import("numpy").attr("flatnonzero")(a);
+  }
   if (a.shape(0) == 0) return {};  // [] is float64 to numpy
   const Eigen::MatrixXi m = index_matrix(a.attr("reshape")(a.shape(0), 1), name, {a.shape(0), 1});
   return {m.data(), m.data() + m.size()};
@@ -206,7 +228,7 @@ std::vector<int> index_list(const py::handle& obj, const char* name) {
 Eigen::MatrixXi index_matrix(const py::handle& obj, const char* name, Shape shape) {
   py::array a = as_array(obj, name);
   if (a.ndim() != 2)
-    throw Error(std::string(name) + " must be a 2D integer array " + shape_text(shape, "m", "d+1") +
+    throw Error(std::string(name) + " must be a 2D integer array " + shape_text(shape, row_letter(name), "d+1") +
                 ", got shape " + shape_of(a));
   check_shape(a, name, shape, 0);
   const char kind = a.dtype().kind();

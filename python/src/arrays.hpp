@@ -64,8 +64,9 @@ Eigen::MatrixXi index_matrix(const py::handle& obj, const char* name, Shape shap
 Eigen::VectorXd float_vector(const py::handle& obj, const char* name, Eigen::Index size);
 inline Eigen::Vector3d vector3(const py::handle& obj, const char* name) { return float_vector(obj, name, 3); }
 
-/// A 1D list of indices (any integer type, checked to fit in int32): node lists.
-std::vector<int> index_list(const py::handle& obj, const char* name);
+/// A 1D list of indices (any integer type, checked to fit in int32), or a boolean mask of `size`
+/// entries (-1: any) giving the indices where it is True: node sets.
+std::vector<int> index_list(const py::handle& obj, const char* name, Eigen::Index size = -1);
 
 /// A control mesh: U (n, d) rest vertices read in place, T (m, d+1) elements.
 struct Mesh {
@@ -127,6 +128,9 @@ py::array to_numpy(Eigen::MatrixXd&& A);
 /// A new numpy array holding a copy of A (C-order).
 py::array to_numpy(const Eigen::Ref<const Eigen::MatrixXd>& A);
 py::array to_numpy(const Eigen::MatrixXi& A);
+/// A C-order copy of an (n, d) result shaped like positions (dL/dX: the layout of X and of
+/// Deformer.vjp's result).
+inline py::array c_order(const Eigen::MatrixXd& A) { return to_numpy(Eigen::Ref<const Eigen::MatrixXd>(A)); }
 py::array to_numpy_vector(const Eigen::Ref<const Eigen::VectorXd>& v);
 
 }  // namespace mbi::python

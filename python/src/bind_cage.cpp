@@ -21,7 +21,15 @@ CageResult make(const py::object& V, const py::object& F, int vertices, const st
     throw Error("V is flat (every z = " + std::to_string(v.map(0, 2)) +
                 "), a 2D input; TetGen makes tetrahedra only: use mesher=\"voxel\" for a 2D triangle cage, or "
                 "force_3d=True for tetrahedra");
-  return without_gil([&] { return generate::make_cage(v.map, f, o); });
+  try {
+    return without_gil([&] { return generate::make_cage(v.map, f, o); });
+  } catch (const Error& e) {  // the library's option target_vertices is the argument `vertices` here
+    std::string message = e.what();
+    const std::string field = "target_vertices";
+    for (size_t at = message.find(field); at != std::string::npos; at = message.find(field, at))
+      message.replace(at, field.size(), "vertices");
+    throw Error(message);
+  }
 }
 
 }  // namespace

@@ -118,7 +118,7 @@ void bind_evaluate(py::module_& m) {
         const Mesh c = control_mesh(U, T);
         const Input g = float_matrix(G, "G", {-1, c.U.map.cols()});
         interp::BezierTranspose t = without_gil([&] { return interp::bezier_transpose(c.U.map, c.T, g.map); });
-        return py::make_tuple(to_numpy(std::move(t.X)), to_numpy(std::move(t.M)));
+        return py::make_tuple(c_order(t.X), to_numpy(std::move(t.M)));
       },
       "U"_a, "T"_a, "G"_a,
       "The transpose of bezier_points(): (dL/dX (n, d), dL/dM ((n d), d)) from G = dL/dB ((m K), d).");

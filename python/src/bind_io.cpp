@@ -51,7 +51,7 @@ py::list polygons_of(const SurfaceMesh& s) {
 
 void bind_surface(py::module_& m) {
   py::class_<SurfaceMesh>(m, "Surface",
-      "A surface mesh as a file holds it: V (n, 3), F (t, 3) triangles (polygons fan-triangulated), "
+      "A surface mesh as a file holds it (unpacks as V, F): V (n, 3), F (t, 3) triangles (polygons fan-triangulated), "
       "N (n, 3) unit normals or None, and what else the file held (OBJ texture coordinates, groups, "
       "materials, vertex colours; every PLY property; STL header), written back by write_surface to "
       "a file of the same format while the vertex count and faces stay.")
@@ -69,6 +69,7 @@ void bind_surface(py::module_& m) {
                       return to_numpy(Eigen::Ref<const Eigen::MatrixXd>(s.N));
                     }, [](SurfaceMesh& s, const py::object& N) { s.N = normals_arg(N, s.V.rows()); },
                     "(n, 3) unit vertex normals, or None")
+      .def("__iter__", [](const py::object& self) { return py::iter(py::make_tuple(self.attr("V"), self.attr("F"))); })
       .def_property_readonly("polygons", &polygons_of, "the faces as the file wrote them (lists of >= 3 indices)")
       .def_property_readonly("has_attributes", [](const SurfaceMesh& s) { return s.attributes != nullptr; },
                              "whether it keeps attributes of the file it was read from")

@@ -80,7 +80,7 @@ void bind_modified_bi(py::module_& m) {
       "solve_transpose",
       [](Solver& s, const py::object& G) {
         const Input g = vertex_matrices(G, "G", s.object.vertices(), s.object.dim());
-        return to_numpy(s.run([&](const ModifiedBI& b) { return b.solve_transpose(g.map); }));
+        return c_order(s.run([&](const ModifiedBI& b) { return b.solve_transpose(g.map); }));
       },
       "G"_a, "The transpose of solve() (linear in X): dL/dX (n, d) from G = dL/dM ((n d), d).");
   c.def(
@@ -120,7 +120,7 @@ void bind_phong(py::module_& m) {
           "M_transpose",
           [](const Phong& p, const py::object& G) {
             const Input g = vertex_matrices(G, "G", p.vertices(), p.dim());
-            return to_numpy(without_gil([&] { return p.M_transpose(g.map); }));
+            return c_order(without_gil([&] { return p.M_transpose(g.map); }));
           },
           "G"_a, "The transpose of M() (linear in X): dL/dX (n, d) from G = dL/dM ((n d), d).")
       .def(

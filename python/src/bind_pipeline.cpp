@@ -146,7 +146,7 @@ void bind_drivers(py::module_& m) {
              o.mode = scenes::kHandleModeNames.parse(mode, "mode");
              o.gamma = gamma;
              o.regularization = regularization;
-             std::vector<int> h = index_list(handles, "handles");
+             std::vector<int> h = index_list(handles, "handles", c.U.map.rows());
              return without_gil([&] { return std::make_shared<HandleDriverObject>(c.U.map, c.T, std::move(h), o); });
            }), py::arg("U"), py::arg("T"), py::arg("handles"), py::kw_only(), py::arg("mode") = "hard",
            py::arg("alpha") = py::none(), py::arg("beta") = 0.0, py::arg("pin_boundary") = false, py::arg("gamma") = 0.0,

@@ -100,12 +100,12 @@ using Object = SimulatorObject;
 
 void bind_handles(py::class_<Object, std::shared_ptr<Object>>& c) {
   c.def("fix", [](Object& s, const py::object& nodes) {
-       const std::vector<int> n = index_list(nodes, "nodes");
+       const std::vector<int> n = index_list(nodes, "nodes", s.object.nodes());
        return s.run([&](Simulator& x) { return x.fix(n); });
      }, py::arg("nodes"), "Holds the nodes at their current positions; returns the handle.")
       .def("add_kinematic", [](Object& s, const py::object& nodes, const py::object& center, const py::object& axis,
                                double angular_velocity, const py::object& velocity, double start, double stop) {
-        const std::vector<int> n = index_list(nodes, "nodes");
+        const std::vector<int> n = index_list(nodes, "nodes", s.object.nodes());
         const sim::RigidMotion motion{vector3(center, "center"), vector3(axis, "axis"), angular_velocity,
                                       vector3(velocity, "velocity"), start, stop};
         return s.run([&](Simulator& x) { return x.add_kinematic(n, motion); });
@@ -217,8 +217,8 @@ void bind_sim(py::module_& m) {
       .def_property_readonly("dt", [](Object& s) { return s.object.params().dt; }, "s per step")
       .def_property_readonly("solver", [](Object& s) { return kSolverNames.name(s.object.solver()); },
                              "the linear solver in use (auto resolved)");
-  m.attr("INTEGRATORS") = py::cast(kIntegratorNames.names());
-  m.attr("SOLVERS") = py::cast(kSolverNames.names());
+  m.attr("INTEGRATORS") = py::tuple(py::cast(kIntegratorNames.names()));
+  m.attr("SOLVERS") = py::tuple(py::cast(kSolverNames.names()));
 }
 
 }  // namespace mbi::python

@@ -65,5 +65,5 @@ def test_flat_models_and_bad_arguments():
         mbi.cage(V, F, mesher="octree")
     with pytest.raises(ValueError, match=r"V must have shape \(n, 3\)"):
         mbi.cage(V[:, :2], F)
-    with pytest.raises(ValueError, match="target"):
+    with pytest.raises(ValueError, match=r"^vertices 2 out of range"):
         mbi.cage(V, F, vertices=2)

@@ -182,7 +182,7 @@ def test_solve_paths_and_factorizations_agree(mesh):
 
 def test_box_mesh_fills_its_box_with_positive_tetrahedra():
     U, T = mbi.box_mesh(3, 2, 4, (3.0, 1.0, 2.0))
-    assert U.shape == (4 * 3 * 5, 3) and T.shape == (6 * 3 * 2 * 4, 4) and T.dtype == np.int64
+    assert U.shape == (4 * 3 * 5, 3) and T.shape == (6 * 3 * 2 * 4, 4) and T.dtype == np.int32
     volumes = np.linalg.det(U[T[:, 1:]] - U[T[:, :1]]) / 6
     assert (volumes > 0).all()
     assert abs(volumes.sum() - 6.0) < 1e-12  # the box's volume, 3 x 1 x 2

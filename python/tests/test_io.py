@@ -189,7 +189,7 @@ def test_errors_name_the_file_or_the_argument(tmp_path):
         mbi.read_point_cache(tmp_path / "x.txt")
     with pytest.raises(ValueError, match=r"V must have shape \(n, 3\)"):
         mbi.write_surface(tmp_path / "x.obj", np.zeros((4, 2)), [[0, 1, 2]])
-    with pytest.raises(ValueError, match=r"F must have shape \(n, 3\)"):
+    with pytest.raises(ValueError, match=r"F must have shape \(t, 3\)"):
         mbi.write_surface(tmp_path / "x.obj", QUAD_V, [[0, 1, 2, 3]])
     with pytest.raises(ValueError, match=r"path must be a path"):
         mbi.read_surface(12)
