@@ -1,8 +1,7 @@
 // run_scene: a scene's run from start to end, over its parts: the output folder
-// (output_folder.cpp), the models (models.cpp), the pipeline (drivers.cpp), the evaluator
+// (output_folder.cpp), the models and the pipeline (mbi/scenes/models.hpp), the evaluator
 // (evaluator.cpp), the frames (frame_loop.cpp) and what they write (outputs.cpp, pictures.cpp,
 // metrics.cpp).
-#include "format.hpp"
 #include "frame_loop.hpp"
 #include "metrics.hpp"
 #include "outputs.hpp"

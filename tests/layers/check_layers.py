@@ -15,20 +15,23 @@ GRAPH = {
     "interp": ["base"], "sim": ["base"], "io": ["base"],
     "pipeline": ["interp", "sim"], "generate": ["io", "interp"], "raster": ["io"],
     "gpu": ["pipeline", "raster", "io"],
-    "scenes": ["gpu", "generate", "pipeline"],
-    "viewer": ["scenes"], "web": ["scenes"], "python": ["scenes"], "bench": ["scenes"],
+    "scene_format": ["generate", "pipeline"], "scenes": ["gpu", "scene_format"],
+    "viewer": ["scenes"], "web": ["scene_format"], "python": ["scenes"], "bench": ["scenes"],
     "app": ["viewer", "scenes"],
 }
 # source folder -> target (the longest matching prefix wins)
 FOLDERS = {
     "base": "base", "interp": "interp", "sim": "sim", "io": "io", "pipeline": "pipeline",
     "generate": "generate", "gpu/raster": "raster", "gpu/gl": "gpu", "scenes": "scenes",
+    "scenes/format": "scene_format",
     "viewer": "viewer", "web": "web", "python": "python", "bench": "bench", "app": "app",
 }
-# public header prefix (<mbi/X/...>) -> target
+# public header prefix (<mbi/X/...>, or <mbi/X/Y> for a header of a folder's second target) -> target
 HEADERS = {"base": "base", "error.hpp": "base", "interp": "interp", "interp.hpp": "interp",
            "sim": "sim", "io": "io", "pipeline": "pipeline", "generate": "generate",
-           "raster": "raster", "gpu": "gpu", "scenes": "scenes", "viewer": "viewer", "web": "web"}
+           "raster": "raster", "gpu": "gpu", "scenes": "scenes", "viewer": "viewer", "web": "web",
+           "scenes/scene.hpp": "scene_format", "scenes/model_scene.hpp": "scene_format",
+           "scenes/models.hpp": "scene_format", "scenes/limits.hpp": "scene_format"}
 INCLUDE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]')
 
 
@@ -74,8 +77,8 @@ def check(root):
             if kind == '"' and ".." in pathlib.PurePosixPath(name).parts:
                 problems.append(f"{rel}:{n}: #include \"{name}\" reaches out of its folder")
             if kind == "<" and name.startswith("mbi/"):
-                head = name.split("/")[1]
-                reached = HEADERS.get(head)
+                parts = name.split("/")
+                reached = HEADERS.get("/".join(parts[1:3]), HEADERS.get(parts[1]))
                 if reached is None:
                     problems.append(f"{rel}:{n}: <{name}> belongs to no target")
                 elif reached not in allowed:

@@ -1,10 +1,8 @@
 // make_driver and make_pipeline: what moves a scene's control mesh (the simulator with its
 // constraints and pokes, or the dragged handles) and the frame pipeline around it.
-#include "format.hpp"
-
 #include <mbi/interp.hpp>
 #include <mbi/io/io.hpp>
-#include <mbi/scenes/runner.hpp>
+#include <mbi/scenes/models.hpp>
 #include <mbi/sim/simulator.hpp>
 
 #include <Eigen/Geometry>

@@ -26,6 +26,9 @@ bool is_model(const std::filesystem::path& arg);
 /// The scene of a bare model before its size is known: the dense model (file or built-in), a
 /// control mesh of about 150 vertices generated around it, modified BI, y up.
 Scene model_scene(const std::filesystem::path& model);
+/// model_scene without a dense model, for one given in memory (the page reads an OBJ's text):
+/// load_models(scene, surface, name) adds it. `name` names the scene in messages.
+Scene surface_scene(const std::filesystem::path& name);
 
 /// Fits the scene to the model's rest positions V (n x 3): the material scaled to its size (see
 /// above), the bottom tenth held (along y; along the longest axis for a model flat in y).

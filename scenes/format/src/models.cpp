@@ -1,11 +1,11 @@
 // load_models: the dense model and the control mesh of a scene, in one dimension.
-#include "format.hpp"
+#include "model_files.hpp"
 
 #include <mbi/generate/cage.hpp>
 #include <mbi/generate/procedural.hpp>
 #include <mbi/generate/subdivide.hpp>
 #include <mbi/scenes/limits.hpp>
-#include <mbi/scenes/runner.hpp>
+#include <mbi/scenes/models.hpp>
 
 #include <algorithm>
 
@@ -23,14 +23,14 @@ void subdivide(const Scene& sc, const DenseSpec& d, io::SurfaceMesh& s) {
   s.attributes.reset();
 }
 
-// The dense model: --mesh, the scene's file or a built-in; Loop-subdivided when the scene asks.
+// The dense model: --mesh, the scene's file or a built-in.
 void load_dense(const Scene& sc, const fs::path& mesh_override, SceneModels& m) {
   if (!mesh_override.empty()) {
-    m.dense = io::read_surface(mesh_override);
+    m.dense = read_surface(sc, mesh_override, "--mesh");
     m.dense_name = mesh_override.string();
   } else if (!sc.dense.path.empty()) {
     const fs::path p = resolve_path(sc, sc.dense.path);
-    m.dense = io::read_surface(p);
+    m.dense = read_surface(sc, p, "dense.path");
     m.dense_name = p.string();
   } else if (sc.dense.builtin == DenseBuiltin::PaperBar) {
     generate::paper_bar_surface(m.dense.V, m.dense.F);
@@ -43,7 +43,7 @@ void load_dense(const Scene& sc, const fs::path& mesh_override, SceneModels& m) 
     m.dense_name = "built-in bumpy sphere";
   } else if (sc.dense.builtin == DenseBuiltin::ImageGrid) {
     io::Image img = sc.dense.image.empty() ? generate::test_pattern(512, 384)
-                                           : io::read_png(resolve_path(sc, sc.dense.image));
+                                           : read_image(sc, resolve_path(sc, sc.dense.image));
     const int longer = std::max(img.width, img.height);
     const int gx = std::max(2, sc.dense.grid * img.width / longer);
     const int gy = std::max(2, sc.dense.grid * img.height / longer);
@@ -52,8 +52,6 @@ void load_dense(const Scene& sc, const fs::path& mesh_override, SceneModels& m) 
         sc.dense.image.empty() ? "built-in test pattern" : resolve_path(sc, sc.dense.image).string();
     m.image = std::move(img);
   }
-  subdivide(sc, sc.dense, m.dense);
-  if (m.dense.V.rows() == 0) throw Error(m.dense_name + ": the dense model has no vertices");
 }
 
 // [[dense]]: the other models' files joined after the first (deform_parts in the app does the
@@ -62,7 +60,7 @@ void add_more_dense(const Scene& sc, SceneModels& m) {
   m.dense_parts.push_back({m.dense_name, 0, m.dense.V.rows(), m.dense});
   for (const DenseSpec& d : sc.more_dense) {
     const fs::path p = resolve_path(sc, d.path);
-    io::SurfaceMesh s = io::read_surface(p);
+    io::SurfaceMesh s = read_surface(sc, p, "dense.path");
     subdivide(sc, d, s);
     if (s.V.rows() == 0) throw Error(p.string() + ": the dense model has no vertices");
     m.dense_parts.push_back({p.string(), m.dense_parts.back().first + m.dense_parts.back().rows, s.V.rows(), s});
@@ -174,14 +172,14 @@ void load_control(const Scene& sc, bool force_3d, std::optional<io::ControlMesh>
   }
 }
 
-}  // namespace
-
-SceneModels load_models(const Scene& sc, const fs::path& mesh_override, bool force_3d) {
-  SceneModels m;
-  load_dense(sc, mesh_override, m);
-  if (mesh_override.empty() && !sc.more_dense.empty()) add_more_dense(sc, m);
+// The models around the dense model m.dense: Loop-subdivided when the scene asks, joined with
+// the scene's other dense models (`more`), in their control mesh.
+SceneModels with_control(const Scene& sc, SceneModels m, bool more, bool force_3d) {
+  subdivide(sc, sc.dense, m.dense);
+  if (m.dense.V.rows() == 0) throw Error(m.dense_name + ": the dense model has no vertices");
+  if (more && !sc.more_dense.empty()) add_more_dense(sc, m);
   std::optional<io::ControlMesh> from_file;
-  if (!sc.control.path.empty()) from_file = io::read_control_mesh(resolve_path(sc, sc.control.path));
+  if (!sc.control.path.empty()) from_file = read_control_mesh(sc, resolve_path(sc, sc.control.path));
   drop_flat_z(sc, force_3d, from_file, m);
   load_control(sc, force_3d, std::move(from_file), m);
   const std::string where = sc.file.string();
@@ -191,6 +189,21 @@ SceneModels load_models(const Scene& sc, const fs::path& mesh_override, bool for
   // before the embedding, the assembly and the factorisation allocate anything
   check_run_size(where, m.dense.V.rows(), m.U.rows(), m.T.rows(), static_cast<int>(m.U.cols()));
   return m;
+}
+
+}  // namespace
+
+SceneModels load_models(const Scene& sc, const fs::path& mesh_override, bool force_3d) {
+  SceneModels m;
+  load_dense(sc, mesh_override, m);
+  return with_control(sc, std::move(m), mesh_override.empty(), force_3d);
+}
+
+SceneModels load_models(const Scene& sc, io::SurfaceMesh dense, const std::string& name, bool force_3d) {
+  SceneModels m;
+  m.dense = std::move(dense);
+  m.dense_name = name;
+  return with_control(sc, std::move(m), false, force_3d);
 }
 
 }  // namespace mbi::scenes

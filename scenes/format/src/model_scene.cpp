@@ -1,4 +1,3 @@
-#include <mbi/io/io.hpp>
 #include <mbi/scenes/model_scene.hpp>
 
 #include <algorithm>
@@ -14,14 +13,18 @@ std::optional<DenseBuiltin> builtin_model(const std::filesystem::path& arg) {
   return b;
 }
 
-bool is_model(const std::filesystem::path& arg) { return io::is_surface_file(arg) || builtin_model(arg); }
-
 Scene model_scene(const std::filesystem::path& model) {
-  Scene s;
-  s.file = model;
+  Scene s = surface_scene(model);
   s.name = model.filename().string();
   if (const std::optional<DenseBuiltin> b = builtin_model(model)) s.dense.builtin = *b;
   else s.dense.path = std::filesystem::absolute(model);
+  return s;
+}
+
+Scene surface_scene(const std::filesystem::path& name) {
+  Scene s;
+  s.file = name;
+  s.name = name.string();
   s.control.generate_vertices = 150;
   s.simulation.parameters.substeps = 2;
   s.simulation.parameters.mass_damping = 1.0;

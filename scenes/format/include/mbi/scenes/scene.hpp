@@ -12,6 +12,7 @@
 
 #include <Eigen/Core>
 
+#include <cstdio>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -207,5 +208,12 @@ std::filesystem::path resolve_path(const Scene& scene, const std::filesystem::pa
 /// Nodes of U (n x d) selected by s (sorted, unique). Throws Error if an index is out of
 /// range or nothing is selected.
 std::vector<int> select_nodes(const Selection& s, const Eigen::Ref<const Eigen::MatrixXd>& U);
+
+/// A number in the messages and names of scenes: three significant digits.
+inline std::string format_num(double x) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.3g", x);
+  return b;
+}
 
 }  // namespace mbi::scenes
