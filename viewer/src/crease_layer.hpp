@@ -5,6 +5,7 @@
 #include "stage.hpp"
 
 #include <mbi/gpu/evaluator.hpp>
+#include <mbi/gpu/surface.hpp>
 #include <mbi/pipeline/creases.hpp>
 
 #include <vector>
@@ -43,8 +44,8 @@ class CreaseLayer {
   std::vector<bool> near_;
   std::vector<CreaseView> views_;
   double top_ = 0;
-  unsigned program_ = 0, vao_ = 0, index_ = 0, colors_ = 0;
-  long long indices_ = 0;
+  gpu::Surface surface_;
+  unsigned program_ = 0;
 };
 
 }  // namespace mbi::viewer

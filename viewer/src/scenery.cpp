@@ -1,6 +1,8 @@
 #include "scenery.hpp"
 
-#include "gl_program.hpp"
+#include <mbi/gpu/program.hpp>
+
+#include <epoxy/gl.h>
 
 #include <Eigen/Geometry>
 
@@ -11,89 +13,10 @@
 namespace mbi::viewer {
 namespace {
 
-const char* kSurfaceVertex = R"(
-layout(location = 0) in vec3 rest;
-layout(location = 1) in vec3 displacement;
-layout(location = 2) in vec3 normal;
-uniform mat4 view_projection;
-uniform mat3 view_rotation;
-out vec3 v_normal;
-void main() {
-  v_normal = view_rotation * normal;
-  gl_Position = view_projection * vec4(rest + displacement, 1.0);
-}
-)";
-
-// A clay matcap: a key light from the upper left, a sky-to-ground fill, a soft rim and a small
-// highlight, all from the normal in camera space (x right, y up, z toward the eye). Two-sided:
-// models with inward or mixed normals look the same.
-const char* kSurfaceFragment = R"(
-in vec3 v_normal;
-uniform vec3 color;
-out vec4 frag;
-void main() {
-  vec3 n = normalize(v_normal);
-  if (n.z < 0.0) n = -n;
-  vec3 key = normalize(vec3(-0.45, 0.6, 0.65));
-  float diffuse = max(dot(n, key), 0.0);
-  vec3 fill = mix(vec3(0.32, 0.3, 0.28), vec3(0.55, 0.6, 0.68), 0.5 + 0.5 * n.y);
-  // powers by multiplication: pow() is costly on a software renderer
-  float r = 1.0 - n.z, rim = r * r * r;
-  float h = max(dot(reflect(-key, n), vec3(0.0, 0.0, 1.0)), 0.0), h2 = h * h, h4 = h2 * h2, h8 = h4 * h4;
-  vec3 c = color * (fill + 0.75 * diffuse) + 0.18 * (h8 * h8 * h8) + 0.12 * rim;
-  frag = vec4(clamp(c, 0.0, 1.0), 1.0);
-}
-)";
-
-const char* kGroundVertex = R"(
-layout(location = 0) in vec2 corner;
-uniform mat4 view_projection;
-uniform vec3 center, e1, e2;
-uniform float half_side;
-out vec2 p;
-void main() {
-  p = corner * half_side;
-  gl_Position = view_projection * vec4(center + p.x * e1 + p.y * e2, 1.0);
-}
-)";
-
-// Grid lines one pixel wide whatever the distance (fwidth), every tenth darker; the shadow a
-// rounded rectangle whose edge fades over `soft`; the square's edge fades into the background.
-const char* kGroundFragment = R"(
-in vec2 p;
-uniform float half_side, spacing, soft;
-uniform vec2 shadow_center, shadow_half;
-uniform vec3 background;
-out vec4 frag;
-float lines(vec2 q) {
-  vec2 g = abs(fract(q - 0.5) - 0.5) / max(fwidth(q), vec2(1e-6));
-  return 1.0 - min(min(g.x, g.y), 1.0);
-}
-void main() {
-  vec2 q = p / spacing;
-  float grid = max(0.5 * lines(q), lines(q / 10.0));
-  float d = length(max(abs(p - shadow_center) - shadow_half, 0.0));
-  float shadow = 0.42 * (1.0 - smoothstep(0.0, soft, d));
-  vec3 ground = vec3(0.9, 0.9, 0.89) * (1.0 - 0.12 * grid) * (1.0 - shadow);
-  float fade = smoothstep(half_side, 0.55 * half_side, length(p));
-  frag = vec4(mix(background, ground, fade), 1.0);
-}
-)";
-
-Eigen::Matrix4f relative(const Eigen::Matrix4d& vp, const Eigen::Vector3d& origin) {
-  Eigen::Matrix4d shift = Eigen::Matrix4d::Identity();  // GPU positions are relative to the origin
-  shift.block<3, 1>(0, 3) = origin;
-  return (vp * shift).cast<float>();
-}
-
 void uniform3(GLuint p, const char* name, const Eigen::Vector3d& v) {
   glUniform3f(glGetUniformLocation(p, name), static_cast<float>(v.x()), static_cast<float>(v.y()),
               static_cast<float>(v.z()));
 }
-
-}  // namespace
-
-namespace {
 
 // The extent of the points Y (rows) along e1 and e2.
 void footprint(const Eigen::MatrixXd& Y, const Ground& g, Eigen::Vector2d& lo, Eigen::Vector2d& hi) {
@@ -134,10 +57,8 @@ void cast_shadow(Ground& g, const Eigen::MatrixXd& X) {
 }
 
 Scenery::Scenery() {
-  surface_ = link_program("surface material", kSurfaceVertex, kSurfaceFragment);
-  ground_ = link_program("ground", kGroundVertex, kGroundFragment);
-  glGenVertexArrays(1, &vao_);
-  glGenBuffers(1, &index_);
+  surface_ = gpu::program("surface material", gpu::shaders::material);
+  ground_ = gpu::program("ground", gpu::shaders::ground);
   glGenVertexArrays(1, &ground_vao_);
   glGenBuffers(1, &corners_);
   const float corners[8] = {-1, -1, 1, -1, -1, 1, 1, 1};
@@ -150,24 +71,13 @@ Scenery::Scenery() {
 }
 
 Scenery::~Scenery() {
-  const GLuint buffers[] = {index_, corners_};
-  glDeleteBuffers(2, buffers);
-  const GLuint vaos[] = {vao_, ground_vao_};
-  glDeleteVertexArrays(2, vaos);
+  glDeleteBuffers(1, &corners_);
+  glDeleteVertexArrays(1, &ground_vao_);
   glDeleteProgram(surface_);
   glDeleteProgram(ground_);
 }
 
-void Scenery::set_faces(const Eigen::MatrixXi& F) {
-  std::vector<GLuint> idx(static_cast<size_t>(F.size()));
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) idx[3 * static_cast<size_t>(f) + static_cast<size_t>(k)] = static_cast<GLuint>(F(f, k));
-  glBindVertexArray(vao_);
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, index_);
-  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(idx.size() * sizeof(GLuint)), idx.data(), GL_STATIC_DRAW);
-  glBindVertexArray(0);
-  indices_ = static_cast<long long>(idx.size());
-}
+void Scenery::set_faces(const Eigen::MatrixXi& F) { mesh_.set_faces(F); }
 
 void Scenery::draw_ground(const Ground& g, const Eigen::Matrix4d& view_projection) {
   const Eigen::Matrix4f vp = view_projection.cast<float>();
@@ -198,25 +108,14 @@ void Scenery::draw_surface(const gpu::GpuEvaluator& ev, const Eigen::Matrix4d& v
   rotation.row(0) = camera.right().cast<float>().transpose();
   rotation.row(1) = camera.up().cast<float>().transpose();
   rotation.row(2) = (-camera.direction()).cast<float>().transpose();
-  const Eigen::Matrix4f vp = relative(view_projection, ev.origin());
+  const Eigen::Matrix4f vp = gpu::relative_to(view_projection, ev.origin());
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   glUseProgram(surface_);
   glUniformMatrix4fv(glGetUniformLocation(surface_, "view_projection"), 1, GL_FALSE, vp.data());
   glUniformMatrix3fv(glGetUniformLocation(surface_, "view_rotation"), 1, GL_FALSE, rotation.data());
   uniform3(surface_, "color", color);
-  glBindVertexArray(vao_);
-  const GLuint sources[3] = {ev.rest_buffer(), ev.displacement_buffer(), ev.normal_buffer()};
-  for (GLuint loc = 0; loc < 3; ++loc) {
-    glBindBuffer(GL_ARRAY_BUFFER, sources[loc]);
-    glEnableVertexAttribArray(loc);
-    glVertexAttribPointer(loc, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
-  }
-  glEnable(GL_POLYGON_OFFSET_FILL);
-  glPolygonOffset(0.5f, 0.5f);
-  glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(indices_), GL_UNSIGNED_INT, nullptr);
-  glDisable(GL_POLYGON_OFFSET_FILL);
-  glBindVertexArray(0);
+  mesh_.draw(ev, {.offset = 0.5f});  // in front of the renderer's surface (offset 1)
   glUseProgram(0);
 }
 

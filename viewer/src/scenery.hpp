@@ -4,6 +4,7 @@
 // the colour depends on the normal as the camera sees it, so the shape reads from any side).
 // The software looks keep the same picture, only cheaper in the window (no MSAA).
 #include <mbi/gpu/evaluator.hpp>
+#include <mbi/gpu/surface.hpp>
 #include <mbi/viewer/camera.hpp>
 
 #include <Eigen/Core>
@@ -50,8 +51,8 @@ class Scenery {
                     const Eigen::Vector3d& color);
 
  private:
-  unsigned surface_ = 0, ground_ = 0, vao_ = 0, index_ = 0, ground_vao_ = 0, corners_ = 0;
-  long long indices_ = 0;
+  gpu::Surface mesh_;
+  unsigned surface_ = 0, ground_ = 0, ground_vao_ = 0, corners_ = 0;
 };
 
 }  // namespace mbi::viewer

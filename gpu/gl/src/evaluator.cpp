@@ -1,5 +1,6 @@
 #include <mbi/base/timer.hpp>
 #include <mbi/gpu/evaluator.hpp>
+#include <mbi/gpu/program.hpp>
 
 #include "gl_util.hpp"
 #include "shaders.hpp"
@@ -77,8 +78,8 @@ void GpuEvaluator::set_points(const pipeline::PointSet& ps) {
     origin_.head(d) = 0.5 * (lo + hi);
   }
 
-  program_ = detail::program("#define D " + std::to_string(d) + "\n", shaders::evaluate_vs.c_str(), nullptr,
-                             {"tf_displacement", "tf_normal"});
+  program_ = program("evaluation pass", {shaders::evaluate_vs.c_str(), nullptr}, "#define D " + std::to_string(d) + "\n",
+                     {"tf_displacement", "tf_normal"});
   glGenVertexArrays(1, &vao_);
   glBindVertexArray(vao_);
   const size_t p = static_cast<size_t>(points_);

@@ -1,7 +1,8 @@
 #include <mbi/gpu/renderer.hpp>
 
+#include <mbi/gpu/program.hpp>
+
 #include "gl_util.hpp"
-#include "shaders.hpp"
 
 #include <Eigen/Geometry>
 
@@ -43,34 +44,20 @@ Eigen::Matrix4d ortho_view(const raster::View& v, int w, int h) {
   return M;
 }
 
-// World -> clip composed with the translation by `origin` (GPU positions are relative to it),
-// in float: the large parts cancel in double first.
-Eigen::Matrix4f relative_to(const Eigen::Matrix4d& vp, const Eigen::Vector3d& origin) {
-  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
-  T.block<3, 1>(0, 3) = origin;
-  return (vp * T).cast<float>();
-}
-
 }  // namespace
 
 Renderer::Renderer(Context& context) : context_(context) {
-  mesh_program_ = detail::program("", shaders::mesh_vs, shaders::mesh_fs);
-  line_program_ = detail::program("", shaders::line_vs, shaders::line_fs);
-  texture_program_ = detail::program("", shaders::texture_vs, shaders::texture_fs);
-  glGenVertexArrays(1, &vao_);
+  mesh_program_ = program("renderer surface", shaders::mesh);
+  line_program_ = program("renderer lines", shaders::line);
+  texture_program_ = program("renderer picture", shaders::texture);
   glGenVertexArrays(1, &line_vao_);
-  glGenBuffers(1, &index_);
   glGenBuffers(1, &line_buffer_);
   detail::check("Renderer");
 }
 
 Renderer::~Renderer() {
-  const GLuint buffers[] = {index_, line_buffer_};
-  for (GLuint b : buffers)
-    if (b) glDeleteBuffers(1, &b);
-  const GLuint vaos[] = {vao_, line_vao_};
-  for (GLuint a : vaos)
-    if (a) glDeleteVertexArrays(1, &a);
+  if (line_buffer_) glDeleteBuffers(1, &line_buffer_);
+  if (line_vao_) glDeleteVertexArrays(1, &line_vao_);
   if (fbo_) glDeleteFramebuffers(1, &fbo_);
   const GLuint rbs[] = {color_, depth_};
   for (GLuint r : rbs)
@@ -81,22 +68,7 @@ Renderer::~Renderer() {
   if (texture_) glDeleteTextures(1, &texture_);
 }
 
-void Renderer::set_faces(const Eigen::Ref<const Eigen::MatrixXi>& F) {
-  if (F.cols() != 3 && F.rows() > 0) throw Error("Renderer: faces must be t x 3");
-  std::vector<GLuint> idx(static_cast<size_t>(F.rows()) * 3);
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      if (F(f, k) < 0) throw Error("Renderer: negative face index");
-      idx[3 * static_cast<size_t>(f) + static_cast<size_t>(k)] = static_cast<GLuint>(F(f, k));
-    }
-  glBindVertexArray(vao_);
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, index_);
-  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(idx.size() * sizeof(GLuint)),
-               idx.empty() ? nullptr : idx.data(), GL_STATIC_DRAW);
-  glBindVertexArray(0);
-  indices_ = static_cast<long long>(idx.size());
-  detail::check("Renderer::set_faces");
-}
+void Renderer::set_faces(const Eigen::Ref<const Eigen::MatrixXi>& F) { surface_.set_faces(F); }
 
 void Renderer::ensure_target(int width, int height) {
   if (width == width_ && height == height_ && fbo_) return;
@@ -136,17 +108,7 @@ void Renderer::draw(const GpuEvaluator& ev, const Eigen::Matrix4d& view_projecti
   glUniform3f(glGetUniformLocation(mesh_program_, "color"), static_cast<float>(color.x()),
               static_cast<float>(color.y()), static_cast<float>(color.z()));
   glUniform3f(glGetUniformLocation(mesh_program_, "eye_direction"), eye.x(), eye.y(), eye.z());
-  glBindVertexArray(vao_);
-  const GLuint sources[3] = {ev.rest_buffer(), ev.displacement_buffer(), ev.normal_buffer()};
-  for (GLuint loc = 0; loc < 3; ++loc) {
-    glBindBuffer(GL_ARRAY_BUFFER, sources[loc]);
-    glEnableVertexAttribArray(loc);
-    glVertexAttribPointer(loc, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
-  }
-  glEnable(GL_POLYGON_OFFSET_FILL);
-  glPolygonOffset(1.0f, 1.0f);
-  glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(indices_), GL_UNSIGNED_INT, nullptr);
-  glDisable(GL_POLYGON_OFFSET_FILL);
+  surface_.draw(ev, {.offset = 1.0f});  // behind the wireframe
   if (wire_X && wire_T && wire_T->cols() == 4) {
     if (wire_T->rows() != edges_of_ || wire_T->size() == 0 || edges_.empty()) {  // once per control mesh
       std::set<std::pair<int, int>> unique;
@@ -202,16 +164,7 @@ void Renderer::draw_textured(const GpuEvaluator& ev, const Eigen::Matrix4d& view
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, texture_);
   glUniform1i(glGetUniformLocation(texture_program_, "image"), 0);
-  glBindVertexArray(vao_);
-  const GLuint sources[2] = {ev.rest_buffer(), ev.displacement_buffer()};
-  for (GLuint loc = 0; loc < 2; ++loc) {
-    glBindBuffer(GL_ARRAY_BUFFER, sources[loc]);
-    glEnableVertexAttribArray(loc);
-    glVertexAttribPointer(loc, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
-  }
-  glDisableVertexAttribArray(2);
-  glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(indices_), GL_UNSIGNED_INT, nullptr);
-  glBindVertexArray(0);
+  surface_.draw(ev, {.normals = false});
   glUseProgram(0);
   detail::check("Renderer::draw_textured");
 }

@@ -4,6 +4,7 @@
 // an optional control-mesh wireframe, into an RGB image. The camera is the CPU rasteriser's
 // orthographic raster::View, so GPU and CPU pictures frame the same region.
 #include <mbi/gpu/evaluator.hpp>
+#include <mbi/gpu/surface.hpp>
 #include <mbi/io/image.hpp>
 #include <mbi/raster/raster.hpp>
 
@@ -52,8 +53,8 @@ class Renderer {
  private:
   void ensure_target(int width, int height);
   Context& context_;
-  unsigned mesh_program_ = 0, line_program_ = 0, vao_ = 0, index_ = 0;
-  long long indices_ = 0;
+  Surface surface_;
+  unsigned mesh_program_ = 0, line_program_ = 0;
   unsigned line_vao_ = 0, line_buffer_ = 0;
   unsigned fbo_ = 0, color_ = 0, depth_ = 0;
   unsigned texture_program_ = 0, texture_ = 0;

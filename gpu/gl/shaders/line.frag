@@ -1,0 +1,4 @@
+// A flat colour.
+uniform vec3 color;
+out vec4 frag;
+void main() { frag = vec4(color, 1.0); }
