@@ -14,9 +14,10 @@ GRAPH = {
     "base": [],
     "interp": ["base"], "sim": ["base"], "io": ["base"],
     "pipeline": ["interp", "sim"], "generate": ["io", "interp"], "raster": ["io"],
+    "interact": ["interp"],
     "gpu": ["pipeline", "raster", "io"],
     "scene_format": ["generate", "pipeline"], "scenes": ["gpu", "scene_format"],
-    "viewer": ["scenes"], "web": ["scene_format"], "python": ["scenes"], "bench": ["scenes"],
+    "viewer": ["scenes", "interact"], "web": ["scene_format", "interact"], "python": ["scenes"], "bench": ["scenes"],
     "app": ["viewer", "scenes"],
 }
 # source folder -> target (the longest matching prefix wins)
@@ -25,13 +26,15 @@ FOLDERS = {
     "generate": "generate", "gpu/raster": "raster", "gpu/gl": "gpu", "scenes": "scenes",
     "scenes/format": "scene_format",
     "viewer": "viewer", "web": "web", "python": "python", "bench": "bench", "app": "app",
+    "interact": "interact",
 }
 # public header prefix (<mbi/X/...>, or <mbi/X/Y> for a header of a folder's second target) -> target
 HEADERS = {"base": "base", "error.hpp": "base", "interp": "interp", "interp.hpp": "interp",
            "sim": "sim", "io": "io", "pipeline": "pipeline", "generate": "generate",
            "raster": "raster", "gpu": "gpu", "scenes": "scenes", "viewer": "viewer", "web": "web",
-           "scenes/scene.hpp": "scene_format", "scenes/model_scene.hpp": "scene_format",
-           "scenes/models.hpp": "scene_format", "scenes/limits.hpp": "scene_format"}
+           "interact": "interact", "scenes/scene.hpp": "scene_format",
+           "scenes/model_scene.hpp": "scene_format", "scenes/models.hpp": "scene_format",
+           "scenes/limits.hpp": "scene_format"}
 INCLUDE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]')
 
 

@@ -1,7 +1,6 @@
 #include "interaction.hpp"
 
 #include <mbi/interp/control.hpp>
-#include <mbi/interp/embed.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -138,22 +137,20 @@ bool Interaction::grab_handle(int vertex) {
 }
 
 bool Interaction::start_poke(double x, double y, int view, const WindowSize& window) {
+  const Ray ray = ray_at(x, y, view, window);
+  if (!ray.origin.allFinite()) return false;  // a cursor far outside the window picks nothing
   Eigen::MatrixXd V;
   stage_.pipe.evaluate_with(stage_.views[static_cast<size_t>(view)], V);
-  const std::optional<Hit> hit = cast(ray_at(x, y, view, window), V, stage_.F);
+  const std::optional<Hit> hit = cast(ray, V, stage_.F);
   if (!hit) return false;
-  // the material point under the cursor: rest position -> control element
-  Eigen::Vector3d rest = Eigen::Vector3d::Zero();
-  for (int k = 0; k < 3; ++k) rest += hit->bary(k) * stage_.rest_dense.row(stage_.F(hit->face, k)).transpose();
-  const interp::Embedding emb = interp::embed(stage_.U, stage_.T, rest.transpose());
-  Poke p;
-  p.element = emb.element(0);
-  p.bary = emb.bary.row(0).transpose();
   sim::Simulator& sim = stage_.simulation()->simulator();
-  double mass = 0;
-  for (int k = 0; k < 4; ++k) mass += sim.masses()(stage_.T(p.element, k));
-  p.stiffness = poke_stiffness(mass, opt_.poke_response);
-  p.plane = p.target = hit->point;
+  const interact::Grab g =
+      interact::grab(*hit, stage_.rest_dense, stage_.F, stage_.U, stage_.T, sim.masses(), opt_.poke_response);
+  Poke p;
+  p.element = g.element;
+  p.bary = g.bary;
+  p.stiffness = g.stiffness;
+  p.plane = p.target = g.point;
   release_poke();
   p.handle = sim.add_poke(p.element, p.bary, p.target, p.stiffness);
   poke_ = p;

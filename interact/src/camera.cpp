@@ -1,11 +1,12 @@
-#include <mbi/viewer/camera.hpp>
+// The orbit camera (camera.hpp).
+#include <mbi/interact/camera.hpp>
 
 #include <Eigen/Geometry>
 
 #include <algorithm>
 #include <cmath>
 
-namespace mbi::viewer {
+namespace mbi::interact {
 
 void Camera::frame(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const Eigen::Vector3d& up_dir) {
   target = home = 0.5 * (lo + hi);
@@ -83,60 +84,4 @@ Eigen::Vector2d Camera::project(const Eigen::Vector3d& p, int w, int h) const {
   return {(nx + 1) * 0.5 * w, (1 - ny) * 0.5 * h};
 }
 
-std::optional<Hit> cast(const Ray& ray, const Eigen::Ref<const Eigen::MatrixXd>& V,
-                        const Eigen::Ref<const Eigen::MatrixXi>& F) {
-  // a ray through a shared vertex or edge (a click at the middle of a regular grid) must not
-  // miss every triangle by rounding: a little slack, the barycentrics then clamped
-  constexpr double slack = 1e-9;
-  std::optional<Hit> best;
-  for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    const Eigen::Vector3d a = V.row(F(f, 0)), b = V.row(F(f, 1)), c = V.row(F(f, 2));
-    const Eigen::Vector3d e1 = b - a, e2 = c - a;
-    const Eigen::Vector3d p = ray.direction.cross(e2);
-    const double det = e1.dot(p);
-    if (std::abs(det) < 1e-300) continue;
-    const double inv = 1 / det;
-    const Eigen::Vector3d s = ray.origin - a;
-    double u = s.dot(p) * inv;
-    if (u < -slack || u > 1 + slack) continue;
-    const Eigen::Vector3d q = s.cross(e1);
-    double v = ray.direction.dot(q) * inv;
-    if (v < -slack || u + v > 1 + slack) continue;
-    u = std::clamp(u, 0.0, 1.0);
-    v = std::clamp(v, 0.0, 1.0 - u);
-    const double t = e2.dot(q) * inv;
-    if (t < 0 || !std::isfinite(t)) continue;
-    if (!best || t < best->t) {
-      Hit h;
-      h.face = static_cast<int>(f);
-      h.t = t;
-      h.bary = Eigen::Vector3d(1 - u - v, u, v);
-      h.point = ray.origin + t * ray.direction;
-      best = h;
-    }
-  }
-  return best;
-}
-
-double poke_stiffness(double mass, double response) {
-  const double w = 2 * std::acos(-1.0) / std::max(response, 1e-6);
-  return std::max(mass, 0.0) * w * w;
-}
-
-Eigen::Vector3d poke_target(const Ray& ray, const Eigen::Vector3d& grab, const Eigen::Vector3d& view_dir,
-                            double max_distance) {
-  const Eigen::Vector3d n = view_dir.normalized();
-  const double denom = ray.direction.dot(n);
-  Eigen::Vector3d p = grab;
-  if (std::abs(denom) > 1e-12) {
-    const double t = (grab - ray.origin).dot(n) / denom;
-    if (std::isfinite(t)) p = ray.origin + t * ray.direction;
-  }
-  if (!p.allFinite()) return grab;
-  const Eigen::Vector3d d = p - grab;
-  const double len = d.norm();
-  if (len > max_distance && len > 0) p = grab + d * (max_distance / len);
-  return p;
-}
-
-}  // namespace mbi::viewer
+}  // namespace mbi::interact
