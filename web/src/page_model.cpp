@@ -3,15 +3,13 @@
 
 #include <mbi/base/timer.hpp>
 #include <mbi/error.hpp>
+#include <mbi/interact/pick.hpp>
+#include <mbi/interact/poke.hpp>
 #include <mbi/interp/embed.hpp>
 #include <mbi/interp/evaluate.hpp>
 #include <mbi/pipeline/creases.hpp>
 
-#include <Eigen/Geometry>
-
 #include <algorithm>
-#include <cmath>
-#include <limits>
 #include <optional>
 
 namespace mbi::web {
@@ -19,38 +17,6 @@ namespace {
 
 // The natural period (s) of a poke's spring on the mass it pulls: `mbi view`'s default.
 constexpr double kPokePeriod = 0.15;
-
-struct Hit {
-  int face = -1;
-  Eigen::Vector3d bary;  // of the face's corners
-  Eigen::Vector3d point;
-};
-
-// The first triangle of (P, F) that the ray hits (Moller-Trumbore), if any.
-std::optional<Hit> cast(const Ray& ray, const Eigen::MatrixXd& P, const Eigen::MatrixXi& F) {
-  std::optional<Hit> best;
-  double best_t = std::numeric_limits<double>::infinity();
-  const Eigen::Vector3d& o = ray.origin;
-  const Eigen::Vector3d& d = ray.direction;
-  for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    const Eigen::Vector3d a = P.row(F(f, 0)).transpose(), e1 = P.row(F(f, 1)).transpose() - a,
-                          e2 = P.row(F(f, 2)).transpose() - a;
-    const Eigen::Vector3d p = d.cross(e2);
-    const double det = e1.dot(p);
-    if (std::abs(det) < 1e-300) continue;
-    const Eigen::Vector3d s = o - a;
-    const double u = s.dot(p) / det;
-    if (u < 0 || u > 1) continue;
-    const Eigen::Vector3d q = s.cross(e1);
-    const double v = d.dot(q) / det;
-    if (v < 0 || u + v > 1) continue;
-    const double t = e2.dot(q) / det;
-    if (t <= 0 || t >= best_t) continue;
-    best_t = t;
-    best = Hit{static_cast<int>(f), Eigen::Vector3d(1 - u - v, u, v), o + t * d};
-  }
-  return best;
-}
 
 pipeline::Method method_of(View view) {
   return view == View::BI ? pipeline::Method::BI : pipeline::Method::ModifiedBI;
@@ -192,32 +158,21 @@ double PageModel::alpha() const { return interp::resolve_alpha(pipe_->options().
 
 bool PageModel::grab(View view, const Ray& ray) {
   positions(view);  // the CPU's positions of this frame (the GPU's stay on the GPU)
-  const std::optional<Hit> hit = cast(ray, views_[static_cast<int>(view)], rest_.F);
+  const std::optional<interact::Hit> hit = interact::cast(ray, views_[static_cast<int>(view)], rest_.F);
   if (!hit) return false;
-  // the material point under the cursor: its rest position, then its control element
-  Eigen::Vector3d rest = Eigen::Vector3d::Zero();
-  for (int k = 0; k < 3; ++k) rest += hit->bary(k) * rest_.V.row(rest_.F(hit->face, k)).transpose();
-  const Eigen::MatrixXi& T = pipe_->elements();
-  const interp::Embedding e = interp::embed(pipe_->rest_positions(), T, rest.transpose());
-  const int element = e.element(0);
   sim::Simulator& sim = sim_->simulator();
-  double mass = 0;
-  for (int k = 0; k < 4; ++k) mass += sim.masses()(T(element, k));
-  const double w = 2 * std::acos(-1.0) / kPokePeriod;
+  const interact::Grab g =
+      interact::grab(*hit, rest_.V, rest_.F, pipe_->rest_positions(), pipe_->elements(), sim.masses(), kPokePeriod);
   release();
-  poke_.handle = sim.add_poke(element, e.bary.row(0).transpose(), hit->point, mass * w * w);
-  poke_.grabbed = hit->point;
+  poke_.handle = sim.add_poke(g.element, g.bary, g.point, g.stiffness);
+  poke_.grabbed = g.point;
   return true;
 }
 
 void PageModel::move(const Ray& ray) {
-  const Eigen::Vector3d& o = ray.origin;
-  const Eigen::Vector3d& d = ray.direction;
-  if (poke_.handle < 0 || !o.allFinite() || !d.allFinite() || !(d.squaredNorm() > 0)) return;
-  Eigen::Vector3d to = o + ((poke_.grabbed - o).dot(d) / d.squaredNorm()) * d - poke_.grabbed;
-  const double reach = 0.5 * size_;
-  if (to.norm() > reach) to *= reach / to.norm();
-  sim_->simulator().set_poke_target(poke_.handle, poke_.grabbed + to);
+  if (poke_.handle < 0) return;
+  // a perspective camera: the plane through the grabbed point facing the ray
+  sim_->simulator().set_poke_target(poke_.handle, interact::poke_target(ray, poke_.grabbed, ray.direction, 0.5 * size_));
 }
 
 void PageModel::release() {

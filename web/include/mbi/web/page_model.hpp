@@ -9,6 +9,7 @@
 // Two evaluators of the dense points: the CPU (here, double) and the page's WebGL2 pass
 // (web/page/gpu_evaluator.js) from bezier_texels(); with the GPU one, step() leaves the CPU
 // positions to be evaluated on demand (positions(), picking).
+#include <mbi/interact/pick.hpp>
 #include <mbi/interp/metrics.hpp>
 #include <mbi/pipeline/creases.hpp>
 #include <mbi/pipeline/driver.hpp>
@@ -26,10 +27,7 @@ namespace mbi::web {
 enum class SceneKind { TwistBar, Poke, DenseSphere };
 
 /// A half-line in model coordinates (m); direction need not be unit length.
-struct Ray {
-  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
-  Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();
-};
+using interact::Ray;
 
 /// The two views: BI (left) and modified-BI (right).
 enum class View { BI = 0, ModifiedBI = 1 };
@@ -60,11 +58,13 @@ class PageModel {
   /// The current alpha (interp's default until set_alpha()).
   double alpha() const;
 
-  /// Starts a poke where `ray` first hits the dense surface as drawn in `view`: a spring from
-  /// the material point under the cursor to a target at the hit point. False on a miss.
+  /// Starts a poke where `ray` first hits the dense surface as drawn in `view` (interact::cast,
+  /// the viewer's picking: a ray through a shared edge or vertex hits): a spring from the
+  /// material point under the cursor to a target at the hit point. False on a miss; throws
+  /// interact::Error on a zero or non-finite ray.
   bool grab(View view, const Ray& ray);
   /// Moves the poke's target to where `ray` meets the plane through the grabbed point facing
-  /// the ray, kept within half the model's size of that point.
+  /// the ray, kept within half the model's size of that point (interact::poke_target).
   void move(const Ray& ray);
   void release();
 
