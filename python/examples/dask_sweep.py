@@ -15,12 +15,13 @@ import argparse
 import os
 import tempfile
 import time
+from typing import Any, Dict, List, Optional, Tuple
 
 import mbi
 from mbi.batch import deform_model, material_grid, run_batch, simulate_material
 
 
-def run(client, a, out_dir):
+def run(client: Optional[Any], a: argparse.Namespace, out_dir: str) -> Tuple[List[Dict[str, Any]], float]:
     """The sweep and the models on `client` (None: one by one here); results and wall time (s)."""
     t0 = time.perf_counter()
     grid = material_grid([2e5, 5e5, 1e6, 2e6], [0.3, 0.45])
@@ -31,12 +32,12 @@ def run(client, a, out_dir):
     return results, time.perf_counter() - t0
 
 
-def without_paths(results):
+def without_paths(results: List[Dict[str, Any]]) -> List[Dict[str, Any]]:
     return [{k: v for k, v in r.items() if k != "obj"} for r in results]
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def main() -> None:
+    parser = argparse.ArgumentParser(description=(__doc__ or "").split("\n\n")[0])
     parser.add_argument("--workers", type=int, default=2, help="local worker processes (0: no Dask, one by one)")
     parser.add_argument("--scheduler", help="address of a running Dask scheduler (instead of --workers)")
     parser.add_argument("--frames", type=int, default=60)

@@ -10,18 +10,19 @@ import argparse
 import os
 
 import numpy as np
+import numpy.typing as npt
 
 import mbi
 
 
-def texture_coordinates(path):
+def texture_coordinates(path: str) -> npt.NDArray[np.float64]:
     """The `vt` records of an OBJ file, as read from its text."""
     with open(path) as f:
         return np.array([[float(x) for x in line.split()[1:]] for line in f if line.startswith("vt ")])
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def main() -> None:
+    parser = argparse.ArgumentParser(description=(__doc__ or "").split("\n\n")[0])
     models = os.environ.get("MBI_MODELS_DIR", "")
     parser.add_argument("--model", default=os.path.join(models, "spot.obj"), help="an OBJ with texture coordinates")
     parser.add_argument("--out", default="spot_sag.obj")
@@ -39,7 +40,7 @@ def main():
     sim = mbi.Simulator(U, T, youngs_modulus=5e5, poisson_ratio=0.4, density=1000, dt=1 / 30,
                         gravity=(0, -9.81, 0), mass_damping=1.0)
     back = U[:, 2] <= U[:, 2].min() + 0.15 * (U[:, 2].max() - U[:, 2].min())
-    sim.fix(np.flatnonzero(back))
+    sim.fix(back)  # a boolean mask of the control vertices
     pipe = mbi.FramePipeline(U, T, mesh.V, sim, method="modified-bi")
     for _ in range(a.frames + 1):  # frame 0 is the rest pose
         result = pipe.step()

@@ -10,6 +10,7 @@ import itertools
 import time
 
 import numpy as np
+import numpy.typing as npt
 
 import mbi
 
@@ -18,7 +19,8 @@ class MassSpring:
     """Springs along the edges of the tetrahedra, lumped masses, symplectic Euler with damping.
     Units: m, kg, s, N/m."""
 
-    def __init__(self, U, T, stiffness=1000.0, mass=0.02, damping=2.0, gravity=-9.81):
+    def __init__(self, U: npt.NDArray[np.float64], T: npt.NDArray[np.int32], stiffness: float = 1000.0,
+                 mass: float = 0.02, damping: float = 2.0, gravity: float = -9.81) -> None:
         pairs = {tuple(sorted((t[a], t[b]))) for t in T for a, b in itertools.combinations(range(4), 2)}
         self.edges = np.array(sorted(pairs))
         self.rest = np.linalg.norm(U[self.edges[:, 1]] - U[self.edges[:, 0]], axis=1)
@@ -26,7 +28,7 @@ class MassSpring:
         self.fixed = U[:, 0] < 1e-9  # the end at x = 0 is clamped
         self.k, self.m, self.c, self.g = stiffness, mass, damping, gravity
 
-    def step(self, dt):
+    def step(self, dt: float) -> npt.NDArray[np.float64]:
         d = self.x[self.edges[:, 1]] - self.x[self.edges[:, 0]]
         length = np.linalg.norm(d, axis=1)
         f_edge = (self.k * (length - self.rest) / length)[:, None] * d
@@ -41,8 +43,8 @@ class MassSpring:
         return self.x
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main() -> None:
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     parser.add_argument("--points", type=int, default=200_000, help="dense points (default 200000)")
     parser.add_argument("--frames", type=int, default=60, help="frames (default 60)")
     parser.add_argument("--method", default="modified-bi", choices=mbi.METHODS)

@@ -8,21 +8,22 @@ start at rest, and a loss on the dense points back-propagates to X through mbi.t
 import argparse
 
 import numpy as np
+import numpy.typing as npt
 import torch
 
 import mbi
 import mbi.torch
 
 
-def bend_twist(P):
+def bend_twist(P: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
     """The target shape: a twist of 60 degrees along x and a bend of the bar's axis."""
     x, y, z = P[:, 0], P[:, 1] - 0.5, P[:, 2] - 0.5
     a = np.pi / 3 * x / 3.0
     return np.stack([x, 0.5 + np.cos(a) * y - np.sin(a) * z, 0.5 + np.sin(a) * y + np.cos(a) * z + 0.1 * x**2], 1)
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def main() -> None:
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     parser.add_argument("--method", default="modified-bi", choices=mbi.METHODS)
     parser.add_argument("--points", type=int, default=5000)
     parser.add_argument("--iterations", type=int, default=30)
@@ -36,14 +37,15 @@ def main():
     X = torch.tensor(U, requires_grad=True)
     optimizer = torch.optim.LBFGS([X], lr=1, max_iter=args.iterations, line_search_fn="strong_wolfe")
 
-    def loss_fn():
-        return ((model(X) - target) ** 2).sum(1).mean()  # mean squared distance, m^2
+    def loss_fn() -> torch.Tensor:
+        loss: torch.Tensor = ((model(X) - target) ** 2).sum(1).mean()  # mean squared distance, m^2
+        return loss
 
-    def closure():
+    def closure() -> float:
         optimizer.zero_grad()
         loss = loss_fn()
-        loss.backward()
-        return loss
+        loss.backward()  # type: ignore[no-untyped-call]  # torch 1.13 leaves backward() unannotated
+        return loss.item()
 
     first = loss_fn().item()
     optimizer.step(closure)

@@ -3,22 +3,37 @@
 Shapes in docstrings: n control vertices, d = 2 or 3 dimensions, m elements, p dense points,
 K = (d+1)(d+2)/2 Bezier points an element. Float arrays are float64 unless stated; array
 arguments take anything numpy.asarray takes. Units are those of the inputs, SI for the simulator.
+Array shapes are not part of the types: a batch (frames, n, d) gives the same array type as a
+pose (n, d). Where the result's type depends on an argument (out=, normals=, dtype=), overloads
+give it.
 """
 import os
-from typing import Any, Iterator, Literal, Optional, Sequence, Tuple, Union, overload
+import types
+from typing import Any, Iterator, Literal, Optional, Sequence, Tuple, Type, TypeVar, Union, overload
 
 import numpy as np
 import numpy.typing as npt
 
 ArrayLike = npt.ArrayLike
 FloatArray = npt.NDArray[np.float64]
+Float32Array = npt.NDArray[np.float32]
 IntArray = npt.NDArray[np.int32]
+AnyArray = npt.NDArray[Any]
 PathLike = Union[str, "os.PathLike[str]"]
 Method = Literal["bi", "modified-bi", "phong"]
-Vector3 = Union[Sequence[float], npt.NDArray[np.floating]]
+Integrator = Literal["backward-euler", "implicit-midpoint"]
+Solver = Literal["auto", "ldlt", "pcg"]
+Simd = Literal["auto", "avx512", "avx2", "portable"]
+Vector3 = Union[Sequence[float], npt.NDArray[np.floating[Any]]]
+Out = TypeVar("Out", bound=AnyArray)
+Float64Type = Union[Type[np.float64], Literal["float64"]]
+Float32Type = Union[Type[np.float32], Literal["float32"]]
 
-INTEGRATORS: list[str]
-SOLVERS: list[str]
+INTEGRATORS: Tuple[Integrator, ...]
+SOLVERS: Tuple[Solver, ...]
+_timing: Optional[types.ModuleType]
+"""The overhead benchmark's C++ clocks (python/bench/overhead.py): a submodule in a module built
+with -DMBI_PYTHON_TIMING=ON, None in the shipped module."""
 
 class Error(ValueError):
     """Every error of the libraries and every refused argument (the message names it)."""
@@ -44,6 +59,7 @@ class Embedding:
     def dim(self) -> int: ...
     @property
     def size(self) -> int: ...
+    def __len__(self) -> int: ...
 
 def embed(U: ArrayLike, T: ArrayLike, P: ArrayLike) -> Embedding:
     """Locates the points P (p, d) in the mesh U (n, d), T (m, d+1)."""
@@ -55,11 +71,30 @@ class Deformer:
     def __init__(self, U: ArrayLike, T: ArrayLike, P: ArrayLike, *, method: Method = "modified-bi",
                  alpha: Optional[float] = None, beta: float = 0.0, pin_boundary: bool = False,
                  rest_normals: Optional[ArrayLike] = None, threads: int = 0) -> None: ...
-    def deform(self, X: ArrayLike, *, out: Optional[np.ndarray] = None, normals: bool = False,
-               normals_out: Optional[np.ndarray] = None, dtype: Any = None) -> Any:
+    # mypy takes Type[np.float64] and Type[np.float32] (aliases of one generic class) to overlap
+    @overload
+    def deform(  # type: ignore[misc]
+            self, X: ArrayLike, *, out: None = None, normals: Literal[False] = False, normals_out: None = None,
+            dtype: Optional[Float64Type] = None) -> FloatArray:
         """X (n, d) -> (p, d) positions, or (frames, n, d) -> (frames, p, d); with normals a
         (positions, normals) tuple; float32 out or dtype runs the fast float kernel."""
-    def vjp(self, G: ArrayLike, *, out: Optional[np.ndarray] = None) -> FloatArray:
+    @overload
+    def deform(self, X: ArrayLike, *, out: None = None, normals: Literal[False] = False, normals_out: None = None,
+               dtype: Float32Type) -> Float32Array: ...
+    @overload
+    def deform(self, X: ArrayLike, *, out: Out, normals: Literal[False] = False, normals_out: None = None,
+               dtype: Any = None) -> Out: ...
+    @overload
+    def deform(self, X: ArrayLike, *, out: Optional[AnyArray] = None, normals: Literal[True],
+               normals_out: Optional[AnyArray] = None, dtype: Any = None) -> Tuple[AnyArray, AnyArray]: ...
+    @overload
+    def deform(self, X: ArrayLike, *, out: Optional[AnyArray] = None, normals: bool = False, normals_out: AnyArray,
+               dtype: Any = None) -> Tuple[AnyArray, AnyArray]: ...
+    @overload
+    def vjp(self, G: ArrayLike, *, out: None = None) -> FloatArray:
+        """dL/dX (n, d) from G = dL/dpositions (p, d), or batches of them; C order, as X."""
+    @overload
+    def vjp(self, G: ArrayLike, *, out: Out) -> Out:
         """dL/dX (n, d) from G = dL/dpositions (p, d), or batches of them."""
     def M(self, X: ArrayLike) -> FloatArray: """((n d), d) the method's M at X"""
     def bezier(self, X: ArrayLike) -> FloatArray: """((m K), d) Bezier points at X"""
@@ -88,78 +123,125 @@ class Deformer:
 class ModifiedBI:
     """Modified-BI's precompute (assembly, gauge, sparse Cholesky factor)."""
     def __init__(self, U: ArrayLike, T: ArrayLike, *, alpha: Optional[float] = None, beta: float = 0.0,
-                 pin_boundary: bool = False, solve_path: str = "automatic", factorization: str = "automatic") -> None: ...
-    def solve(self, X: ArrayLike, *, out: Optional[np.ndarray] = None) -> FloatArray: """M ((n d), d) at X (n, d)"""
-    def bezier(self, X: ArrayLike, M: ArrayLike, *, out: Optional[np.ndarray] = None) -> FloatArray: ...
+                 pin_boundary: bool = False, solve_path: Literal["automatic", "sparse", "dense"] = "automatic",
+                 factorization: Literal["automatic", "eigen", "cholmod"] = "automatic") -> None: ...
+    def solve(self, X: ArrayLike, *, out: Optional[AnyArray] = None) -> FloatArray: """M ((n d), d) at X (n, d)"""
+    def bezier(self, X: ArrayLike, M: ArrayLike, *, out: Optional[AnyArray] = None) -> FloatArray: ...
     def solve_transpose(self, G: ArrayLike) -> FloatArray: """dL/dX (n, d) from dL/dM ((n d), d)"""
     def set_alpha(self, alpha: float) -> None: ...
-    alpha: float
-    beta: float
-    dim: int
-    vertices: int
-    elements: int
-    pin_boundary: bool
-    null_space_dim: int
-    unknowns: int
-    dense_operator: bool
-    factorization: str
-    factor_nonzeros: int
-    memory_bytes: int
+    @property
+    def alpha(self) -> float: ...
+    @property
+    def beta(self) -> float: ...
+    @property
+    def dim(self) -> int: ...
+    @property
+    def vertices(self) -> int: ...
+    @property
+    def elements(self) -> int: ...
+    @property
+    def pin_boundary(self) -> bool: ...
+    @property
+    def null_space_dim(self) -> int: ...
+    @property
+    def unknowns(self) -> int: ...
+    @property
+    def dense_operator(self) -> bool: ...
+    @property
+    def factorization(self) -> str: ...
+    @property
+    def factor_nonzeros(self) -> int: ...
+    @property
+    def memory_bytes(self) -> int: ...
 
 class Phong:
     """Phong deformation's M (James 2020)."""
     def __init__(self, U: ArrayLike, T: ArrayLike) -> None: ...
-    def M(self, X: ArrayLike, *, out: Optional[np.ndarray] = None) -> FloatArray: ...
+    def M(self, X: ArrayLike, *, out: Optional[AnyArray] = None) -> FloatArray: ...
     def M_transpose(self, G: ArrayLike) -> FloatArray: ...
     def element_gradients(self, X: ArrayLike) -> FloatArray: ...
     def vertex_gradients(self, X: ArrayLike) -> FloatArray: ...
-    dim: int
-    vertices: int
-    elements: int
-    fallback_vertices: Any
+    @property
+    def dim(self) -> int: ...
+    @property
+    def vertices(self) -> int: ...
+    @property
+    def elements(self) -> int: ...
+    @property
+    def fallback_vertices(self) -> int: ...
 
 def bezier_bi(X: ArrayLike, T: ArrayLike) -> FloatArray: """BI's Bezier points ((m K), d)"""
 def bezier_points(U: ArrayLike, T: ArrayLike, X: ArrayLike, M: ArrayLike) -> FloatArray: ...
 def bezier_transpose(U: ArrayLike, T: ArrayLike, G: ArrayLike) -> Tuple[FloatArray, FloatArray]:
     """(dL/dX, dL/dM) from dL/dB"""
-def evaluate(B: ArrayLike, embedding: Embedding, *, out: Optional[np.ndarray] = None,
-             rest_normals: Optional[ArrayLike] = None, normals_out: Optional[np.ndarray] = None,
-             threads: int = 0) -> Any: """(p, d) positions (float64), with rest_normals (positions, normals)"""
+@overload
+def evaluate(B: ArrayLike, embedding: Embedding, *, out: Optional[AnyArray] = None, rest_normals: None = None,
+             normals_out: None = None, threads: int = 0) -> FloatArray:
+    """(p, d) positions (float64), with rest_normals (positions, normals)"""
+@overload
+def evaluate(B: ArrayLike, embedding: Embedding, *, out: Optional[AnyArray] = None, rest_normals: ArrayLike,
+             normals_out: Optional[AnyArray] = None, threads: int = 0) -> Tuple[FloatArray, FloatArray]: ...
 def evaluate_transpose(embedding: Embedding, G: ArrayLike, elements: int, *, threads: int = 0) -> FloatArray: ...
 
 class FastEvaluator:
     """The compact float32 kernel (AVX-512 / AVX2 picked at run time)."""
-    def __init__(self, embedding: Embedding, *, threads: int = 0, simd: str = "auto") -> None: ...
-    def evaluate(self, B: ArrayLike, *, out: Optional[np.ndarray] = None, normals: bool = False,
-                 normals_out: Optional[np.ndarray] = None) -> Any: ...
+    def __init__(self, embedding: Embedding, *, threads: int = 0, simd: Simd = "auto") -> None: ...
+    @overload
+    def evaluate(self, B: ArrayLike, *, out: Optional[AnyArray] = None, normals: Literal[False] = False,
+                 normals_out: None = None) -> Float32Array: """(p, d) float32 positions"""
+    @overload
+    def evaluate(self, B: ArrayLike, *, out: Optional[AnyArray] = None, normals: Literal[True],
+                 normals_out: Optional[AnyArray] = None) -> Tuple[Float32Array, Float32Array]: ...
+    @overload
+    def evaluate(self, B: ArrayLike, *, out: Optional[AnyArray] = None, normals: bool = False,
+                 normals_out: AnyArray) -> Tuple[Float32Array, Float32Array]: ...
     def set_rest_normals(self, normals: ArrayLike) -> None: ...
     def bytes_per_point(self, normals: bool = False) -> int: ...
     @staticmethod
-    def supported(simd: str) -> bool: ...
-    simd: str
-    threads: int
-    size: int
-    dim: int
-    elements: int
-    coherent: bool
-    has_rest_normals: bool
+    def supported(simd: Simd) -> bool: ...
+    @property
+    def simd(self) -> str: ...
+    @property
+    def threads(self) -> int: ...
+    @property
+    def size(self) -> int: ...
+    @property
+    def dim(self) -> int: ...
+    @property
+    def elements(self) -> int: ...
+    @property
+    def coherent(self) -> bool: ...
+    @property
+    def has_rest_normals(self) -> bool: ...
 
 class Summary:
-    mean: float
-    std: float
-    max: float
+    @property
+    def mean(self) -> float: ...
+    @property
+    def std(self) -> float: ...
+    @property
+    def max(self) -> float: ...
 
 class DiscontinuityTable:
     """The paper's Table 2 for one pose."""
-    bi: Summary
-    modified_bi: Summary
-    ratio: Summary
-    phong: Optional[Summary]
-    phong_ratio: Optional[Summary]
-    e_vibr: float
-    e_disc: float
-    e_total: float
-    faces: int
+    @property
+    def bi(self) -> Summary: ...
+    @property
+    def modified_bi(self) -> Summary: ...
+    @property
+    def ratio(self) -> Summary: ...
+    @property
+    def phong(self) -> Optional[Summary]: ...
+    @property
+    def phong_ratio(self) -> Optional[Summary]: ...
+    @property
+    def e_vibr(self) -> float: ...
+    @property
+    def e_disc(self) -> float: ...
+    @property
+    def e_total(self) -> float: ...
+    @property
+    def faces(self) -> int: ...
 
 def discontinuity_table(solver: ModifiedBI, X: ArrayLike, M: ArrayLike, M_phong: Optional[ArrayLike] = None) -> DiscontinuityTable: ...
 def face_discontinuity(U: ArrayLike, T: ArrayLike, X: ArrayLike, M: ArrayLike) -> FloatArray: ...
@@ -176,29 +258,40 @@ def threads_available() -> bool: ...
 
 class StepResult:
     """The outcome of Simulator.step(); false when the step failed."""
-    success: bool
-    message: str
-    step: int
-    time: float  # s, after the step
-    newton_iterations: int
-    solver_iterations: int
-    total_ms: float
+    @property
+    def success(self) -> bool: ...
+    @property
+    def message(self) -> str: ...
+    @property
+    def step(self) -> int: ...
+    @property
+    def time(self) -> float: """s, after the step"""
+    @property
+    def newton_iterations(self) -> int: ...
+    @property
+    def solver_iterations(self) -> int: ...
+    @property
+    def total_ms(self) -> float: ...
     def __bool__(self) -> bool: ...
 
 class StaticResult:
-    converged: bool
-    iterations: int
-    residual: float  # N
-    message: str
+    @property
+    def converged(self) -> bool: ...
+    @property
+    def iterations(self) -> int: ...
+    @property
+    def residual(self) -> float: """N"""
+    @property
+    def message(self) -> str: ...
 
 class Simulator:
     """Co-rotational FEM of a tetrahedral mesh, SI units (m, s, kg, N, Pa, J)."""
     def __init__(self, U: ArrayLike, T: ArrayLike, *, youngs_modulus: float = 1e5, poisson_ratio: float = 0.45,
                  density: float = 1000.0, element_materials: Optional[ArrayLike] = None,
                  dt: float = ..., substeps: int = ..., gravity: Vector3 = ..., mass_damping: float = ...,
-                 stiffness_damping: float = ..., integrator: Literal["backward-euler", "implicit-midpoint"] = ...,
+                 stiffness_damping: float = ..., integrator: Integrator = ...,
                  newton_iterations: int = ..., newton_tolerance: float = ...,
-                 solver: Literal["auto", "ldlt", "pcg"] = ..., pcg_tolerance: float = ...,
+                 solver: Solver = ..., pcg_tolerance: float = ...,
                  pcg_max_iterations: int = ..., max_energy: float = ..., ground: Optional[float] = ...,
                  ground_normal: Vector3 = ..., ground_friction: float = ...) -> None:
         """U (n, 3) rest positions (m), T (m, 4) tetrahedra; E (Pa), nu, rho (kg/m^3) or
@@ -267,9 +360,12 @@ class GivenDriver:
     def set(self, X: ArrayLike) -> None: ...
 
 class FrameResult:
-    ok: bool
-    message: str
-    frame: int
+    @property
+    def ok(self) -> bool: ...
+    @property
+    def message(self) -> str: ...
+    @property
+    def frame(self) -> int: ...
     def __bool__(self) -> bool: ...
 
 class FramePipeline:
@@ -316,6 +412,7 @@ class Surface:
     @property
     def has_attributes(self) -> bool: ...
     def with_positions(self, V: ArrayLike, N: Optional[ArrayLike] = None) -> "Surface": ...
+    def __iter__(self) -> Iterator[AnyArray]: """V, F"""
 
 def read_surface(path: PathLike) -> Surface: """.obj, .off, .ply, .stl"""
 def write_surface(path: PathLike, mesh: Union[Surface, ArrayLike], F: Optional[ArrayLike] = None, *,
@@ -332,7 +429,7 @@ class ControlMesh:
     def notes(self) -> list[str]: ...
     @property
     def dim(self) -> int: ...
-    def __iter__(self) -> Iterator[np.ndarray]: ...
+    def __iter__(self) -> Iterator[AnyArray]: ...
 
 def read_control_mesh(path: PathLike) -> ControlMesh: """TetGen, .msh, .vtk, .vtu"""
 def read_positions(path: PathLike) -> FloatArray: ...
@@ -343,9 +440,12 @@ def write_vtk(path: PathLike, U: ArrayLike, T: ArrayLike, point_vectors: Optiona
 class PointCache:
     @property
     def frames(self) -> FloatArray: """(frames, n, 3)"""
-    start_frame: float
-    sample_rate: float
-    times: list[float]
+    @property
+    def start_frame(self) -> float: ...
+    @property
+    def sample_rate(self) -> float: ...
+    @property
+    def times(self) -> list[float]: ...
 
 def read_point_cache(path: PathLike) -> PointCache: """.pc2 or .mdd"""
 def write_point_cache(path: PathLike, frames: ArrayLike, *, start_frame: float = 0.0, sample_rate: float = 1.0,
@@ -360,14 +460,21 @@ class Cage:
     def U(self) -> FloatArray: ...
     @property
     def T(self) -> IntArray: ...
-    dim: int
-    cell_size: float
-    min_dihedral_deg: float
-    outside_points: int
-    seconds: float
-    mesher: str
-    tetgen_switches: str
-    def __iter__(self) -> Iterator[np.ndarray]: ...
+    @property
+    def dim(self) -> int: ...
+    @property
+    def cell_size(self) -> float: ...
+    @property
+    def min_dihedral_deg(self) -> float: ...
+    @property
+    def outside_points(self) -> int: ...
+    @property
+    def seconds(self) -> float: ...
+    @property
+    def mesher(self) -> str: ...
+    @property
+    def tetgen_switches(self) -> str: ...
+    def __iter__(self) -> Iterator[AnyArray]: ...
 
 def cage(V: ArrayLike, F: Optional[ArrayLike] = None, *, vertices: int = 200,
          mesher: Literal["voxel", "tetgen"] = "voxel", force_3d: bool = False) -> Cage: ...

@@ -8,25 +8,29 @@ Every task runs mbi on `threads` threads (1 by default: a Dask worker with one t
 """
 import hashlib
 import os
+from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Tuple
 
 import numpy as np
+import numpy.typing as npt
 
 from . import _mbi
 from .meshes import box_mesh
 
 
-def digest(A):
+def digest(A: npt.ArrayLike) -> str:
     """A short fingerprint of an array's exact values (equal digests: bitwise equal results)."""
     return hashlib.sha256(np.ascontiguousarray(A, dtype=np.float64).tobytes()).hexdigest()[:16]
 
 
-def material_grid(youngs_moduli, poisson_ratios, density=500.0):
+def material_grid(youngs_moduli: Iterable[float], poisson_ratios: Sequence[float],
+                  density: float = 500.0) -> List[Dict[str, float]]:
     """The parameter sets of a sweep: every (E, nu) pair, as dicts for simulate_material."""
     return [{"youngs_modulus": float(E), "poisson_ratio": float(nu), "density": float(density)}
             for E in youngs_moduli for nu in poisson_ratios]
 
 
-def simulate_material(params, *, frames=20, cells=(2, 2, 8), points=2000, threads=1):
+def simulate_material(params: Dict[str, float], *, frames: int = 20, cells: Tuple[int, int, int] = (2, 2, 8),
+                      points: int = 2000, threads: int = 1) -> Dict[str, Any]:
     """One run of a material sweep: a 1 x 1 x 4 m bar (box control mesh of `cells`) clamped at
     z = 0 sags under gravity for `frames` frames of 1/30 s, driving `points` dense points by
     modified-BI. params: youngs_modulus (Pa), poisson_ratio, density (kg/m^3). Returns the
@@ -45,7 +49,8 @@ def simulate_material(params, *, frames=20, cells=(2, 2, 8), points=2000, thread
                 elastic_energy=sim.elastic_energy(), digest=digest(final))
 
 
-def deform_model(path, out_dir, *, vertices=150, frames=10, youngs_modulus=2e5, threads=1):
+def deform_model(path: str, out_dir: str, *, vertices: int = 150, frames: int = 10, youngs_modulus: float = 2e5,
+                 threads: int = 1) -> Dict[str, Any]:
     """One run of a folder of models: a cage of about `vertices` vertices around the model at
     `path` (mbi.cage), clamped on its back (the 15% of the cage with the lowest z), sags under
     gravity for `frames` frames of 1/30 s (a bar of 1000 kg/m^3 and `youngs_modulus` Pa, the
@@ -69,10 +74,12 @@ def deform_model(path, out_dir, *, vertices=150, frames=10, youngs_modulus=2e5, 
             "digest": digest(final), "obj": out}
 
 
-def run_batch(function, items, client=None, **kwargs):
+def run_batch(function: Callable[..., Any], items: Iterable[Any], client: Optional[Any] = None,
+              **kwargs: Any) -> List[Any]:
     """function(item, **kwargs) for every item, in the order of `items`: one by one in this process
     when client is None, else as tasks of the dask.distributed Client (one task an item)."""
     if client is None:
         return [function(item, **kwargs) for item in items]
     futures = client.map(function, list(items), pure=False, **kwargs)
-    return client.gather(futures)
+    gathered: List[Any] = client.gather(futures)
+    return gathered

@@ -17,7 +17,7 @@ def table_dict(t: _mbi.DiscontinuityTable) -> Dict[str, Any]:
     """An mbi.DiscontinuityTable as a dict of plain numbers (the shape of metrics.json's "last_disc")."""
     out: Dict[str, Any] = {"bi": summary_dict(t.bi), "modified_bi": summary_dict(t.modified_bi), "ratio": summary_dict(t.ratio),
            "faces": t.faces, "e_vibr": t.e_vibr, "e_disc": t.e_disc, "e_total": t.e_total}
-    if t.phong is not None:
+    if t.phong is not None and t.phong_ratio is not None:
         out["phong"] = summary_dict(t.phong)
         out["phong_ratio"] = summary_dict(t.phong_ratio)
     return out

@@ -35,8 +35,8 @@ class DeformFunction(torch.autograd.Function):
         return positions.to(X.device, X.dtype)
 
     @staticmethod
-    @torch.autograd.function.once_differentiable
-    def backward(ctx: Any, grad: torch.Tensor) -> Tuple[torch.Tensor, None]:  # type: ignore[override]
+    @torch.autograd.function.once_differentiable  # type: ignore[misc]  # torch leaves it untyped
+    def backward(ctx: Any, grad: torch.Tensor) -> Tuple[torch.Tensor, None]:
         dX = torch.from_numpy(ctx.deformer.vjp(_as_numpy(grad)))
         return dX.to(grad.device, grad.dtype), None
 
