@@ -25,7 +25,7 @@ Eigen::Vector3d poke_target(const Ray& ray, const Eigen::Vector3d& grab, const E
   const Eigen::Vector3d n = normal.normalized();
   const double denom = ray.direction.dot(n);
   Eigen::Vector3d p = grab;
-  if (std::abs(denom) > 1e-12) {
+  if (std::abs(denom) > 1e-12 * ray.direction.norm()) {  // not parallel, whatever the ray's length
     const double t = (grab - ray.origin).dot(n) / denom;
     if (std::isfinite(t)) p = ray.origin + t * ray.direction;
   }

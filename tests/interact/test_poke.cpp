@@ -48,6 +48,9 @@ TEST_CASE("drag plane: the target is where the ray meets the plane through the g
     const Eigen::Vector3d b = poke_target(ray, grab, normal, reach);
     CHECK((b - grab).norm() == Approx(reach));
     CHECK((b - grab).normalized().dot((t - grab).normalized()) == Approx(1));
+    // the ray's length does not matter
+    const Ray tiny{ray.origin, 1e-15 * ray.direction};
+    CHECK((poke_target(tiny, grab, normal, 1e9) - t).norm() < 1e-12);
   }
   // a perspective camera: the plane facing the ray itself is the closest point of the ray
   const Eigen::Vector3d grab(0.2, 0.1, 0.3);
