@@ -1,5 +1,6 @@
 // An orbiting perspective camera shared by the two views: view and projection matrices
-// (column-major, for WebGL), world points to pixels (the 2D fallback), pixels to rays (pokes).
+// (column-major, for WebGL), world points to pixels (the 2D fallback), pixels to rays (pokes:
+// the module picks, pulls and moves the drag plane with mbi::interact, as the viewer does).
 const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
 const add = (a, b) => [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
 const scale = (a, s) => [a[0] * s, a[1] * s, a[2] * s];
@@ -70,12 +71,5 @@ export class Camera {
     const t = Math.tan(this.fov / 2);
     const px = (2 * x / width - 1) * t * width / height, py = (1 - 2 * y / height) * t;
     return { origin: this.eye(), direction: add(f, add(scale(r, px), scale(u, py))) };
-  }
-
-  // Where the ray meets the plane through p facing the camera (a poke's target).
-  onPlane(ray, p) {
-    const { f } = this.frame();
-    const s = dot(sub(p, ray.origin), f) / dot(ray.direction, f);
-    return add(ray.origin, scale(ray.direction, s));
   }
 }
