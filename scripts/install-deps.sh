@@ -38,7 +38,7 @@ test_packages=(
   libbenchmark-dev python3-matplotlib git
   clang libclang-rt-14-dev
   pybind11-dev python3-dev python3-numpy python3-pytest python3-torch python3-venv python3-setuptools
-  python3-meshio python3-distributed python3-hypothesis ffmpeg
+  python3-meshio python3-distributed python3-hypothesis python3-mypy ffmpeg
   emscripten node-acorn chromium
 )
 # The glTF tests check our files with the Khronos validator and three.js, the browser test drives

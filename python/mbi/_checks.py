@@ -23,12 +23,9 @@ def built_for() -> str:
     return f"{_build.PYTHON} ({_build.VERSION})"
 
 
-def fixes() -> str:
+def built_python() -> str:
     built = built_for()
-    python = built.split(" (")[0] if built != "another Python" else "python3"
-    return (f"run {python}, or build mbi for this interpreter: `{sys.executable} -m pip install --no-build-isolation "
-            f"--no-index <mbi source>/python` in a virtual environment made with --system-site-packages "
-            f"(docs/python.md, Install)")
+    return built.split(" (")[0] if built != "another Python" else "python3"
 
 
 def require_module() -> None:
@@ -41,7 +38,9 @@ def require_module() -> None:
                           f"release --target mbi_python) or pip install mbi (docs/python.md, Install)")
     wanted = [s for s in importlib.machinery.EXTENSION_SUFFIXES if s != ".so"][0]
     raise ImportError(f"mbi's compiled module {built[0]} was built for {built_for()}; this is {this_python()}, which "
-                      f"loads _mbi{wanted}: {fixes()}")
+                      f"loads _mbi{wanted}: run {built_python()}, or build mbi for this interpreter "
+                      f"({sys.executable} -m pip install --no-build-isolation --no-index <mbi source>/python, in a "
+                      f"virtual environment; docs/python.md, Install)")
 
 
 def require_numpy() -> None:
@@ -50,5 +49,7 @@ def require_numpy() -> None:
         import numpy  # noqa: F401
     except ImportError as e:
         raise ImportError(f"mbi needs numpy, which this interpreter, {this_python()}, cannot import ({e}); mbi was "
-                          f"built for {built_for()}: {fixes()}") from None
+                          f"built for {built_for()}: run that one, or a virtual environment made from it that sees "
+                          f"its numpy ({built_python()} -m venv --system-site-packages VENV; docs/python.md, "
+                          f"Install)") from None
 

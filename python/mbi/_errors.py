@@ -85,9 +85,12 @@ def explain(fn: Any, name: str, args: Tuple[Any, ...], kwargs: Dict[str, Any], m
         positional, given = positional[1:], given[1:]
     names = [p[0] for p in positional]
     if len(given) > len(positional):
-        rest = ", ".join(p[0] + "=" for p in keyword)
-        return (f"{name}() takes {len(positional)} positional argument{'s' if len(positional) != 1 else ''} "
-                f"({', '.join(names)}) but {len(given)} were given; name the others: {rest}")
+        takes = f"{name}() takes {len(positional)} positional argument{'s' if len(positional) != 1 else ''}"
+        given_text = f"{len(given)} {'was' if len(given) == 1 else 'were'} given"
+        if not keyword:
+            return f"{takes} ({', '.join(names)}) but {given_text}"
+        return f"{takes} ({', '.join(names)}) but {given_text}; name the others: " + \
+            ", ".join(p[0] + "=" for p in keyword)
     params = {p[0]: p for p in positional + keyword}
     for key in kwargs:
         if key not in params and not takes_kwargs:
