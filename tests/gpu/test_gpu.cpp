@@ -1,15 +1,20 @@
 // The GPU transform-feedback evaluator and renderer against the CPU evaluator (independent
 // kernel, double), on Mesa llvmpipe in CI: positions and normals, BI and modified-BI, 2D and 3D,
-// small meshes and 1M points, far from the origin, split into several draws; and pictures.
+// small meshes and 1M points, far from the origin, split into several draws; and pictures: the
+// shader programs and the surface draw with and without a colour per point.
 #include <catch2/catch.hpp>
 
 #include <mbi/generate/procedural.hpp>
+#include <mbi/gpu/program.hpp>
 #include <mbi/gpu/renderer.hpp>
+#include <mbi/gpu/surface.hpp>
 #include <mbi/interp.hpp>
 #include <mbi/pipeline/frame_pipeline.hpp>
 
 #include "common/grid_meshes.hpp"
 #include "common/sanitizers.hpp"
+
+#include <epoxy/gl.h>
 
 #include <cstdlib>
 #include <random>
@@ -79,6 +84,101 @@ Pair pipelines(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T, const Eigen::
 double max_abs(const Eigen::MatrixXd& A) { return A.size() ? A.cwiseAbs().maxCoeff() : 0.0; }
 
 double extent(const Eigen::MatrixXd& P) { return (P.colwise().maxCoeff() - P.colwise().minCoeff()).norm(); }
+
+// The paper bar twisted and bent, evaluated on the GPU with normals (modified-BI).
+struct TwistedBar {
+  Eigen::MatrixXd U, X;
+  Eigen::MatrixXi T, F;
+  gpu::GpuEvaluator* ev = nullptr;  // owned by pipe
+  std::unique_ptr<pl::FramePipeline> pipe;
+};
+
+TwistedBar twisted_bar() {
+  TwistedBar b;
+  Eigen::MatrixXd V;
+  generate::paper_bar_control(b.U, b.T);
+  generate::paper_bar_surface(V, b.F);
+  b.X = generate::twist_bend(b.U, 0, 0, 0, 6, std::acos(-1.0) / 2, 0.05);
+  // rest vertex normals (area weighted)
+  Eigen::MatrixXd N = Eigen::MatrixXd::Zero(V.rows(), 3);
+  for (Eigen::Index f = 0; f < b.F.rows(); ++f) {
+    const Eigen::Vector3d a = V.row(b.F(f, 0)), c1 = V.row(b.F(f, 1)), c2 = V.row(b.F(f, 2));
+    const Eigen::RowVector3d n = (c1 - a).cross(c2 - a).transpose();
+    for (int k = 0; k < 3; ++k) N.row(b.F(f, k)) += n;
+  }
+  N.rowwise().normalize();
+  pl::PipelineOptions o;
+  o.normals = true;
+  auto driver = std::make_unique<pl::GivenDriver>(b.U);
+  driver->set(b.X);
+  auto evaluator = std::make_unique<gpu::GpuEvaluator>(context());
+  b.ev = evaluator.get();
+  b.pipe = std::make_unique<pl::FramePipeline>(b.U, b.T, interp::embed(b.U, b.T, V), std::move(driver), o,
+                                               std::move(evaluator), N);
+  REQUIRE(b.pipe->step().ok);
+  return b;
+}
+
+raster::View bar_view(const TwistedBar& b) {
+  return raster::frame_points(b.X, Eigen::Vector3d(-1, -0.6, -0.8), Eigen::Vector3d(0, 1, 0));
+}
+
+// A width x height colour + depth framebuffer, bound while it lives.
+struct Target {
+  GLuint fbo = 0, rb[2] = {};
+  Target(int width, int height) {
+    glGenFramebuffers(1, &fbo);
+    glGenRenderbuffers(2, rb);
+    glBindRenderbuffer(GL_RENDERBUFFER, rb[0]);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, width, height);
+    glBindRenderbuffer(GL_RENDERBUFFER, rb[1]);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, width, height);
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, rb[0]);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, rb[1]);
+    glViewport(0, 0, width, height);
+  }
+  ~Target() {
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glDeleteRenderbuffers(2, rb);
+    glDeleteFramebuffers(1, &fbo);
+  }
+};
+
+// The bar drawn with gpu::shaders::mesh through a gpu::Surface: the uniform `color`, or a colour
+// per point where `colors` is given (the program then built with VERTEX_COLOR).
+io::Image draw_bar(TwistedBar& b, int w, int h, const Eigen::Vector3f& color, const std::vector<float>* colors) {
+  const Target target(w, h);
+  glClearColor(1, 1, 1, 1);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glEnable(GL_DEPTH_TEST);
+  const GLuint p = gpu::program("test mesh", gpu::shaders::mesh, colors ? "#define VERTEX_COLOR\n" : "");
+  const raster::View view = bar_view(b);
+  const Eigen::Matrix4f vp = gpu::relative_to(gpu::Renderer::view_matrix(view, w, h), b.ev->origin());
+  const Eigen::Vector3f eye = view.direction.normalized().cast<float>();
+  glUseProgram(p);
+  glUniformMatrix4fv(glGetUniformLocation(p, "view_projection"), 1, GL_FALSE, vp.data());
+  glUniform3f(glGetUniformLocation(p, "eye_direction"), eye.x(), eye.y(), eye.z());
+  glUniform3f(glGetUniformLocation(p, "color"), color.x(), color.y(), color.z());
+  gpu::Surface surface;
+  surface.set_faces(b.F);
+  surface.draw(*b.ev, {.colors = colors, .offset = 1.0f});  // as the Renderer
+  glUseProgram(0);
+  glDeleteProgram(p);
+  glDisable(GL_DEPTH_TEST);
+  REQUIRE(glGetError() == GL_NO_ERROR);
+  return gpu::read_picture(w, h);
+}
+
+long long covered(const io::Image& img) {
+  long long n = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const auto* px = img.at(x, y);
+      n += !(px[0] == 255 && px[1] == 255 && px[2] == 255);
+    }
+  return n;
+}
 
 }  // namespace
 
@@ -179,36 +279,17 @@ TEST_CASE("gpu: no context when disabled, the reason is said", "[gpu]") {
 }
 
 TEST_CASE("gpu: the offscreen render of the twisted bar is framed and BI differs from modified-BI", "[gpu][render]") {
-  Eigen::MatrixXd U, V;
-  Eigen::MatrixXi T, F;
-  generate::paper_bar_control(U, T);
-  generate::paper_bar_surface(V, F);
-  const Eigen::MatrixXd X = generate::twist_bend(U, 0, 0, 0, 6, std::acos(-1.0) / 2, 0.05);
-  // rest vertex normals (area weighted)
-  Eigen::MatrixXd N = Eigen::MatrixXd::Zero(V.rows(), 3);
-  for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    const Eigen::Vector3d a = V.row(F(f, 0)), b = V.row(F(f, 1)), c = V.row(F(f, 2));
-    const Eigen::RowVector3d n = (b - a).cross(c - a).transpose();
-    for (int k = 0; k < 3; ++k) N.row(F(f, k)) += n;
-  }
-  N.rowwise().normalize();
-  pl::PipelineOptions o;
-  o.normals = true;
-  auto driver = std::make_unique<pl::GivenDriver>(U);
-  driver->set(X);
-  auto evaluator = std::make_unique<gpu::GpuEvaluator>(context());
-  gpu::GpuEvaluator& ev = *evaluator;
-  pl::FramePipeline pipe(U, T, interp::embed(U, T, V), std::move(driver), o, std::move(evaluator), N);
-  REQUIRE(pipe.step().ok);
+  TwistedBar b = twisted_bar();
+  gpu::GpuEvaluator& ev = *b.ev;
   gpu::Renderer r(context());
-  r.set_faces(F);
-  raster::View view = raster::frame_points(X, Eigen::Vector3d(-1, -0.6, -0.8), Eigen::Vector3d(0, 1, 0));
+  r.set_faces(b.F);
+  const raster::View view = bar_view(b);
   const int w = 320, h = 240;
   const io::Image mbi_img = r.render(ev, view, w, h);
-  pipe.set_method(pl::Method::BI);
-  pipe.evaluate();
-  const io::Image bi_img = r.render(ev, view, w, h, {0.85, 0.62, 0.35}, &X, &T);
-  pipe.set_method(pl::Method::ModifiedBI);
+  b.pipe->set_method(pl::Method::BI);
+  b.pipe->evaluate();
+  const io::Image bi_img = r.render(ev, view, w, h, {0.85, 0.62, 0.35}, &b.X, &b.T);
+  b.pipe->set_method(pl::Method::ModifiedBI);
   for (const io::Image* img : {&mbi_img, &bi_img}) {
     long long covered = 0, border = 0;
     for (int y = 0; y < h; ++y)
@@ -229,4 +310,71 @@ TEST_CASE("gpu: the offscreen render of the twisted bar is framed and BI differs
   long long differ = 0;
   for (size_t i = 0; i < mbi_img.rgb.size(); ++i) differ += mbi_img.rgb[i] != bi_img.rgb[i];
   CHECK(differ > 1000);  // BI's creases (and the wireframe) show
+}
+
+TEST_CASE("gpu: every shipped shader program links, a broken one is an error naming it with the driver's log", "[gpu]") {
+  context();
+  for (const gpu::ShaderSource* s : {&gpu::shaders::mesh, &gpu::shaders::texture, &gpu::shaders::line,
+                                     &gpu::shaders::material, &gpu::shaders::ground}) {
+    const unsigned p = gpu::program("shipped", *s);
+    CHECK(p != 0);
+    glDeleteProgram(p);
+  }
+  const unsigned colored = gpu::program("shipped", gpu::shaders::mesh, "#define VERTEX_COLOR\n");
+  CHECK(glGetAttribLocation(colored, "color") == 3);
+  glDeleteProgram(colored);
+  const char* fragment = "out vec4 frag;\nvoid main() { frag = vec4(1.0); }\n";
+  const gpu::ShaderSource no_compile{"void main() { gl_Position = undeclared; }\n", fragment};
+  CHECK_THROWS_WITH(gpu::program("broken", no_compile),
+                    Catch::StartsWith("OpenGL: broken: shader does not compile: ") && Catch::Contains("undeclared"));
+  const gpu::ShaderSource no_link{"void f();\nvoid main() { f(); gl_Position = vec4(0.0); }\n", fragment};
+  CHECK_THROWS_WITH(gpu::program("unlinked", no_link), Catch::StartsWith("OpenGL: unlinked: program does not link: "));
+  CHECK_THROWS_WITH(gpu::program("empty", {}), "OpenGL: empty: no vertex shader");
+  CHECK(glGetError() == GL_NO_ERROR);
+}
+
+TEST_CASE("gpu: the surface drawn with a colour per point equal to the uniform colour is the same picture, "
+          "per-point colours show", "[gpu][render]") {
+  TwistedBar b = twisted_bar();
+  const int w = 200, h = 150;
+  const Eigen::Vector3f tint(0.85f, 0.62f, 0.35f);
+  const io::Image uniform = draw_bar(b, w, h, tint, nullptr);
+  std::vector<float> rgb;
+  for (long long i = 0; i < b.ev->points(); ++i) rgb.insert(rgb.end(), {tint.x(), tint.y(), tint.z()});
+  const io::Image per_point = draw_bar(b, w, h, {0, 0, 0}, &rgb);
+  CHECK(covered(uniform) > w * h / 10);
+  CHECK(per_point.rgb == uniform.rgb);
+  // pure red everywhere: every covered pixel red only, as many as before
+  for (size_t i = 0; i < rgb.size(); ++i) rgb[i] = i % 3 == 0 ? 1.0f : 0.0f;
+  const io::Image red = draw_bar(b, w, h, tint, &rgb);
+  CHECK(covered(red) == covered(uniform));
+  long long not_red = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const auto* px = red.at(x, y);
+      const bool bg = px[0] == 255 && px[1] == 255 && px[2] == 255;
+      not_red += !bg && (px[1] != 0 || px[2] != 0 || px[0] == 0);
+    }
+  CHECK(not_red == 0);
+  // the renderer's picture is the same surface draw under the same shader
+  gpu::Renderer r(context());
+  r.set_faces(b.F);
+  CHECK(r.render(*b.ev, bar_view(b), w, h, tint.cast<double>()).rgb == uniform.rgb);
+}
+
+TEST_CASE("gpu: the surface refuses faces of another shape, negative indices, colours not 3 a point and "
+          "normals a pass did not make", "[gpu]") {
+  TwistedBar b = twisted_bar();
+  gpu::Surface surface;
+  CHECK_THROWS_WITH(surface.set_faces(Eigen::MatrixXi::Zero(2, 4)), "Surface: faces must be t x 3, not t x 4");
+  Eigen::MatrixXi F = b.F;
+  F(3, 1) = -1;
+  CHECK_THROWS_WITH(surface.set_faces(F), "Surface: negative index in face 3");
+  surface.set_faces(b.F);
+  const std::vector<float> short_rgb(3 * static_cast<size_t>(b.ev->points()) - 1, 0.5f);
+  CHECK_THROWS_WITH(surface.draw(*b.ev, {.colors = &short_rgb}),
+                    Catch::StartsWith("Surface: " + std::to_string(short_rgb.size()) + " colour values for "));
+  b.ev->evaluate(b.pipe->bezier_with(pl::Method::ModifiedBI), false);  // a pass without normals
+  CHECK_THROWS_WITH(surface.draw(*b.ev), "Surface: normals asked of a pass without them");
+  CHECK(glGetError() == GL_NO_ERROR);
 }

@@ -80,18 +80,8 @@ void draw_views(gpu::Renderer& renderer, Stage& stage, const Interaction& in, co
 }
 
 io::Image read_framebuffer(int width, int height) {
-  std::vector<std::uint8_t> rgba(static_cast<size_t>(width) * height * 4);
-  glPixelStorei(GL_PACK_ALIGNMENT, 1);
   glReadBuffer(GL_BACK);
-  glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
-  io::Image img(width, height);
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x) {
-      const std::uint8_t* s = rgba.data() + (static_cast<size_t>(height - 1 - y) * width + x) * 4;
-      std::uint8_t* d = img.at(x, y);
-      d[0] = s[0], d[1] = s[1], d[2] = s[2];
-    }
-  return img;
+  return gpu::read_picture(width, height);
 }
 
 }  // namespace mbi::viewer

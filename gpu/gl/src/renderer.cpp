@@ -205,12 +205,16 @@ io::Image Renderer::render(const GpuEvaluator& ev, const raster::View& view, int
   glClearColor(1, 1, 1, 1);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   draw(ev, ortho_view(view, width, height), view.direction, color, wire_X, wire_T);
+  io::Image img = read_picture(width, height);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  detail::check("Renderer::render");
+  return img;
+}
 
+io::Image read_picture(int width, int height) {
   std::vector<std::uint8_t> rgba(static_cast<size_t>(width) * height * 4);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
-  detail::check("Renderer::render");
   io::Image img(width, height);
   for (int y = 0; y < height; ++y)  // GL rows start at the bottom
     for (int x = 0; x < width; ++x) {

@@ -64,4 +64,8 @@ class Renderer {
   long long edges_of_ = -1;                 // element count they were built from
 };
 
+/// The picture of the bound read framebuffer's read buffer, width x height pixels from the
+/// lower left corner, as RGB with the top row first.
+io::Image read_picture(int width, int height);
+
 }  // namespace mbi::gpu
