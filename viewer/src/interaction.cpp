@@ -40,7 +40,7 @@ void Interaction::move(double x, double y, const WindowSize& window) {
   if (drag_ == Drag::Pan) camera_.pan(dx, dy, window.height);
   if (drag_ == Drag::Poke && poke_.handle >= 0 && stage_.simulation()) {
     poke_.target =
-        poke_target(ray_at(x, y, view_of_drag_, window), poke_.plane, camera_.direction(), 0.5 * stage_.size);
+        poke_target(ray_at(x, y, view_of_drag_, window), poke_.point, camera_.direction(), 0.5 * stage_.size);
     stage_.simulation()->simulator().set_poke_target(poke_.handle, poke_.target);
   }
   if (drag_ == Drag::Handle && dragged_handle_ >= 0 && dragged_handle_ < static_cast<int>(handles_.size())) {
@@ -144,13 +144,10 @@ bool Interaction::start_poke(double x, double y, int view, const WindowSize& win
   const std::optional<Hit> hit = cast(ray, V, stage_.F);
   if (!hit) return false;
   sim::Simulator& sim = stage_.simulation()->simulator();
-  const interact::Grab g =
-      interact::grab(*hit, stage_.rest_dense, stage_.F, stage_.U, stage_.T, sim.masses(), opt_.poke_response);
   Poke p;
-  p.element = g.element;
-  p.bary = g.bary;
-  p.stiffness = g.stiffness;
-  p.plane = p.target = g.point;
+  static_cast<interact::Grab&>(p) =
+      interact::grab(*hit, stage_.rest_dense, stage_.F, stage_.U, stage_.T, sim.masses(), opt_.poke_response);
+  p.target = p.point;
   release_poke();
   p.handle = sim.add_poke(p.element, p.bary, p.target, p.stiffness);
   poke_ = p;

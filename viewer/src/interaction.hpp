@@ -10,15 +10,11 @@
 
 namespace mbi::viewer {
 
-/// A poke spring on the simulation: a material point (element + barycentric coordinates)
-/// pulled toward `target`.
-struct Poke {
+/// A poke spring on the simulation: the grabbed material point (element, barycentric
+/// coordinates, stiffness; the drag plane passes through `point`) pulled toward `target`.
+struct Poke : interact::Grab {
   int handle = -1;   ///< the simulator's handle; -1: no poke
-  int element = -1;
-  Eigen::Vector4d bary = Eigen::Vector4d::Zero();
-  Eigen::Vector3d plane = Eigen::Vector3d::Zero();   ///< the grabbed point: the drag plane passes here
   Eigen::Vector3d target = Eigen::Vector3d::Zero();
-  double stiffness = 0;  ///< N/m
 };
 
 class Interaction {
