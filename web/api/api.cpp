@@ -6,6 +6,7 @@
 #include <mbi/interp/modified_bi.hpp>
 #include <mbi/io/obj_text.hpp>
 #include <mbi/web/page_model.hpp>
+#include <mbi/web/scene_files.hpp>
 
 #include <algorithm>
 #include <exception>
@@ -24,6 +25,8 @@ std::optional<PageModel> g_model;
 std::string g_error;
 double g_times[5] = {0, 0, 0, 0, 0};
 double g_table[5] = {0, 0, 0, 0, 0};
+double g_up[3] = {0, 1, 0};
+std::string g_text;  // the last string returned (mbi_scene_name, mbi_scene_problem)
 Eigen::Matrix<int, Eigen::Dynamic, 3, Eigen::RowMajor> g_triangles;
 
 // Runs f; on an exception keeps its message and returns `failed`.
@@ -49,28 +52,62 @@ int loaded(PageModel model) {
 
 View view_of(int view) { return view == 0 ? View::BI : View::ModifiedBI; }
 
+const mbi::web::SceneFile& scene_file(int scene) {
+  const auto files = mbi::web::scene_files();
+  if (scene < 0 || static_cast<std::size_t>(scene) >= files.size())
+    throw std::out_of_range("no scene " + std::to_string(scene) + " (there are " + std::to_string(files.size()) + ")");
+  return files[static_cast<std::size_t>(scene)];
+}
+
+// A scene file's problem on the page: page_problem(), or why it does not parse.
+std::string problem_of(int scene) {
+  try {
+    return mbi::web::page_problem(mbi::web::parse(scene_file(scene)));
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+}
+
 }  // namespace
 
 extern "C" {
 
-int mbi_load_builtin(int scene) {
+int mbi_scene_count(void) { return static_cast<int>(mbi::web::scene_files().size()); }
+
+const char* mbi_scene_name(int scene) {
+  g_text = scene >= 0 && scene < mbi_scene_count() ? std::string(scene_file(scene).name) : "";
+  return g_text.c_str();
+}
+
+const char* mbi_scene_problem(int scene) {
+  g_text = problem_of(scene);
+  return g_text.c_str();
+}
+
+int mbi_load_scene(int scene) {
   g_error.clear();
   try {
-    using mbi::web::SceneKind;
-    return loaded(PageModel::builtin(scene == 2 ? SceneKind::DenseSphere
-                                     : scene == 1 ? SceneKind::Poke : SceneKind::TwistBar));
+    const mbi::scenes::Scene s = mbi::web::parse(scene_file(scene));
+    loaded(PageModel::scene(s));
+    std::copy(s.output.up.data(), s.output.up.data() + 3, g_up);
+    return 1;
   } catch (const std::exception& e) {
     g_error = e.what();
   }
   return 0;
 }
 
+const double* mbi_up(void) { return g_up; }
+
 int mbi_load_obj(const char* text, int bytes, int control_vertices) {
   g_error.clear();
   try {
     const mbi::io::SurfaceMesh m =
         mbi::io::parse_obj_text(std::string_view(text, static_cast<std::size_t>(bytes)), "model.obj");
-    return loaded(PageModel::surface(m.V, m.F, control_vertices));
+    loaded(PageModel::surface(m.V, m.F, control_vertices));
+    g_up[0] = g_up[2] = 0;
+    g_up[1] = 1;
+    return 1;
   } catch (const std::exception& e) {
     g_error = e.what();
   }

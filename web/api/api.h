@@ -7,9 +7,17 @@
 extern "C" {
 #endif
 
-/// Loads a built-in scene (0: the twisting bar, 1: the poke cylinder, 2: a dense sphere of
-/// 252,152 points) at frame 0; 1 on success.
-int mbi_load_builtin(int scene);
+/// The scene files the page offers: scenes/*.toml, embedded at build time, by name
+/// (mbi/web/scene_files.hpp); scenes are numbered 0 .. mbi_scene_count() - 1.
+int mbi_scene_count(void);
+/// A scene file's name, its stem (e.g. "twist-bar"); "" out of range.
+const char* mbi_scene_name(int scene);
+/// Why the page cannot run a scene file, "" when it can.
+const char* mbi_scene_problem(int scene);
+/// Loads a scene file at frame 0; 1 on success.
+int mbi_load_scene(int scene);
+/// The loaded scene's up direction (x, y, z: its output.up; y for an OBJ).
+const double* mbi_up(void);
 /// Loads an OBJ model from its text (`bytes` long) in a generated voxel cage of about
 /// `control_vertices` vertices; 1 on success.
 int mbi_load_obj(const char* text, int bytes, int control_vertices);

@@ -3,8 +3,8 @@
 //   mbi-web-twin replay <journal> <out.bin>   replays the page's calls (one a line: the
 //       function's name without mbi_, then its numbers), then writes both views' positions
 //       (float32, BI then modified-BI) and prints the discontinuity table's means
-//   mbi-web-twin frames <scene> <n>           n frames of a built-in scene (0 bar, 1 poke): mean ms
-//                                             per phase
+//   mbi-web-twin frames <scene> <n>           n frames of a scene file (its name, e.g. twist-bar):
+//                                             mean ms per phase
 //   mbi-web-twin solve <n>                    ms per modified-BI solve at 448 control vertices
 #include "api.h"
 
@@ -26,7 +26,7 @@ bool call(const std::string& line) {
   a.resize(7, 0.0);
   const auto i = [&](int k) { return static_cast<int>(a[static_cast<std::size_t>(k)]); };
   bool ok = true;
-  if (f == "load_builtin") ok = mbi_load_builtin(i(0)) == 1;
+  if (f == "load_scene") ok = mbi_load_scene(i(0)) == 1;
   else if (f == "step") ok = mbi_step() >= 0;
   else if (f == "reset") ok = mbi_reset() == 1;
   else if (f == "set_method") ok = mbi_set_method(i(0)) == 1;
@@ -62,8 +62,10 @@ int replay(const char* journal, const char* out) {
   return 0;
 }
 
-int frames(int scene, int n) {
-  if (mbi_load_builtin(scene) != 1) return std::fprintf(stderr, "mbi-web-twin: %s\n", mbi_error()), 1;
+int frames(const std::string& name, int n) {
+  int scene = 0;
+  while (scene < mbi_scene_count() && name != mbi_scene_name(scene)) ++scene;
+  if (mbi_load_scene(scene) != 1) return std::fprintf(stderr, "mbi-web-twin: %s: %s\n", name.c_str(), mbi_error()), 1;
   double sum[5] = {0, 0, 0, 0, 0};
   for (int k = 0; k < n; ++k) {
     if (mbi_step() < 0) return std::fprintf(stderr, "mbi-web-twin: %s\n", mbi_error()), 1;
@@ -81,7 +83,7 @@ int frames(int scene, int n) {
 int main(int argc, char** argv) {
   const std::string what = argc > 1 ? argv[1] : "";
   if (what == "replay" && argc == 4) return replay(argv[2], argv[3]);
-  if (what == "frames" && argc == 4) return frames(std::stoi(argv[2]), std::stoi(argv[3]));
+  if (what == "frames" && argc == 4) return frames(argv[2], std::stoi(argv[3]));
   if (what == "solve" && argc == 3) {
     std::printf("modified-BI solve at 448 control vertices: %.4f ms\n", mbi_bench_solve(std::stoi(argv[2])));
     return 0;

@@ -20,13 +20,23 @@ const call = (name, ret, n) => {
   return (...a) => { journal.push([name, ...a].join(' ')); return f(...a); };
 };
 const api = {
-  loadBuiltin: call('load_builtin', 'number', 1), step: call('step', 'number', 0),
+  loadScene: call('load_scene', 'number', 1), step: call('step', 'number', 0),
   reset: call('reset', 'number', 0), setMethod: call('set_method', 'number', 1),
   setAlpha: call('set_alpha', 'number', 1), grab: call('grab', 'number', 7),
   move: call('move', null, 6), release: call('release', null, 0),
   setCpuEvaluation: call('set_cpu_evaluation', 'number', 1),
   alpha: M.cwrap('mbi_alpha', 'number', []), error: M.cwrap('mbi_error', 'string', []), description: M.cwrap('mbi_description', 'string', []),
+  sceneName: M.cwrap('mbi_scene_name', 'string', ['number']), sceneProblem: M.cwrap('mbi_scene_problem', 'string', ['number']),
 };
+
+// The scene list: the scene files of scenes/ built into the module; those the page cannot run
+// are shown, greyed, with the reason.
+const scenes = Array.from({ length: M._mbi_scene_count() }, (_, k) => ({ name: api.sceneName(k), problem: api.sceneProblem(k) }));
+scenes.forEach((s, k) => {
+  const option = new Option(s.problem ? `${s.name} (not here: ${s.problem})` : s.name, String(k));
+  option.disabled = s.problem !== '';
+  $('scene').add(option);
+});
 const TINTS = [[0.85, 0.55, 0.35], [0.35, 0.6, 0.85]];
 
 // Drawing: WebGL2 unless missing (or ?draw=2d asks for the fallback).
@@ -91,8 +101,10 @@ function triangles() {
   return new Int32Array(M.HEAP32.buffer, M._mbi_triangles(), 3 * M._mbi_triangle_count());
 }
 
-// After a load: both views get the triangles; the camera frames the model.
-function loaded(up) {
+// After a load: both views get the triangles; the camera frames the model, its up direction
+// the scene's.
+function loaded() {
+  const up = Array.from(new Float64Array(M.HEAPF64.buffer, M._mbi_up(), 3));
   const t = triangles();
   views.forEach((v) => v.setTriangles(t));
   if (gpuAvailable) {
@@ -120,9 +132,10 @@ function restart() {
   frameChanged();
 }
 
-function loadBuiltin(scene) {
-  if (!api.loadBuiltin(scene)) return show(api.error());
-  loaded(scene === 0 ? [0, 0, 1] : [0, 1, 0]);
+function loadScene(scene) {
+  if (!api.loadScene(scene)) return show(api.error());
+  $('scene').value = String(scene);
+  loaded();
 }
 
 function loadObj(text) {
@@ -133,7 +146,7 @@ function loadObj(text) {
   M._free(ptr);
   journal.push('load_obj');
   if (!ok) return show('could not load the OBJ: ' + api.error());
-  loaded([0, 1, 0]);
+  loaded();
 }
 
 function step() {
@@ -236,7 +249,7 @@ $('step').onclick = () => { setPlaying(false); step(); };
 $('reset').onclick = () => { api.reset(); restart(); };
 $('evaluator').onchange = (e) => setEvaluator(e.target.value === 'gpu');
 $('creases').onchange = (e) => { state.creases = e.target.checked; frameChanged(); };
-$('scene').onchange = (e) => loadBuiltin(Number(e.target.value));
+$('scene').onchange = (e) => loadScene(Number(e.target.value));
 $('method').onchange = (e) => { if (!api.setMethod(Number(e.target.value))) show(api.error()); };
 $('alpha').onchange = (e) => { if (!api.setAlpha(Number(e.target.value))) show(api.error()); else show(''); };
 document.addEventListener('keydown', (e) => {
@@ -303,7 +316,7 @@ function benchEvaluators(repeats) {
 }
 
 window.mbiPage = {
-  drawPath, journal, state, api, gpuAvailable, gpuProblem, compareEvaluators, benchEvaluators,
+  drawPath, journal, state, api, scenes, gpuAvailable, gpuProblem, compareEvaluators, benchEvaluators,
   evaluator: () => (state.gpu ? 'gpu' : 'cpu'),
   setEvaluator: (name) => setEvaluator(name === 'gpu'),
   setCreases: (on) => { $('creases').checked = on; state.creases = on; frameChanged(); },
@@ -345,6 +358,8 @@ setPlaying(state.playing);
 $('evaluator').querySelector('[value=gpu]').disabled = !gpuAvailable;
 state.gpu = gpuAvailable && params.get('eval') !== 'cpu';
 $('evaluator').value = state.gpu ? 'gpu' : 'cpu';
-loadBuiltin(Number(params.get('scene') || 0));
-$('scene').value = params.get('scene') || '0';
+// ?scene=<name> picks the scene (else the twisting bar, else the first the page runs)
+const named = (name) => scenes.findIndex((s) => s.name === name && !s.problem);
+const first = [params.get('scene'), 'twist-bar'].map(named).find((k) => k >= 0);
+loadScene(first ?? scenes.findIndex((s) => !s.problem));
 requestAnimationFrame(loop);

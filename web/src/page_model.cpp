@@ -36,16 +36,11 @@ PageModel::~PageModel() = default;
 PageModel::PageModel(PageModel&&) noexcept = default;
 PageModel& PageModel::operator=(PageModel&&) noexcept = default;
 
-PageModel::PageModel(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T, Surface dense, sim::Simulator simulator,
-                     std::optional<double> alpha, std::string description)
+PageModel::PageModel(Surface dense, pipeline::FramePipeline pipe, std::string description)
     : rest_(std::move(dense)), description_(std::move(description)) {
-  auto driver = std::make_unique<pipeline::SimulatorDriver>(std::move(simulator));
-  sim_ = driver.get();
-  pipeline::PipelineOptions po;
-  po.method = pipeline::Method::ModifiedBI;
-  if (alpha) po.interp.alpha = *alpha;
-  pipe_ = std::make_unique<pipeline::FramePipeline>(U, T, interp::embed(U, T, rest_.V),
-                                                    std::move(driver), po);
+  pipe_ = std::make_unique<pipeline::FramePipeline>(std::move(pipe));
+  sim_ = dynamic_cast<pipeline::SimulatorDriver*>(&pipe_->driver());
+  if (!sim_) throw mbi::Error("the page runs simulated scenes only (its pokes pull on the simulation)");
   size_ = (rest_.V.colwise().maxCoeff() - rest_.V.colwise().minCoeff()).norm();
   const interp::Embedding& emb = pipe_->embedding();
   gpu_.elements.assign(emb.element.data(), emb.element.data() + emb.element.size());
@@ -54,7 +49,7 @@ PageModel::PageModel(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T, Surface
     for (Eigen::Index k = 0; k < emb.bary.cols(); ++k)
       gpu_.bary[static_cast<std::size_t>(4 * i + k)] = static_cast<float>(emb.bary(i, k));
   gpu_.rest = floats(rest_.V);
-  gpu_.rest_bezier = interp::bezier_bi(U, T);
+  gpu_.rest_bezier = interp::bezier_bi(pipe_->rest_positions(), pipe_->elements());
   step();
 }
 

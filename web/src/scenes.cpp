@@ -1,88 +1,61 @@
-// The page's scenes: the settings of scenes/twist-bar.toml and scenes/poke.toml (poke's also for a
-// dense generated sphere), built from mbi::generate's shapes and its voxel mesher (the page reads
-// no scene file).
+// The page's scenes (scene_files.hpp): a scene file's models and simulation as `mbi run` builds
+// them (mbi::scene_format), and a user's surface as `mbi view MODEL` runs it.
 #include <mbi/web/page_model.hpp>
+#include <mbi/web/scene_files.hpp>
 
-#include <mbi/generate/cage.hpp>
-#include <mbi/generate/procedural.hpp>
+#include <mbi/interp/embed.hpp>
+#include <mbi/scenes/model_scene.hpp>
+#include <mbi/scenes/models.hpp>
 
 #include <string>
+#include <utility>
 
 namespace mbi::web {
 namespace {
 
-// Nodes whose coordinate c lies in [lo, hi] of the bounding box (fractions; as a scene's
-// select.box_relative does).
-std::vector<int> nodes_between(const Eigen::MatrixXd& U, int c, double lo, double hi) {
-  const double a = U.col(c).minCoeff(), ext = U.col(c).maxCoeff() - a, tol = 1e-9 * (1 + ext);
-  std::vector<int> nodes;
-  for (Eigen::Index i = 0; i < U.rows(); ++i)
-    if (U(i, c) >= a + lo * ext - tol && U(i, c) <= a + hi * ext + tol) nodes.push_back(static_cast<int>(i));
-  return nodes;
-}
-
-// poke.toml's time stepping and material: soft, damped, no gravity.
-sim::Simulator poke_simulator(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T) {
-  sim::Parameters p;
-  p.dt = 0.0333333333;
-  p.substeps = 2;
-  p.gravity.setZero();
-  p.mass_damping = 1.0;
-  p.stiffness_damping = 0.02;
-  sim::Simulator s(U, T, {.youngs_modulus = 1e4, .poisson_ratio = 0.4, .density = 1000}, p);
-  s.fix(nodes_between(U, 1, 0.0, 0.1));  // the bottom tenth in y
-  return s;
-}
-
-std::string counts(const Eigen::MatrixXd& V, const Eigen::MatrixXd& U) {
-  return std::to_string(V.rows()) + " dense vertices, " + std::to_string(U.rows()) + " control vertices";
+std::string counts(const scenes::SceneModels& m) {
+  return std::to_string(m.dense.V.rows()) + " dense vertices, " + std::to_string(m.U.rows()) + " control vertices";
 }
 
 }  // namespace
 
-PageModel PageModel::builtin(SceneKind kind) {
-  Surface dense;
-  Eigen::MatrixXd U;
-  Eigen::MatrixXi T;
-  if (kind == SceneKind::DenseSphere) {  // 252,152 points: the evaluators side by side
-    generate::bumpy_sphere(1.0, 205, 0.05, dense.V, dense.F);
-    generate::CageResult cage = generate::make_cage(dense.V, dense.F, {.target_vertices = 150});
-    sim::Simulator s = poke_simulator(cage.U, cage.T);
-    std::string what = "dense sphere: " + counts(dense.V, cage.U);
-    return PageModel(cage.U, cage.T, std::move(dense), std::move(s), std::nullopt, std::move(what));
-  }
-  if (kind == SceneKind::Poke) {
-    generate::cylinder_surface(0.5, 4.0, 96, 192, 12, dense.V, dense.F);
-    generate::CageResult cage = generate::make_cage(dense.V, dense.F, {.target_vertices = 150});
-    sim::Simulator s = poke_simulator(cage.U, cage.T);
-    std::string what = "poke: the built-in cylinder, " + counts(dense.V, cage.U);
-    return PageModel(cage.U, cage.T, std::move(dense), std::move(s), std::nullopt, std::move(what));
-  }
-  // twist-bar.toml: one end held, the other twisted by 90 degrees over 3 s, then held
-  generate::paper_bar_control(U, T);
-  generate::paper_bar_surface(dense.V, dense.F);
-  sim::Parameters p;
-  p.dt = 0.0333333333;
-  p.substeps = 2;
-  p.gravity.setZero();
-  p.stiffness_damping = 0.01;
-  sim::Simulator s(U, T, {.youngs_modulus = 1e6, .poisson_ratio = 0.45, .density = 1000}, p);
-  s.fix(nodes_between(U, 2, 0.0, 0.0));
-  s.add_kinematic(nodes_between(U, 2, 1.0, 1.0), {.center = Eigen::Vector3d(0, 0, 6),
-                                                 .axis = Eigen::Vector3d::UnitZ(),
-                                                 .angular_velocity = 0.5235987756,
-                                                 .stop = 3.0});
-  std::string what = "twisting bar: the paper's bar, " + counts(dense.V, U);
-  return PageModel(U, T, std::move(dense), std::move(s), std::nullopt, std::move(what));
+scenes::Scene parse(const SceneFile& file) {
+  return scenes::parse_scene(file.text, "scenes/" + std::string(file.name) + ".toml");
+}
+
+std::string page_problem(const scenes::Scene& s) {
+  if (!s.dense.path.empty() || !s.more_dense.empty() || !s.dense.image.empty() || !s.control.path.empty())
+    return "it reads model files, and the page has no file system";
+  if (s.dense.builtin == scenes::DenseBuiltin::ImageGrid || s.control.builtin == scenes::ControlBuiltin::Grid2D)
+    return "it is 2D (a picture warped in its plane), and the page draws surfaces in 3D";
+  if (s.mode != scenes::Mode::Simulate)
+    return "its handles are dragged by keyframes, and the page's pokes pull on a simulation";
+  return "";
+}
+
+PageModel PageModel::scene(const scenes::Scene& scene) {
+  if (const std::string why = page_problem(scene); !why.empty())
+    throw scenes::Error(scene.file.string() + ": the page cannot run this scene: " + why);
+  scenes::Scene s = scene;
+  if (s.interpolation.method != pipeline::Method::BI) s.interpolation.method = pipeline::Method::ModifiedBI;
+  scenes::SceneModels m = scenes::load_models(s);
+  pipeline::FramePipeline pipe = scenes::make_pipeline(s, m, interp::embed(m.U, m.T, m.dense.V));
+  std::string what = s.name + ": " + m.dense_name + ", " + counts(m);
+  return PageModel(Surface{std::move(m.dense.V), std::move(m.dense.F)}, std::move(pipe), std::move(what));
 }
 
 PageModel PageModel::surface(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, int control_vertices) {
+  scenes::Scene s = scenes::surface_scene("model.obj");
+  s.control.generate_vertices = control_vertices;
+  io::SurfaceMesh dense;
+  dense.V = V;
+  dense.F = F;
   // a flat model gets a 3D cage too: the simulator is 3D
-  generate::CageResult cage =
-      generate::make_cage(V, F, {.target_vertices = control_vertices, .force_3d = true});
-  sim::Simulator s = poke_simulator(cage.U, cage.T);
-  std::string what = "your model: " + counts(V, cage.U);
-  return PageModel(cage.U, cage.T, Surface{V, F}, std::move(s), std::nullopt, std::move(what));
+  scenes::SceneModels m = scenes::load_models(s, std::move(dense), "your model", true);
+  scenes::fit_to_model(s, m.dense.V);
+  pipeline::FramePipeline pipe = scenes::make_pipeline(s, m, interp::embed(m.U, m.T, m.dense.V));
+  std::string what = "your model: " + counts(m);
+  return PageModel(Surface{std::move(m.dense.V), std::move(m.dense.F)}, std::move(pipe), std::move(what));
 }
 
 }  // namespace mbi::web

@@ -1,17 +1,20 @@
 // The page in a real browser: headless Chromium (Debian's, driven by playwright-core) loads the
-// built page from a local http server, pokes the twisting bar with scripted mouse events and
-// checks that
+// built page from a local http server, pokes the twisting bar (scenes/twist-bar.toml) with
+// scripted mouse events and checks that
+//   - the page's scene list is scenes/*.toml, those it cannot run greyed with the reason (the
+//     scenes that drag handles by keyframes);
 //   - the picture changes where the poked bar moves;
 //   - BI creases and modified-BI does not (the largest change of a dihedral angle between
 //     neighbouring dense triangles, against the rest shape, is several times larger for BI), the
 //     page's discontinuity table says so, and the picture in crease colours shows it (BI's view
 //     hotter);
 //   - the page's positions equal the native build's for the same calls (the page's journal
-//     replayed by mbi-web-twin) to float round-off, its discontinuity table the native one's;
+//     replayed by mbi-web-twin) to float round-off, its discontinuity table the native one's: on
+//     the poked bar, and on every other scene the page runs after a few frames;
 //   - the other draw path draws too (the 2D canvas fallback when WebGL2 ran);
 //   - an OBJ file given to the page loads in a control mesh generated there, and runs;
 //   - with WebGL2: the GPU evaluator (transform feedback, read back) gives the CPU's positions
-//     to float round-off on the bar and on a generated sphere of 252,152 points, poked; the
+//     to float round-off on the bar and on scenes/large.toml's sphere of 252,152 points, poked; the
 //     switch to the CPU evaluator works.
 // It says which draw path and which evaluator ran (and when WebGL2 is missing). Usage:
 //   node browser.mjs --page <build/web/page> --twin <mbi-web-twin> [--out <dir>] [--bench]
@@ -20,9 +23,9 @@
 import { chromium } from 'playwright-core';
 import { execFileSync } from 'node:child_process';
 import { createServer } from 'node:http';
-import { mkdtempSync, readFileSync, writeFileSync, existsSync } from 'node:fs';
+import { mkdtempSync, readFileSync, readdirSync, writeFileSync, existsSync } from 'node:fs';
 import { tmpdir } from 'node:os';
-import { join, extname } from 'node:path';
+import { join, extname, basename } from 'node:path';
 import { fileURLToPath } from 'node:url';
 
 const arg = (name, fallback) => {
@@ -104,7 +107,8 @@ async function main() {
   const base = `http://127.0.0.1:${server.address().port}/index.html`;
   const browser = await chromium.launch({ executablePath: '/usr/bin/chromium', args: ['--no-sandbox'] });
   try {
-    const page = await open(browser, base + '?scene=0&play=0');
+    const page = await open(browser, base + '?scene=twist-bar&play=0');
+    const runs = await sceneList(page);
     const path = await page.evaluate(() => mbiPage.drawPath);
     const renderer = await page.evaluate(() => mbiPage.renderer);
     console.log(`draw path: ${path}${renderer ? ' (' + renderer + ')' : ''}`);
@@ -146,30 +150,7 @@ async function main() {
     check(moved > 0.005, `the poked bar moved: ${(100 * moved).toFixed(2)} % of the modified-BI view changed`);
     await page.screenshot({ path: join(out, 'web-page.png'), fullPage: true });
 
-    // the same calls in the native build
-    const journal = await page.evaluate(() => mbiPage.journal.join('\n') + '\n');
-    writeFileSync(join(out, 'journal.txt'), journal);
-    const said = execFileSync(twin, ['replay', join(out, 'journal.txt'), join(out, 'native.bin')],
-                              { encoding: 'utf8', stdio: ['ignore', 'pipe', 'inherit'] });
-    process.stdout.write(said);
-    const bytes = readFileSync(join(out, 'native.bin'));
-    const native = new Float32Array(bytes.buffer, bytes.byteOffset, bytes.length / 4);
-    const page0 = await page.evaluate(() => mbiPage.positions(0)), page1 = await page.evaluate(() => mbiPage.positions(1));
-    const n = page0.length;
-    let worst = 0, size = 0;
-    for (let i = 0; i < n; ++i) {
-      worst = Math.max(worst, Math.abs(page0[i] - native[i]), Math.abs(page1[i] - native[n + i]));
-      size = Math.max(size, Math.abs(native[i]));
-    }
-    check(native.length === 2 * n && worst <= 1e-5 * size,
-          `page vs native positions after ${journal.split('\n').length - 1} calls: largest difference ` +
-          `${worst.toExponential(2)} m (model size ${size.toFixed(1)} m; float round-off allowed: 1e-5 of it)`);
-    // the table too: wasm and native compute it in double from the same positions
-    const m = said.match(/table: BI mean (\S+) modified-BI mean (\S+)/), tp = await page.evaluate(() => mbiPage.table());
-    const close = (a, b) => Math.abs(a - b) <= 1e-9 * Math.abs(b);
-    check(m && tp && close(tp.bi, Number(m[1])) && close(tp.modifiedBi, Number(m[2])),
-          `page vs native discontinuity table: BI ${tp?.bi.toExponential(6)} vs ${m && Number(m[1]).toExponential(6)}, ` +
-          `modified-BI ${tp?.modifiedBi.toExponential(6)} vs ${m && Number(m[2]).toExponential(6)} (relative 1e-9)`);
+    await againstTwin(page, 'twist-bar');
     if (bench) await measure(page);
     if (gpu[0]) {
       await page.selectOption('#evaluator', 'cpu');
@@ -181,7 +162,7 @@ async function main() {
 
     // the other path: the 2D canvas fallback (when WebGL2 ran above)
     if (path === 'WebGL2') {
-      const flat = await open(browser, base + '?scene=0&play=0&draw=2d');
+      const flat = await open(browser, base + '?scene=twist-bar&play=0&draw=2d');
       const seen = await flat.evaluate(() => [mbiPage.drawPath, mbiPage.pixels(1), mbiPage.evaluator(), mbiPage.status()]);
       const drawn = seen[1].filter((g) => g < 200).length / seen[1].length;
       check(seen[0] === '2D canvas' && drawn > 0.02,
@@ -192,19 +173,75 @@ async function main() {
     }
 
     // a user's OBJ: read in the page, its control mesh generated there
-    const own = await open(browser, base + '?scene=1&play=0');
+    const own = await open(browser, base + '?scene=poke&play=0');
     await own.setInputFiles('#file', fileURLToPath(new URL('../../tests/data/vtu/sphere.obj', import.meta.url)));
     await own.waitForFunction(() => mbiPage.api.description().startsWith('your model'), null, { timeout: 30000 });
     for (let k = 0; k < 3; ++k) await own.keyboard.press('s');
     const loadedObj = await own.evaluate(() => [mbiPage.api.description(), mbiPage.state.frame]);
     check(loadedObj[1] === 3, `an OBJ given to the page runs: ${loadedObj[0]}, frame ${loadedObj[1]}`);
     await own.close();
+
+    // every other scene the page runs, a few frames on, against the native build
+    for (const name of runs.filter((s) => s !== 'twist-bar')) {
+      const p = await open(browser, `${base}?scene=${name}&play=0`);
+      const said = await p.evaluate(() => [mbiPage.api.description(), mbiPage.api.error()]);
+      check(said[0].startsWith(name + ':'), `the page loads scenes/${name}.toml: ${said[0] || said[1]}`);
+      for (let k = 0; k < 5; ++k) await p.keyboard.press('s');
+      await againstTwin(p, name);
+      await p.close();
+    }
   } finally {
     await browser.close();
     server.close();
   }
   console.log(failures ? `${failures} check(s) failed` : `all checks passed (draw path above; files in ${out})`);
   process.exit(failures ? 1 : 0);
+}
+
+// The page's scene list against scenes/*.toml: every file listed by its name; greyed with a
+// reason exactly for the scenes that drag handles by keyframes (the page pokes simulations).
+// The names of the scenes the page runs.
+async function sceneList(page) {
+  const folder = fileURLToPath(new URL('../../scenes/', import.meta.url));
+  const files = readdirSync(folder).filter((f) => f.endsWith('.toml')).sort();
+  const listed = await page.evaluate(() => mbiPage.scenes);
+  const options = await page.evaluate(() => Array.from(document.querySelectorAll('#scene option'), (o) => [o.text, o.disabled]));
+  check(listed.map((s) => s.name).join() === files.map((f) => basename(f, '.toml')).join(),
+        `the page lists the scene files of scenes/: ${listed.map((s) => s.name).join(', ')}`);
+  for (const [k, f] of files.entries()) {
+    const drags = /^mode\s*=\s*"drag"/m.test(readFileSync(join(folder, f), 'utf8'));
+    const s = listed[k] || { name: f, problem: '' };
+    check(drags === (s.problem !== '') && options[k]?.[1] === drags && (!drags || options[k][0].includes(s.problem)),
+          `scenes/${f}: ${drags ? 'greyed: ' + s.problem : 'the page runs it'}`);
+  }
+  return listed.filter((s) => !s.problem).map((s) => s.name);
+}
+
+// The page's journal replayed in the native build (mbi-web-twin): both views' positions equal
+// to float round-off, the discontinuity table to 1e-9 (both compute it in double).
+async function againstTwin(page, what) {
+  const journal = await page.evaluate(() => mbiPage.journal.join('\n') + '\n');
+  writeFileSync(join(out, `journal-${what}.txt`), journal);
+  const said = execFileSync(twin, ['replay', join(out, `journal-${what}.txt`), join(out, `native-${what}.bin`)],
+                            { encoding: 'utf8', stdio: ['ignore', 'pipe', 'inherit'] });
+  process.stdout.write(said);
+  const bytes = readFileSync(join(out, `native-${what}.bin`));
+  const native = new Float32Array(bytes.buffer, bytes.byteOffset, bytes.length / 4);
+  const page0 = await page.evaluate(() => mbiPage.positions(0)), page1 = await page.evaluate(() => mbiPage.positions(1));
+  const n = page0.length;
+  let worst = 0, size = 0;
+  for (let i = 0; i < n; ++i) {
+    worst = Math.max(worst, Math.abs(page0[i] - native[i]), Math.abs(page1[i] - native[n + i]));
+    size = Math.max(size, Math.abs(native[i]));
+  }
+  check(native.length === 2 * n && worst <= 1e-5 * size,
+        `${what}: page vs native positions after ${journal.split('\n').length - 1} calls: largest difference ` +
+        `${worst.toExponential(2)} m (model size ${size.toFixed(1)} m; float round-off allowed: 1e-5 of it)`);
+  const m = said.match(/table: BI mean (\S+) modified-BI mean (\S+)/), tp = await page.evaluate(() => mbiPage.table());
+  const close = (a, b) => Math.abs(a - b) <= 1e-9 * Math.abs(b);
+  check(m && tp && close(tp.bi, Number(m[1])) && close(tp.modifiedBi, Number(m[2])),
+        `${what}: page vs native discontinuity table: BI ${tp?.bi.toExponential(6)} vs ${m && Number(m[1]).toExponential(6)}, ` +
+        `modified-BI ${tp?.modifiedBi.toExponential(6)} vs ${m && Number(m[2]).toExponential(6)} (relative 1e-9)`);
 }
 
 // GPU == CPU at the current frame (both views), the GPU's positions read back from the
@@ -216,24 +253,24 @@ async function gpuChecks(page, what) {
         `difference ${c.worst.toExponential(2)} (model size ${c.size.toFixed(2)}; float round-off allowed: 1e-5 of it)`);
 }
 
-// The generated sphere of 252,152 points, poked through the API (a ray down the z axis) for a
-// few frames on the GPU: GPU == CPU, and the two evaluators side by side.
+// The bumpy sphere of 252,152 points (scenes/large.toml), poked through the API (a ray down the z
+// axis) for a few frames on the GPU: GPU == CPU, and the two evaluators side by side.
 async function dense(browser, base) {
   const t0 = Date.now();
-  const page = await open(browser, base + '?scene=2&play=0');
-  await page.waitForFunction(() => mbiPage.api.description().startsWith('dense sphere'), null, { timeout: 60000 });
+  const page = await open(browser, base + '?scene=large&play=0');
+  await page.waitForFunction(() => mbiPage.api.description().startsWith('large:'), null, { timeout: 60000 });
   const hit = await page.evaluate(() => mbiPage.api.grab(1, 0, 0, 5, 0, 0, -1) === 1 &&
                                         (mbiPage.api.move(0.6, 0.4, 5, 0, 0, -1), true));
   for (let k = 0; k < 4; ++k) await page.keyboard.press('s');
-  check(hit && (await page.evaluate(() => mbiPage.evaluator())) === 'gpu', 'the dense sphere poked, on the GPU evaluator');
-  await gpuChecks(page, 'the dense sphere');
+  check(hit && (await page.evaluate(() => mbiPage.evaluator())) === 'gpu', 'the large scene\'s sphere poked, on the GPU evaluator');
+  await gpuChecks(page, 'the large scene\'s sphere');
   const b = await page.evaluate((n) => mbiPage.benchEvaluators(n), bench ? 20 : 3);
   const f = (x) => x.toFixed(2);
   console.log(`${bench ? 'bench' : 'evaluators'}: ${b.points} points, modified-BI view, ms per evaluation: GPU pass ` +
               `${f(b.gpu)} (upload, pass, wait; ${b.renderer}), wasm CPU ${f(b.cpu)} (of which the evaluation ` +
               `${f(b.wasm)}); mean of ${bench ? 20 : 3}`);
   await page.close();
-  console.log(`(the dense sphere's checks took ${((Date.now() - t0) / 1000).toFixed(1)} s)`);
+  console.log(`(the large scene's checks took ${((Date.now() - t0) / 1000).toFixed(1)} s)`);
 }
 
 // The bench report's numbers: the bar playing for 120 frames on the CPU evaluator (wasm ms per

@@ -97,6 +97,10 @@ namespace {
 // usable_memory_bytes(), and whether the control group's limit is what bounds it
 double usable_memory(bool& by_group) {
   const double physical = physical_memory_bytes();
+#ifdef __EMSCRIPTEN__  // the page: no file system, no control group; the heap's limit alone
+  by_group = false;
+  return physical;
+#endif
   std::ifstream in("/proc/self/cgroup");
   std::stringstream text;
   text << in.rdbuf();

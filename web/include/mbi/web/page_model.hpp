@@ -2,9 +2,8 @@
 // The browser page's model: a scene on the one frame pipeline (mbi::pipeline), the dense
 // positions of BI and modified-BI for the page's two views, and mouse pokes as in `mbi view`.
 // Plain C++ without Emscripten: the page's module and its native twin compile the same code
-// (web/api). Scenes: the paper's twisting bar (scenes/twist-bar.toml), the poke cylinder
-// (scenes/poke.toml, without its scripted pokes), a dense sphere (about 250K points, for the
-// evaluators' comparison) and a user's surface in a generated voxel cage.
+// (web/api). Scenes: the scene files the page can run (scenes/*.toml, embedded at build time:
+// web/include/mbi/web/scene_files.hpp) and a user's surface in a generated control mesh.
 //
 // Two evaluators of the dense points: the CPU (here, double) and the page's WebGL2 pass
 // (web/page/gpu_evaluator.js) from bezier_texels(); with the GPU one, step() leaves the CPU
@@ -14,6 +13,7 @@
 #include <mbi/pipeline/creases.hpp>
 #include <mbi/pipeline/driver.hpp>
 #include <mbi/pipeline/frame_pipeline.hpp>
+#include <mbi/scenes/scene.hpp>
 
 #include <Eigen/Core>
 
@@ -23,8 +23,6 @@
 #include <vector>
 
 namespace mbi::web {
-
-enum class SceneKind { TwistBar, Poke, DenseSphere };
 
 /// A half-line in model coordinates (m); direction need not be unit length.
 using interact::Ray;
@@ -38,11 +36,13 @@ class PageModel {
   PageModel(PageModel&&) noexcept;
   PageModel& operator=(PageModel&&) noexcept;
 
-  /// A built-in scene, at frame 0.
-  static PageModel builtin(SceneKind kind);
-  /// A dense surface (V n x 3, F t x 3, y up) in a voxel cage of about `control_vertices`
-  /// vertices, its bottom tenth in y held, as `mbi run scenes/poke.toml --mesh` sets it up.
-  /// Throws mbi::Error on a bad surface or cage.
+  /// A scene at frame 0, as `mbi run` builds it (its models, simulation, constraints, scripted
+  /// pokes, alpha; mbi/scenes/models.hpp); the timed method modified-BI unless the scene says
+  /// BI. Throws mbi::Error naming the scene when the page cannot run it (page_problem()).
+  static PageModel scene(const scenes::Scene& scene);
+  /// A dense surface (V n x 3, F t x 3, y up) in a generated control mesh of about
+  /// `control_vertices` vertices, as `mbi view MODEL` sets it up (mbi/scenes/model_scene.hpp:
+  /// material fitted to its size, its bottom held). Throws mbi::Error on a bad surface or cage.
   static PageModel surface(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
                            int control_vertices);
 
@@ -116,8 +116,8 @@ class PageModel {
     int handle = -1;
     Eigen::Vector3d grabbed = Eigen::Vector3d::Zero();
   };
-  PageModel(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T, Surface dense, sim::Simulator simulator,
-            std::optional<double> alpha, std::string description);
+  // pipe's driver must be a SimulatorDriver (the pokes pull on the simulation)
+  PageModel(Surface dense, pipeline::FramePipeline pipe, std::string description);
   struct GpuInputs {
     std::vector<int> elements;
     std::vector<float> bary, rest, texels[2];
