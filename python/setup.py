@@ -28,6 +28,11 @@ def project_version():
 
 def cmake_build():
     """Configures and builds mbi_python for this interpreter; returns the build tree."""
+    try:
+        import numpy  # noqa: F401  (CMake builds no module for an interpreter without it)
+    except ImportError:
+        raise RuntimeError(f"mbi needs numpy in the interpreter that runs pip, {sys.executable}: make the virtual "
+                           f"environment with /usr/bin/python3 -m venv --system-site-packages (Debian's numpy)")
     tree = os.path.join(ROOT, "build", "pip-" + SUFFIX.strip(".").rsplit(".", 1)[0])
     subprocess.run(["cmake", "-S", ROOT, "-B", tree, "-DCMAKE_BUILD_TYPE=Release", f"-DPython_EXECUTABLE={sys.executable}",
                     "-DMBI_BUILD_PYTHON=ON", "-DMBI_BUILD_TESTS=OFF", "-DMBI_BUILD_BENCH=OFF"], check=True)

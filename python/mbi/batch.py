@@ -16,6 +16,8 @@ import numpy.typing as npt
 from . import _mbi
 from .meshes import box_mesh
 
+__all__ = ["deform_model", "digest", "material_grid", "run_batch", "simulate_material"]
+
 
 def digest(A: npt.ArrayLike) -> str:
     """A short fingerprint of an array's exact values (equal digests: bitwise equal results)."""

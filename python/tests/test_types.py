@@ -45,6 +45,13 @@ def test_mypy_catches_a_wrong_literal_and_a_wrong_result_type(tmp_path):
     assert "bad.py:5: error" in result.stdout and "bad.py:6: error" in result.stdout, result.stdout
 
 
+def test_the_typing_usage_names_every_public_name():
+    text = open(USAGE).read()
+    assert [name for name in mbi.__all__ if f"mbi.{name}" not in text] == []
+    assert [name for name in mbi.batch.__all__ if f"mbi.batch.{name}" not in text] == []
+    assert all(f"mbi.torch.{name}" in text for name in ("deform", "Deform", "DeformFunction"))
+
+
 def test_the_typing_usage_runs(tmp_path):
     pytest.importorskip("torch")
     result = subprocess.run([sys.executable, USAGE, str(tmp_path)], capture_output=True, text=True, timeout=600)

@@ -100,9 +100,10 @@ def files(tmp: str) -> None:
     surface = mbi.Surface(U, T[:, :3])
     obj = os.path.join(tmp, "s.obj")
     mbi.write_surface(obj, surface)
-    mbi.write_surface(obj, [[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], encoding="ascii")  # integer positions
     V, F = mbi.read_surface(obj)
-    assert V.shape == (3, 3) and F.dtype == np.int32
+    assert V.shape == (8, 3) and F.dtype == np.int32
+    tri = os.path.join(tmp, "t.obj")
+    mbi.write_surface(tri, [[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], encoding="ascii")  # integer positions
     points = os.path.join(tmp, "p.xyz")
     mbi.write_points(points, U)
     assert mbi.read_points(points).shape == U.shape
@@ -132,6 +133,8 @@ def files(tmp: str) -> None:
     CU, CT = cage
     assert isinstance(cage, mbi.Cage) and CT.dtype == np.int32 and CU.shape[1] == 3
     scene = os.path.join(os.environ["MBI_SOURCE_DIR"], "scenes", "cantilever.toml")
+    model = mbi.batch.deform_model(obj, tmp, vertices=20, frames=1)
+    assert model["digest"] == mbi.batch.digest(mbi.read_surface(model["obj"]).V)
     run: Dict[str, Any] = mbi.run_scene(scene, os.path.join(tmp, "run"), frames=1, gpu="off", method="bi")
     assert run["frames"] >= 1
 
