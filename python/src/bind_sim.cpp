@@ -53,7 +53,15 @@ std::shared_ptr<SimulatorObject> make_simulator(const py::object& U, const py::o
     const Input m = float_matrix(element_materials, "element_materials", {c.T.rows(), 3});
     for (Eigen::Index e = 0; e < m.map.rows(); ++e) per_element.push_back(material(m.map(e, 0), m.map(e, 1), m.map(e, 2)));
   }
-  return without_gil([&] { return std::make_shared<SimulatorObject>(c.U.map, c.T, material(E, nu, rho), p, per_element); });
+  try {
+    return without_gil([&] { return std::make_shared<SimulatorObject>(c.U.map, c.T, material(E, nu, rho), p, per_element); });
+  } catch (const Error& e) {  // the library names the material's fields in words: name the keywords
+    std::string message = e.what();
+    for (const auto& [words, keyword] : {std::pair<std::string, std::string>{"Young's modulus", "youngs_modulus"},
+                                         {"Poisson ratio", "poisson_ratio"}})
+      if (const size_t at = message.find(words); at != std::string::npos) message.replace(at, words.size(), keyword);
+    throw Error(message);
+  }
 }
 
 // A material point: element index and 4 barycentric coordinates.
@@ -106,6 +114,8 @@ void bind_handles(py::class_<Object, std::shared_ptr<Object>>& c) {
       .def("add_kinematic", [](Object& s, const py::object& nodes, const py::object& center, const py::object& axis,
                                double angular_velocity, const py::object& velocity, double start, double stop) {
         const std::vector<int> n = index_list(nodes, "nodes", s.object.nodes());
+        if (stop < start)
+          throw Error("stop (" + std::to_string(stop) + " s) is before start (" + std::to_string(start) + " s)");
         const sim::RigidMotion motion{vector3(center, "center"), vector3(axis, "axis"), angular_velocity,
                                       vector3(velocity, "velocity"), start, stop};
         return s.run([&](Simulator& x) { return x.add_kinematic(n, motion); });

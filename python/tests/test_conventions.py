@@ -109,6 +109,14 @@ def test_messages_use_the_keyword_names_and_the_docs_letters(bar):
         mbi.Surface(U, [[0, 1, 2, 3]])
     with pytest.raises(mbi.Error, match=r"^rest_normals must have shape \(30, 3\), got \(2, 3\)$"):
         mbi.Deformer(U, T, P, rest_normals=np.ones((2, 3)))
+    with pytest.raises(mbi.Error, match=r"^material: youngs_modulus must be finite and > 0 Pa, got -1"):
+        mbi.Simulator(U, T, youngs_modulus=-1)
+    with pytest.raises(mbi.Error, match=r"^material: poisson_ratio must lie in \(-1, 0.5\), got 0.6"):
+        mbi.Simulator(U, T, poisson_ratio=0.6)
+    with pytest.raises(mbi.Error, match=r"^stop \(1.0+ s\) is before start \(2.0+ s\)$"):
+        mbi.Simulator(U, T).add_kinematic([0], start=2, stop=1)
+    with pytest.raises(mbi.Error, match=r"^parameter dt must be finite and > 0 s$"):
+        mbi.Simulator(U, T, dt=-1)
 
 
 @pytest.mark.parametrize("call, message", [

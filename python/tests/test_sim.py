@@ -157,7 +157,7 @@ def test_refused_input_names_the_argument():
         mbi.Simulator(U, T, dtt=0.1)
     with pytest.raises(ValueError, match="gravity must have shape"):
         mbi.Simulator(U, T, gravity=(0, 1))
-    with pytest.raises(ValueError, match="Poisson ratio"):
+    with pytest.raises(ValueError, match="poisson_ratio must lie in"):
         mbi.Simulator(U, T, poisson_ratio=0.7)
     sim = mbi.Simulator(U, T)
     with pytest.raises(ValueError, match=r"X must have shape \(20, 3\)"):
