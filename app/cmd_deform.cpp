@@ -39,6 +39,10 @@ const Registrar reg{
                      "REQUIRED (unless --example) output of each --mesh, format by extension: .obj/.ply/.off/.stl/.glb/"
                      ".gltf (keeping the input's attributes when the format is the same) or points .txt/.xyz; for a "
                      "trajectory a point cache .pc2/.mdd, an animated glTF .glb/.gltf or numbered files out_%04d.obj");
+      sub.add_option("--displacement", a->displacement,
+                     "point field of the --deformed .vtu/.vtk files added to their positions (a rest mesh with a "
+                     "displacement, as FEniCS and deal.II write)")
+          ->check([](const std::string& s) { return s.empty() ? std::string("give the point field's name") : std::string(); });
       add_choice(sub, "--method", a->method, pipeline::kMethodNames, "interpolation");
       sub.add_option_function<double>(
           "--alpha", [a](double v) { a->alpha = v; }, "weight of E_vibr (> 0; default 0.1 in 3D, 0.2 in 2D)");
@@ -56,7 +60,9 @@ const Registrar reg{
               throw CLI::ValidationError(e.what());
             }
           },
-          "frames per second where times meet frames (MDD times, PC2 frames; default 24)");
+          "output frame rate: the sequence resampled to it from its frame times (an MDD or a .pvd), positions "
+          "interpolated linearly between input frames; without it the frames are kept as they are (24 fps where "
+          "times meet frame numbers)");
       sub.add_flag("--force", a->force, "overwrite existing --out / --stats files");
       sub.add_option("--example", a->example, "built-in example instead of files: twist-bar");
       add_threads_option(sub);

@@ -20,12 +20,15 @@ namespace mbi::cli {
 
 struct DeformArgs {
   std::string control, deformed, stats, example;
+  std::string displacement;  ///< a point field of the --deformed files added to their positions; empty: none
   std::vector<std::string> meshes, outs;  ///< one --out for each --mesh
   pipeline::Method method = pipeline::Method::ModifiedBI;
   std::optional<double> alpha;  ///< none: interp's default
   bool pin_boundary = false, force = false;
   std::optional<double> max_outside;  ///< refuse points farther out (x the model size)
-  double fps = 24;                    ///< frames per second, where times and frames meet
+  /// The output's frame rate: the frames resampled to it (Frames::resample); none: the input's
+  /// frames as they are, at kDefaultFps where times meet frame numbers.
+  std::optional<double> fps;
 };
 
 /// Runs it; returns the exit code: 0, 3 when a frame failed after earlier ones were written (they

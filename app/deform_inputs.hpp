@@ -37,14 +37,24 @@ Eigen::MatrixXd example_pose(const std::string& name);
 /// The control positions frame by frame.
 class Frames {
  public:
-  /// `deformed` read as a trajectory (io::Trajectory) or as one positions file.
-  Frames(const std::string& deformed, bool trajectory);
+  /// `deformed` read as a trajectory (io::Trajectory) or as one positions file; `displacement`:
+  /// the point field added to every frame's positions (none when empty).
+  Frames(const std::string& deformed, bool trajectory, const std::string& displacement = "");
   /// One pose given in memory (the example), `name` for messages.
   Frames(Eigen::MatrixXd pose, std::string name);
   bool trajectory() const { return traj_.has_value(); }
+  /// Resamples the frames to `fps` a second, from the first frame's time to the last's: frame k
+  /// at t0 + k / fps, its positions interpolated linearly between the input frames around that
+  /// time. Throws naming --fps when the input has no frame times in seconds (only an MDD and a
+  /// .pvd have them) or they do not increase.
+  void resample(double fps);
+  /// The frames' times (s) once resampled; empty otherwise.
+  const std::vector<double>& times() const { return times_; }
   io::Trajectory* trajectory_file() { return traj_ ? &*traj_ : nullptr; }
   int count() const;
   /// Frame k as the deformer takes it (n x d), checked against `m`; throws naming the frame.
+  /// Without a displacement, warns once for a frame at the rest positions whose file has a
+  /// nonzero vector point field of the right size (FEniCS's and deal.II's displacement).
   Eigen::MatrixXd pose(int k, const Model& m);
   /// Where frame k comes from, for messages.
   std::string where(int k) const;
@@ -53,9 +63,17 @@ class Frames {
   std::vector<std::filesystem::path> files() const;
 
  private:
-  std::string name_;
+  void warn_rest(int k, const Eigen::MatrixXd& X, const Model& m);
+  Eigen::MatrixXd input_pose(int i, const Model& m);    // input frame i, checked
+  Eigen::MatrixXd cached_input(int i, const Model& m);  // the same, the last one kept
+
+  std::string name_, displacement_;
+  bool warned_ = false;
   std::optional<io::Trajectory> traj_;
   std::optional<Eigen::MatrixXd> pose_;  // one pose, kept once read
+  std::vector<double> times_, input_times_;  // resampled: the output's and the input's frame times
+  int cached_ = -1;                          // resampled: the input frame held in cached_pose_
+  Eigen::MatrixXd cached_pose_;
 };
 
 /// The example's name, or whether `deformed` and the outputs ask for a trajectory: `deformed`

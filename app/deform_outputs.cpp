@@ -51,6 +51,11 @@ std::vector<double> increasing_times(const std::vector<float>& times, double fps
   return t;
 }
 
+bool is_gltf(const fs::path& p) {
+  const std::string ext = io::lower_extension(p);
+  return ext == ".glb" || ext == ".gltf";
+}
+
 Timing cache_timing(const io::Trajectory& t, double fps) {
   Timing o;
   const int F = t.frames();
@@ -122,9 +127,17 @@ void check_outputs(const std::vector<Out>& outs, const std::string& stats, const
   }
 }
 
-Timing output_timing(Frames& frames, double fps, const std::vector<Out>& outs) {
+Timing output_timing(Frames& frames, std::optional<double> resampled, const std::vector<Out>& outs) {
   const io::Trajectory* t = frames.trajectory_file();
   if (!t) return {};
+  if (resampled) {
+    Timing o;
+    o.pc2_start = static_cast<float>(frames.times().front() * *resampled);
+    o.gltf_times = frames.times();
+    for (double x : o.gltf_times) o.mdd_times.push_back(static_cast<float>(x));
+    return o;
+  }
+  const double fps = kDefaultFps;
   std::string timed;  // an output that needs every frame's time
   for (const Out& o : outs)
     if (o.kind == OutKind::mdd || o.kind == OutKind::gltf) timed = o.name;
@@ -178,6 +191,9 @@ class PartWriter {
       if (!part.surface) throw std::runtime_error("--out " + out.name + ": a glTF needs a surface mesh, not points");
       gltf_ = std::make_unique<io::GltfWriter>(file, *part.surface);
       gltf_times_ = timing.gltf_times;
+      warn(*gltf_);
+    } else if (out.kind == OutKind::file && part.surface && is_gltf(out.name)) {
+      warn(io::GltfWriter(file, *part.surface));  // what of the input does not map, before any work
     }
   }
 
@@ -209,6 +225,10 @@ class PartWriter {
   }
 
  private:
+  void warn(const io::GltfWriter& w) const {
+    for (const std::string& note : w.notes())
+      std::fprintf(stderr, "mbi deform: warning: --out %s: %s\n", out_.name.c_str(), note.c_str());
+  }
   // The last frame as one file (format by the extension of `name`): a surface keeps what its file
   // held besides positions; points alone make a vertices-only surface.
   void write_file(const fs::path& file, const fs::path& name = {}) {

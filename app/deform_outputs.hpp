@@ -9,6 +9,7 @@
 #include <mbi/io/atomic_file.hpp>
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -39,9 +40,12 @@ struct Timing {
   std::vector<float> mdd_times;
   std::vector<double> gltf_times;  ///< strictly increasing, as glTF keys must be
 };
+/// Frames per second where times meet frame numbers when --fps is not given.
+constexpr double kDefaultFps = 24;
+
 /// The timing of `frames` (none for one pose); per-frame times only when an output needs them
-/// (MDD, glTF).
-Timing output_timing(Frames& frames, double fps, const std::vector<Out>& outs);
+/// (MDD, glTF). Resampled frames (`fps` given): PC2 start t0 * fps and rate 1, their times.
+Timing output_timing(Frames& frames, std::optional<double> fps, const std::vector<Out>& outs);
 
 /// --fps's text as a number: decimal, finite and > 0, or an error saying so.
 double parse_fps(const std::string& text);

@@ -61,6 +61,7 @@ void check_args(const DeformArgs& a) {
   if (a.alpha) check_option("--alpha", [&] { interp::check_alpha(*a.alpha); });
   if (!a.example.empty()) {
     if (a.outs.size() > 1) throw std::runtime_error("--example writes one --out");
+    if (!a.displacement.empty()) throw std::runtime_error("--displacement: --example has no --deformed files");
     return;
   }
   for (const auto& [flag, v] : {std::pair{"--control", &a.control}, {"--deformed", &a.deformed}})
@@ -259,8 +260,11 @@ int run_deform(const DeformArgs& a) {
   const bool example = !a.example.empty(), trajectory = !example && is_sequence(a.deformed, a.outs);
   std::vector<Out> outs = output_kinds(a.outs, trajectory);
   Frames frames = example ? Frames(example_pose(a.example), "built-in twist (90 degrees, mild bend)")
-                          : Frames(a.deformed, trajectory);
-  if (trajectory) check_fps(a.fps, frames.count());
+                          : Frames(a.deformed, trajectory, a.displacement);
+  if (a.fps) {
+    check_fps(*a.fps, frames.count());
+    frames.resample(*a.fps);
+  }
   // One overwrite rule (docs/cli.md): every output checked before any work, inputs never outputs.
   const std::vector<fs::path> inputs = input_files(a, frames);
   io::OutputSet outputs(inputs, a.force);

@@ -23,6 +23,10 @@ struct VtkCell {
 ControlMesh vtk_control_mesh(const Eigen::MatrixXd& P, const std::vector<VtkCell>& cells,
                              const std::filesystem::path& file);
 
+/// read_point_data of a .vtu and of a legacy .vtk file.
+PointData read_vtu_point_data(const std::filesystem::path& file);
+PointData read_vtk_point_data(const std::filesystem::path& file);
+
 /// BASE`ext` for a TetGen name: `base` without its .node/.ele/.face extension, if it has one.
 std::filesystem::path tetgen_file(const std::filesystem::path& base, const char* ext);
 /// The files read_tetgen(base) reads: BASE.node and BASE.ele.

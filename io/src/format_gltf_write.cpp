@@ -58,9 +58,11 @@ class GltfDocument {
   // `name`: the root node's (and a plain mesh's part's) name
   GltfDocument(const path& file, const std::string& name, const Polygons& faces, long long vertices, const GltfAsset* asset)
       : file_(file), name_(name), vertices_(vertices) {
+    const Polygons* written = &faces;  // in the vertices written
     if (asset) {
       parts_ = asset->parts;
       asset_ = asset;
+      if (!asset->source.empty()) written = &asset->triangles;
     } else {
       GltfPart whole;
       whole.name = name;
@@ -69,7 +71,7 @@ class GltfDocument {
       parts_.push_back(std::move(whole));
     }
     if (faces.empty()) fail(file, 0, "a mesh without faces is not written as glTF");
-    for (GltfPart& p : parts_) shared_.push_back(shared_accessors(p, faces));
+    for (GltfPart& p : parts_) shared_.push_back(shared_accessors(p, *written));
     if (asset) keep_images(*asset);
   }
 
@@ -77,6 +79,19 @@ class GltfDocument {
   void add_frame(double time, const Eigen::Ref<const Eigen::MatrixXd>& V, const Eigen::Ref<const Eigen::MatrixXd>& N) {
     if (V.rows() != vertices_ || V.cols() != 3 || (N.size() > 0 && (N.rows() != vertices_ || N.cols() != 3)))
       fail(file_, 0, "frame " + std::to_string(times_.size()) + ": positions or normals do not match the mesh");
+    if (asset_ && !asset_->source.empty()) {  // the split vertices copy their mesh vertex's rows
+      split(V, V_split_);
+      split(N, N_split_);
+      return add_written(time, V_split_, N_split_);
+    }
+    add_written(time, V, N);
+  }
+
+  std::size_t frames() const { return times_.size(); }
+
+ private:
+  // One frame of the vertices written (the mesh's, or its split copies).
+  void add_written(double time, const Eigen::Ref<const Eigen::MatrixXd>& V, const Eigen::Ref<const Eigen::MatrixXd>& N) {
     // the file stores float32 times: those must be finite and strictly increasing
     const float t32 = static_cast<float>(time);
     if (!std::isfinite(time) || !std::isfinite(t32))
@@ -84,7 +99,7 @@ class GltfDocument {
     if (!times_.empty() && !(t32 > static_cast<float>(times_.back())))
       fail(file_, 0, "frame " + std::to_string(times_.size()) + ": time " + short_number(time) +
                          " s is not after the previous frame's (" + short_number(times_.back()) + " s) as float32");
-    const unsigned long long frame_bytes = static_cast<unsigned long long>(vertices_) * (N.size() > 0 ? 24 : 12);
+    const unsigned long long frame_bytes = static_cast<unsigned long long>(V.rows()) * (N.size() > 0 ? 24 : 12);
     if (bin_.size() + frame_bytes > kMaxBinary)
       fail(file_, 0, "frame " + std::to_string(times_.size()) + ": the glTF would pass 4 GB, the format's limit " +
                          "(write fewer frames, or a point cache)");
@@ -112,8 +127,14 @@ class GltfDocument {
     times_.push_back(time);
   }
 
-  std::size_t frames() const { return times_.size(); }
+  void split(const Eigen::Ref<const Eigen::MatrixXd>& M, Eigen::MatrixXd& out) const {
+    if (M.size() == 0) return out.resize(0, 0);
+    out.resize(static_cast<Eigen::Index>(asset_->source.size()), 3);
+    for (std::size_t i = 0; i < asset_->source.size(); ++i) out.row(static_cast<Eigen::Index>(i)) = M.row(asset_->source[i]);
+  }
 
+
+ public:
   void write(std::FILE* f) {
     if (times_.empty()) fail(file_, 0, "no frame to write");
     if (times_.size() > 1) add_animation();
@@ -278,6 +299,7 @@ class GltfDocument {
   std::vector<json> shared_;   // per part: its TEXCOORD/COLOR attributes
   std::vector<int> indices_;   // per part: its indices accessor
   std::vector<float> frame_;   // the last rows converted (positions: for min and max)
+  Eigen::MatrixXd V_split_, N_split_;
   std::vector<unsigned char> bin_;
   json views_ = json::array(), accessors_ = json::array(), meshes_ = json::array(), nodes_ = json::array(),
        animations_ = json::array(), images_ = json::array();
@@ -285,14 +307,14 @@ class GltfDocument {
 };
 
 void write_gltf(std::FILE* f, const SurfaceOutput& out) {
-  const GltfAsset* asset = out.attributes ? out.attributes->gltf.get() : nullptr;
-  GltfDocument doc(out.file, output_name(out.file).stem().string(), out.faces, out.V.rows(), asset);
+  const auto asset = out.attributes ? gltf_asset_of(*out.attributes, out.faces, out.V.rows(), out.file) : nullptr;
+  GltfDocument doc(out.file, output_name(out.file).stem().string(), out.faces, out.V.rows(), asset.get());
   doc.add_frame(0.0, out.V, out.N);
   doc.write(f);
 }
 
 bool gltf_attributes_fit(const SurfaceAttributes& a, const Polygons& faces) {
-  if (!a.gltf) return false;
+  if (!a.gltf) return converts_to_gltf(a, faces);
   long long total = 0;
   for (const GltfPart& p : a.gltf->parts) {
     if (p.first_face != total || p.first_face + p.faces > static_cast<long long>(faces.size())) return false;
@@ -308,6 +330,7 @@ bool gltf_attributes_fit(const SurfaceAttributes& a, const Polygons& faces) {
 
 struct GltfWriter::State {
   detail::Polygons faces;
+  std::shared_ptr<const detail::GltfAsset> asset;
   std::unique_ptr<detail::GltfDocument> doc;
 };
 
@@ -316,16 +339,21 @@ GltfWriter::GltfWriter(const std::filesystem::path& file, const SurfaceMesh& top
   if (ext != ".glb" && ext != ".gltf") detail::fail(file, 0, "a glTF animation is written to .glb or .gltf");
   state_->faces = detail::faces_of(topology, topology.V, file, true);
   const SurfaceAttributes* a = topology.attributes.get();
-  const detail::GltfAsset* asset =
-      a && a->gltf && a->vertices == topology.V.rows() && detail::gltf_attributes_fit(*a, state_->faces) ? a->gltf.get() : nullptr;
+  if (a && a->vertices == topology.V.rows() && detail::gltf_attributes_fit(*a, state_->faces))
+    state_->asset = detail::gltf_asset_of(*a, state_->faces, topology.V.rows(), file);
   state_->doc = std::make_unique<detail::GltfDocument>(file, output_name(file).stem().string(), state_->faces,
-                                                       topology.V.rows(), asset);
+                                                       topology.V.rows(), state_->asset.get());
 }
 
 GltfWriter::~GltfWriter() = default;
 
 void GltfWriter::append(double time, const Eigen::Ref<const Eigen::MatrixXd>& V, const Eigen::Ref<const Eigen::MatrixXd>& N) {
   state_->doc->add_frame(time, V, N);
+}
+
+const std::vector<std::string>& GltfWriter::notes() const {
+  static const std::vector<std::string> none;
+  return state_->asset ? state_->asset->notes : none;
 }
 
 int GltfWriter::samples() const { return static_cast<int>(state_->doc->frames()); }

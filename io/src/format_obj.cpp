@@ -149,6 +149,7 @@ SurfaceMesh parse_obj(std::string_view data, const path& file) {
   auto attr = std::make_shared<SurfaceAttributes>();
   attr->format = ".obj";
   ObjAttributes& a = attr->obj;
+  a.file = file;
   ObjRead r;
   LineReader lines(skip_bom(data));
   std::string_view raw;

@@ -23,6 +23,7 @@ struct ObjAttributes {
   std::vector<Record> records;                // in file order, comments and blank lines dropped
   std::vector<std::string> vertex_tail;       // per vertex: numbers after x y z, or empty
   std::vector<std::vector<int>> face_vt;      // per face and corner: 0-based vt, -1 = none
+  std::filesystem::path file;                 // the file read (its mtllib names are relative to it)
 };
 
 /// read_surface of an OBJ file's bytes.

@@ -16,6 +16,7 @@ using std::filesystem::path;
 struct VtkData {
   Eigen::MatrixXd P;  // n x 3
   std::vector<detail::VtkCell> cells;
+  std::vector<PointField> fields;  // when asked for
 };
 
 // One value of a legacy VTK data type (binary: big endian).
@@ -51,7 +52,8 @@ std::size_t line_end(std::string_view data, std::size_t from) {
 // Reads the keywords of a legacy VTK file and the data after them.
 class VtkReader {
  public:
-  VtkReader(std::string_view data, const path& file) : c_{data, file}, file_(file) {}
+  // `fields`: read the point data too (else it is not looked at)
+  VtkReader(std::string_view data, const path& file, bool fields = false) : c_{data, file}, file_(file), want_fields_(fields) {}
 
   VtkData read() {
     encoding();
@@ -70,6 +72,8 @@ class VtkReader {
         std::vector<long long> t;
         numbers(m, "int", "cell types", t);
         types_.assign(t.begin(), t.end());
+      } else if (want_fields_ && (key == "POINT_DATA" || key == "CELL_DATA")) {
+        if (!attributes(c_.integer(key + " count", 0, kMaxCount), key == "POINT_DATA")) break;
       } else if (key == "POINT_DATA" || key == "CELL_DATA" || key == "FIELD" || key == "METADATA") {
         break;  // attributes: not needed
       } else {
@@ -92,6 +96,76 @@ class VtkReader {
     const std::string_view enc = c_.word("ASCII or BINARY");
     if (enc == "BINARY") binary_ = true, c_.swap = std::endian::native == std::endian::little;
     else if (enc != "ASCII") c_.fail_here("expected ASCII or BINARY, found '" + std::string(enc.substr(0, 40)) + "'");
+  }
+
+  // The arrays of one POINT_DATA or CELL_DATA section of `n` tuples, kept in out_.fields when
+  // `keep`; false at a METADATA block (not read: what follows is left unread).
+  bool attributes(long long n, bool keep) {
+    while (!c_.at_end()) {
+      const std::size_t save = c_.pos;
+      const std::string key(c_.word("a data keyword"));
+      if (key == "POINT_DATA" || key == "CELL_DATA") {
+        c_.pos = save;
+        return true;
+      }
+      if (key == "METADATA") return false;
+      if (key == "FIELD") {
+        c_.word("field name");
+        const long long arrays = c_.integer("FIELD array count", 0, kMaxCount);
+        for (long long a = 0; a < arrays; ++a) {
+          const std::string name(c_.word("array name"));
+          if (name == "METADATA") return false;
+          const long long comps = c_.integer(name + ": component count", 1, 1 << 20);
+          const long long tuples = c_.integer(name + ": tuple count", 0, kMaxCount);
+          const std::string type(c_.word("data type"));
+          array(name, type, comps, tuples, keep && tuples == n);
+        }
+        continue;
+      }
+      const std::string name(c_.word("array name"));
+      const std::string byte_type = binary_ ? "unsigned_char" : "float";
+      if (key == "SCALARS") {
+        const std::string type(c_.word("data type"));
+        const std::size_t at = c_.pos;
+        long long comps = 1;
+        if (const std::string_view w = c_.word("LOOKUP_TABLE"); w != "LOOKUP_TABLE") {
+          c_.pos = at;
+          comps = c_.integer(name + ": component count", 1, 4);
+          c_.expect("LOOKUP_TABLE", "");
+        }
+        c_.word("lookup table name");
+        array(name, type, comps, n, keep);
+      } else if (key == "VECTORS" || key == "NORMALS" || key == "TENSORS") {
+        const std::string type(c_.word("data type"));
+        array(name, type, key == "TENSORS" ? 9 : 3, n, keep);
+      } else if (key == "TEXTURE_COORDINATES") {
+        const long long comps = c_.integer(name + ": dimension", 1, 3);
+        const std::string type(c_.word("data type"));
+        array(name, type, comps, n, keep);
+      } else if (key == "COLOR_SCALARS") {
+        array(name, byte_type, c_.integer(name + ": component count", 1, 4), n, keep);
+      } else if (key == "LOOKUP_TABLE") {
+        array(name, byte_type, 4, c_.integer(name + ": size", 0, kMaxCount), false);
+      } else {
+        c_.fail_here("unexpected '" + key.substr(0, 40) + "' in " + (keep ? "POINT_DATA" : "CELL_DATA"));
+      }
+    }
+    return true;
+  }
+
+  // One data array of `tuples` x `comps` values of `type`, kept as a point field when `keep`.
+  void array(const std::string& name, const std::string& type, long long comps, long long tuples, bool keep) {
+    c_.room(comps * tuples, binary_ ? vtk_size(type) : 2, name + " values");
+    if (binary_) c_.end_of_line();
+    c_.binary = binary_;
+    PointField f{name, Eigen::MatrixXd(keep ? tuples : 0, comps)};
+    for (long long i = 0; i < tuples; ++i)
+      for (long long k = 0; k < comps; ++k) {
+        const double x = vtk_value(c_, type, name + ": tuple " + std::to_string(i));
+        if (keep) f.values(i, k) = x;
+      }
+    c_.binary = false;
+    if (keep) out_.fields.push_back(std::move(f));
   }
 
   // `count` integers of `type` (keywords are text; the data after them follows the encoding).
@@ -184,12 +258,13 @@ class VtkReader {
   bool binary_ = false;  // the data's encoding (c_.binary is set only while reading data)
   VtkData out_;
   bool have_points_ = false;
+  bool want_fields_ = false;
   std::vector<long long> offsets_, connectivity_;
   std::vector<int> types_;
 };
 
-VtkData parse_vtk(std::string_view bytes, const path& file) {
-  return VtkReader(detail::skip_bom(bytes), file).read();
+VtkData parse_vtk(std::string_view bytes, const path& file, bool fields = false) {
+  return VtkReader(detail::skip_bom(bytes), file, fields).read();
 }
 
 }  // namespace
@@ -292,3 +367,12 @@ void write_vtk(const path& file, const Eigen::Ref<const Eigen::MatrixXd>& U,
 }
 
 }  // namespace mbi::io
+
+namespace mbi::io::detail {
+
+PointData read_vtk_point_data(const path& file) {
+  VtkData d = parse_vtk(slurp(file), file, true);
+  return {std::move(d.P), std::move(d.fields)};
+}
+
+}  // namespace mbi::io::detail

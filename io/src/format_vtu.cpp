@@ -135,6 +135,21 @@ class VtuReader {
     return P;
   }
 
+  // Every DataArray of PointData, n tuples each.
+  std::vector<PointField> fields(Eigen::Index n) {
+    std::vector<PointField> out;
+    for (const pugi::xml_node& da : piece_.child("PointData").children("DataArray")) {
+      const std::string name = da.attribute("Name").as_string();
+      const int comps = da.attribute("NumberOfComponents").as_int(1);
+      if (comps < 1 || comps > (1 << 20)) fail(file_, line(da), "PointData " + name + ": NumberOfComponents " + std::to_string(comps));
+      const std::vector<double> v = values(da, comps * static_cast<long long>(n), "PointData " + name);
+      PointField f{name, Eigen::MatrixXd(n, comps)};
+      for (std::size_t i = 0; i < v.size(); ++i) f.values(static_cast<Eigen::Index>(i) / comps, static_cast<Eigen::Index>(i) % comps) = v[i];
+      out.push_back(std::move(f));
+    }
+    return out;
+  }
+
   // The cells: connectivity, offsets (the end of each cell) and types.
   std::vector<detail::VtkCell> cells(Eigen::Index points) {
     const pugi::xml_node c = piece_.child("Cells");
@@ -385,3 +400,18 @@ Eigen::MatrixXd parse_vtu_points(std::string_view data, const path& file) {
 }
 
 }  // namespace mbi::io
+
+namespace mbi::io::detail {
+
+PointData read_vtu_point_data(const path& file) {
+  const std::string data = slurp(file);
+  return naming_memory(file, data.size(), [&] {
+    VtuReader r(skip_bom(data), file);
+    PointData d;
+    d.P = r.points();
+    d.fields = r.fields(d.P.rows());
+    return d;
+  });
+}
+
+}  // namespace mbi::io::detail

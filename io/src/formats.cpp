@@ -110,7 +110,9 @@ const SurfaceAttributes* kept_attributes(const FormatRow& row, const SurfaceMesh
                                          Eigen::Index vertices, const Polygons& faces) {
   const SurfaceAttributes* a = mesh.attributes.get();
   // .gltf and .glb hold the same document: attributes read from either fit both
-  const bool same = a && (a->format == row.format.extension || (a->gltf && row.write_surface == detail::write_gltf));
+  // and an OBJ's or PLY's convert to glTF (format_gltf_convert.cpp)
+  const bool to_gltf = row.write_surface == detail::write_gltf && a && (a->gltf || a->format == ".obj" || a->format == ".ply");
+  const bool same = a && (a->format == row.format.extension || to_gltf);
   const bool fit = same && row.attributes_fit &&
                    a->vertices == vertices && row.attributes_fit(*a, faces);
   return fit ? a : nullptr;

@@ -137,7 +137,7 @@ path numbered_file(const std::string& pattern, int k) {
 }
 
 struct Trajectory::Impl {
-  std::string spec;
+  std::string spec, displacement;
   std::unique_ptr<PointCacheReader> cache;
   std::vector<path> files;   // one a frame (when not a cache)
   path collection;           // the .pvd, if any
@@ -177,9 +177,10 @@ struct Trajectory::Impl {
   }
 };
 
-Trajectory::Trajectory(const std::string& spec) : impl_(std::make_unique<Impl>()) {
+Trajectory::Trajectory(const std::string& spec, const std::string& displacement) : impl_(std::make_unique<Impl>()) {
   Impl& I = *impl_;
   I.spec = spec;
+  I.displacement = displacement;
   const std::string ext = lower_extension(spec);
   if (const std::optional<Pattern> p = printf_pattern(spec)) {
     I.open_pattern(*p);
@@ -194,6 +195,8 @@ Trajectory::Trajectory(const std::string& spec) : impl_(std::make_unique<Impl>()
     if (!std::filesystem::exists(spec)) detail::require_regular_file(spec);  // names the missing file
     I.open_files({path(spec)});
   }
+  if (I.cache && !displacement.empty())
+    fail(spec, 0, "no point field '" + displacement + "': a point cache holds positions only (displacement fields are read from .vtu and .vtk frames)");
 }
 
 Trajectory::~Trajectory() = default;
@@ -214,11 +217,13 @@ Eigen::MatrixXd Trajectory::read(int k) {
   const Impl& I = *impl_;
   if (I.cache) return I.cache->frame(k);
   try {
-    return read_positions(I.files.at(static_cast<std::size_t>(k)));
+    return read_positions(I.files.at(static_cast<std::size_t>(k)), I.displacement);
   } catch (const Error& e) {
     throw Error("frame " + std::to_string(k) + ": " + e.what());
   }
 }
+
+path Trajectory::file(int k) const { return impl_->cache ? path() : impl_->files.at(static_cast<std::size_t>(k)); }
 
 std::string Trajectory::where(int k) const {
   const Impl& I = *impl_;

@@ -110,12 +110,131 @@ TEST_CASE("sequence: the outputs keep the trajectory's timing", "[app][sequence]
   TempDir dir("seq");
   REQUIRE(run_mbi(deform(data("twist.pvd"), dir / "t.mdd"), dir).code == 0);
   CHECK(mbi::io::read_mdd(dir / "t.mdd").times == std::vector<float>{0.5f, 1.0f, 1.5f});
-  REQUIRE(run_mbi(deform(data("twist.pvd"), dir / "t.pc2", "--fps 30"), dir).code == 0);
+  REQUIRE(run_mbi(deform(data("twist.pvd"), dir / "t.pc2"), dir).code == 0);
   const mbi::io::PointCache p = mbi::io::read_pc2(dir / "t.pc2");
-  CHECK(p.start_frame == 15.0f);  // 0.5 s at 30 frames per second, then every 0.5 s
-  CHECK(p.sample_rate == 15.0f);
-  REQUIRE(run_mbi(deform(data("twist.pc2"), dir / "p.mdd", "--fps 2"), dir).code == 0);
-  CHECK(mbi::io::read_mdd(dir / "p.mdd").times == std::vector<float>{0.5f, 1.0f, 1.5f});  // frames 1, 2, 3 at 2 fps
+  CHECK(p.start_frame == 12.0f);  // 0.5 s at 24 frames per second, then every 0.5 s
+  CHECK(p.sample_rate == 12.0f);
+  REQUIRE(run_mbi(deform(data("twist.pc2"), dir / "p.mdd"), dir).code == 0);
+  CHECK(mbi::io::read_mdd(dir / "p.mdd").times == std::vector<float>{1 / 24.0f, 2 / 24.0f, 3 / 24.0f});  // frames 1, 2, 3
+}
+
+namespace {
+
+// Control positions U (1 + a t) at irregular times, as a .pvd of legacy .vtk files: a motion
+// linear in t, which linear interpolation between frames reproduces exactly, and affine in space,
+// which every method reproduces: the dense points at time t are P (1 + a t).
+constexpr double kGrowth = 0.25;
+fs::path growing_box(const TempDir& dir, const std::vector<double>& times) {
+  const mbi::io::ControlMesh box = mbi::io::read_control_mesh(data("box.node"));
+  std::ofstream pvd(dir / "grow.pvd");
+  pvd << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    const std::string name = "grow_" + std::to_string(k) + ".vtk";
+    mbi::io::write_vtk(dir / name, box.U * (1 + kGrowth * times[k]), box.T);
+    pvd << "<DataSet timestep=\"" << times[k] << "\" part=\"0\" file=\"" << name << "\"/>\n";
+  }
+  pvd << "</Collection>\n</VTKFile>\n";
+  return dir / "grow.pvd";
+}
+
+}  // namespace
+
+TEST_CASE("sequence: --fps resamples to the output rate, positions linear between input frames", "[app][sequence]") {
+  TempDir dir("seq");
+  const fs::path pvd = growing_box(dir, {0.2, 0.5, 1.3});
+  const Eigen::MatrixXd P = mbi::io::read_surface(data("sphere.obj")).V;
+  const auto r = run_mbi(deform(pvd, dir / "r.pc2", "--fps 10 --mesh " + q(data("sphere.obj")) + " --out " + q(dir / "r.mdd")), dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  // 0.2 s to 1.3 s at 10 frames a second: 12 frames, the first at the scene's frame 0 for a
+  // player that plays sample f at frame f (Blender's Mesh Cache by default)
+  const mbi::io::PointCache pc2 = mbi::io::read_pc2(dir / "r.pc2"), mdd = mbi::io::read_mdd(dir / "r.mdd");
+  REQUIRE(pc2.frames.size() == 12);
+  CHECK(pc2.start_frame == 2.0f);
+  CHECK(pc2.sample_rate == 1.0f);
+  REQUIRE(mdd.times.size() == 12);
+  for (int k = 0; k < 12; ++k) {
+    const double t = 0.2 + k / 10.0;
+    INFO("frame " << k << " at " << t << " s");
+    CHECK(mdd.times[static_cast<std::size_t>(k)] == Approx(t).epsilon(1e-6));
+    // the analytic motion; float32 caches
+    CHECK(max_diff(pc2.frames[static_cast<std::size_t>(k)], P * (1 + kGrowth * t)) <= 1e-6);
+    CHECK(max_diff(mdd.frames[static_cast<std::size_t>(k)], P * (1 + kGrowth * t)) <= 1e-6);
+  }
+  // a glTF of the same frames keys them at the same times
+  REQUIRE(run_mbi(deform(pvd, dir / "r.glb", "--fps 10"), dir).code == 0);
+  CHECK(max_diff(mbi::io::read_surface(dir / "r.glb").V, P * (1 + kGrowth * 0.2)) <= 1e-6);
+}
+
+TEST_CASE("sequence: --fps refuses what it cannot use, naming --fps", "[app][sequence]") {
+  TempDir dir("seq");
+  for (const std::string bad : {"0", "-24", "nan", "inf", "abc", ""}) {
+    INFO("--fps '" << bad << "'");
+    const auto r = run_mbi(deform(data("twist.pvd"), dir / "x.pc2", "--fps '" + bad + "'"), dir);
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Catch::Contains("--fps " + bad + ": give a number of frames per second > 0"));
+  }
+  // no frame times in seconds: a PC2 (frame numbers), numbered files, one pose
+  for (const fs::path& in : {data("twist.pc2"), data("twist_%04d.vtu"), data("twist_0001.txt")}) {
+    INFO(in);
+    const auto r = run_mbi(deform(in, dir / "x.pc2", "--fps 30"), dir);
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Catch::Contains("--fps: ") && Catch::Contains("has no frame times in seconds to resample"));
+  }
+  CHECK(!fs::exists(dir / "x.pc2"));
+}
+
+TEST_CASE("sequence: --displacement adds a meshio .vtu/.vtk point field, as the motion baked into the points", "[app][sequence]") {
+  if (!have_meshio()) {
+    WARN("python3-meshio missing (scripts/install-deps.sh test): displacement fields are not checked");
+    return;
+  }
+  TempDir dir("seq");
+  const std::string make = "/usr/bin/python3 " + q(data("make_displacement.py")) + " " + q(dir / "d") + " 2>/dev/null";
+  REQUIRE(std::system(make.c_str()) == 0);
+  auto r = run_mbi(deform(dir / "d" / "baked_%04d.vtu", dir / "baked.pc2"), dir);
+  REQUIRE(r.code == 0);
+  const mbi::io::PointCache baked = mbi::io::read_pc2(dir / "baked.pc2");
+  REQUIRE(baked.frames.size() == 3);
+  // the field in ASCII, base64 and zlib .vtu, ASCII and binary .vtk
+  for (const std::string ext : {".vtu", ".vtk"}) {
+    INFO(ext);
+    r = run_mbi(deform(dir / "d" / ("disp_%04d" + ext), dir / "disp.pc2", "--force --displacement displacement"), dir);
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    CHECK(r.err.find("warning") == std::string::npos);
+    const mbi::io::PointCache disp = mbi::io::read_pc2(dir / "disp.pc2");
+    REQUIRE(disp.frames.size() == 3);
+    // 12 digits in ASCII, points + field against their sum: float32 round-off of the output
+    for (std::size_t k = 0; k < 3; ++k) CHECK(max_diff(disp.frames[k], baked.frames[k]) <= 1e-6);
+    CHECK(max_diff(disp.frames[2], baked.frames[0]) > 0.01);  // the frames do move
+  }
+  // one pose too
+  r = run_mbi(deform(dir / "d" / "disp_0002.vtu", dir / "one.txt", "--displacement displacement"), dir);
+  REQUIRE(r.code == 0);
+  CHECK(max_diff(mbi::io::read_points(dir / "one.txt"), baked.frames[2]) <= 1e-6);
+
+  // without the option: the rest pose, and a warning naming the field and the option, once
+  r = run_mbi(deform(dir / "d" / "disp_%04d.vtu", dir / "rest.pc2"), dir);
+  REQUIRE(r.code == 0);
+  CHECK_THAT(r.err, Catch::Contains("disp_0000.vtu: the positions are the rest mesh's") &&
+                        Catch::Contains("'displacement' (27 x 3): give --displacement displacement"));
+  CHECK(r.err.find("warning") == r.err.rfind("warning"));
+  // a missing field, a field of the wrong shape, a file without fields: the file and the field named
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"disp_%04d.vtu --displacement nope", "disp_0000.vtu: no point field 'nope' (point fields: temperature, displacement)"},
+      {"disp_%04d.vtk --displacement temperature", "disp_0000.vtk: point field 'temperature': 27 x 1 values"},
+      {"baked_%04d.vtu --displacement displacement", "baked_0000.vtu: no point field 'displacement' (point fields: none)"}};
+  for (const auto& [args, message] : bad) {
+    INFO(args);
+    r = run_mbi(deform(dir / "d" / args.substr(0, args.find(' ')), dir / "bad.pc2", args.substr(args.find(' '))), dir);
+    CHECK(r.code != 0);
+    CHECK_THAT(r.err, Catch::Contains(message));
+  }
+  r = run_mbi(deform(data("twist.pc2"), dir / "bad.pc2", "--displacement u"), dir);
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("twist.pc2: no point field 'u': a point cache holds positions only"));
+  CHECK(!fs::exists(dir / "bad.pc2"));
 }
 
 TEST_CASE("sequence: a bad frame ends it with every earlier frame complete", "[app][sequence]") {

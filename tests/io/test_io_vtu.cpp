@@ -200,3 +200,52 @@ TEST_CASE("trajectories: numbering from 1, natural order, and what is refused", 
   REQUIRE(bad.frames() == 3);
   CHECK_THROWS_WITH(bad.read(2), Catch::StartsWith("frame 2: ") && Catch::Contains("p_3.txt:2"));
 }
+
+TEST_CASE("point data: fields of a raw appended .vtu and a legacy .vtk, and positions displaced by one", "[io][vtu]") {
+  TempDir dir("vtu_fields");
+  // one tetrahedron; appended raw data (UInt32 headers): points, then the field "u" (4 x 3)
+  const double P[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+  const double U[12] = {0.5, 0, 0, 0, 0.25, 0, 0, 0, -1, 1e-3, 2e-3, 3e-3};
+  std::string raw = "_";
+  for (const double* a : {P, U}) {
+    const std::uint32_t bytes = 96;
+    raw.append(reinterpret_cast<const char*>(&bytes), 4).append(reinterpret_cast<const char*>(a), 96);
+  }
+  std::ofstream(dir / "t.vtu", std::ios::binary)
+      << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\" "
+         "header_type=\"UInt32\">\n<UnstructuredGrid>\n<Piece NumberOfPoints=\"4\" NumberOfCells=\"1\">\n"
+         "<PointData><DataArray type=\"Float64\" Name=\"u\" NumberOfComponents=\"3\" format=\"appended\" offset=\"100\"/>"
+         "</PointData>\n<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"appended\" offset=\"0\"/>"
+         "</Points>\n<Cells><DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">0 1 2 3</DataArray>"
+         "<DataArray type=\"Int32\" Name=\"offsets\" format=\"ascii\">4</DataArray>"
+         "<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">10</DataArray></Cells>\n</Piece>\n</UnstructuredGrid>\n"
+         "<AppendedData encoding=\"raw\">"
+      << raw << "</AppendedData>\n</VTKFile>\n";
+  // the same as legacy VTK: SCALARS with a lookup table, then VECTORS
+  std::ofstream(dir / "t.vtk") << "# vtk DataFile Version 3.0\nt\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n"
+                                  "0 0 0 1 0 0 0 1 0 0 0 1\nCELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\nCELL_DATA 1\n"
+                                  "SCALARS id int 1\nLOOKUP_TABLE default\n7\nPOINT_DATA 4\nSCALARS T float\n"
+                                  "LOOKUP_TABLE default\n1 2 3 4\nVECTORS u double\n"
+                                  "0.5 0 0 0 0.25 0 0 0 -1 1e-3 2e-3 3e-3\n";
+  const Eigen::MatrixXd rest = Eigen::Map<const Eigen::Matrix<double, 4, 3, Eigen::RowMajor>>(P);
+  const Eigen::MatrixXd u = Eigen::Map<const Eigen::Matrix<double, 4, 3, Eigen::RowMajor>>(U);
+  for (const char* name : {"t.vtu", "t.vtk"}) {
+    INFO(name);
+    const PointData d = read_point_data(dir / name);
+    CHECK(d.P == rest);
+    const PointField& field = d.fields.back();
+    CHECK(field.name == "u");
+    CHECK(field.values == u);
+    CHECK(read_positions(dir / name, "u") == rest + u);
+    CHECK(read_positions(dir / name, "") == rest);
+    try {
+      read_positions(dir / name, "v");
+      FAIL("no error");
+    } catch (const Error& e) {
+      CHECK_THAT(e.what(), Catch::Contains(name) && Catch::Contains("no point field 'v'"));
+    }
+  }
+  CHECK(read_point_data(dir / "t.vtk").fields.size() == 2);  // T and u; the cell data is not a point field
+  CHECK_THROWS_WITH(read_positions(dir / "t.vtk", "T"), Catch::Contains("point field 'T': 4 x 1 values"));
+  CHECK_THROWS_WITH(read_point_data(data("twist.pc2")), Catch::Contains("point fields are read from .vtu and .vtk files"));
+}

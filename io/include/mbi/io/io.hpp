@@ -226,6 +226,27 @@ ControlMesh read_vtu_mesh(const std::filesystem::path& file);
 /// The Points of a .vtu file, n x 3 (deformed positions for a mesh read by read_vtu_mesh).
 Eigen::MatrixXd read_vtu_points(const std::filesystem::path& file);
 
+/// A point data array of a VTK file: its name and values, n x components (points x components).
+struct PointField {
+  std::string name;
+  Eigen::MatrixXd values;
+};
+/// The points of a VTK file with its point data.
+struct PointData {
+  Eigen::MatrixXd P;                ///< n x 3, as read_vtu_points / read_vtk_points
+  std::vector<PointField> fields;  ///< in file order
+};
+/// The Points and every point data array of a .vtu (PointData, in every encoding read_vtu_mesh
+/// reads) or a legacy .vtk (POINT_DATA: SCALARS, VECTORS, NORMALS, TENSORS, TEXTURE_COORDINATES,
+/// COLOR_SCALARS and FIELD arrays of n tuples, ASCII or BINARY, up to a METADATA block). Error
+/// naming the file for any other extension.
+PointData read_point_data(const std::filesystem::path& file);
+/// read_positions(file) plus the point field `displacement` of a .vtu or .vtk file (FEniCS's and
+/// deal.II's rest mesh with a displacement): n x 3, the field of n tuples of 3 components (or 2:
+/// z unchanged). Error naming the file and the field when the file has no such field, its size
+/// is not n x 2 or n x 3, a value is not finite, or the file is not a .vtu or .vtk.
+Eigen::MatrixXd read_positions(const std::filesystem::path& file, const std::string& displacement);
+
 /// Legacy VTK unstructured grid (ASCII, for ParaView): tetrahedra (cell type 10) or triangles
 /// (type 5, z = 0). Optional per-point vectors (n x d, e.g. displacements) named `point_data`.
 void write_vtk(const std::filesystem::path& file, const Eigen::Ref<const Eigen::MatrixXd>& U,
@@ -252,7 +273,10 @@ std::filesystem::path write_frame(const std::filesystem::path& base, int frame,
 
 /// glTF 2.0 animation (.glb, or .gltf with the buffer inside as base64) of a deformed surface:
 /// one node per frame, each with a mesh of every part (a mesh read from a glTF keeps its parts,
-/// materials, UVs and colours; any other mesh is one part), shown in turn by step-keyed node
+/// materials, UVs and colours; one read from an OBJ has a part per group and material, its UVs,
+/// its vertices split where corners differ in UV (every frame's positions copied to the split),
+/// and its MTL materials as PBR materials where they map (Kd, map_Kd as a URI relative to the
+/// output, d/Tr as BLEND); a PLY keeps its vertex colours; any other mesh is one part), shown in turn by step-keyed node
 /// scale, which Blender's and three.js's importers play back. Positions and normals are stored
 /// as float32 (a relative error of at most 2^-24 a coordinate), indices, UVs and colours once
 /// for all frames. The frames are kept in memory (12 bytes a vertex, 24 with normals) and
@@ -273,6 +297,9 @@ class GltfWriter {
   /// Writes the frames appended so far, atomically.
   void finish();
   int samples() const;
+  /// What of the input's attributes did not map to glTF (an OBJ's MTL keys without a PBR
+  /// counterpart, a missing material library or texture), one line each, for the user.
+  const std::vector<std::string>& notes() const;
 
  private:
   struct State;
@@ -423,7 +450,9 @@ bool is_numbered_name(const std::string& name);
 /// missing one is reported before any work.
 class Trajectory {
  public:
-  explicit Trajectory(const std::string& spec);
+  /// `displacement`: a point field of every frame added to its positions (read_positions);
+  /// frames of a point cache or of text files have none (Error naming the file and the field).
+  explicit Trajectory(const std::string& spec, const std::string& displacement = "");
   ~Trajectory();
   Trajectory(Trajectory&&) noexcept;
   Trajectory& operator=(Trajectory&&) noexcept;
@@ -434,6 +463,8 @@ class Trajectory {
   int frames() const;
   /// Frame k's positions as the file holds them (n x 3, or n x d for .node and text).
   Eigen::MatrixXd read(int k);
+  /// The file of frame k; empty for a point cache.
+  std::filesystem::path file(int k) const;
   /// Where frame k comes from, for messages: "x_0007.vtk" or "traj.pc2: frame 7".
   std::string where(int k) const;
   /// Frame times (s) from an MDD or a .pvd; empty otherwise. An MDD's are read on the first
