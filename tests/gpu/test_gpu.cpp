@@ -18,6 +18,7 @@
 
 #include <cstdlib>
 #include <random>
+#include <span>
 
 using namespace mbi;
 namespace pl = mbi::pipeline;
@@ -146,13 +147,13 @@ struct Target {
 };
 
 // The bar drawn with gpu::shaders::mesh through a gpu::Surface: the uniform `color`, or a colour
-// per point where `colors` is given (the program then built with VERTEX_COLOR).
-io::Image draw_bar(TwistedBar& b, int w, int h, const Eigen::Vector3f& color, const std::vector<float>* colors) {
+// per point where `colors` is not empty (the program then built with VERTEX_COLOR).
+io::Image draw_bar(TwistedBar& b, int w, int h, const Eigen::Vector3f& color, std::span<const float> colors) {
   const Target target(w, h);
   glClearColor(1, 1, 1, 1);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   glEnable(GL_DEPTH_TEST);
-  const GLuint p = gpu::program("test mesh", gpu::shaders::mesh, colors ? "#define VERTEX_COLOR\n" : "");
+  const GLuint p = gpu::program("test mesh", gpu::shaders::mesh, colors.empty() ? "" : "#define VERTEX_COLOR\n");
   const raster::View view = bar_view(b);
   const Eigen::Matrix4f vp = gpu::relative_to(gpu::Renderer::view_matrix(view, w, h), b.ev->origin());
   const Eigen::Vector3f eye = view.direction.normalized().cast<float>();
@@ -338,15 +339,15 @@ TEST_CASE("gpu: the surface drawn with a colour per point equal to the uniform c
   TwistedBar b = twisted_bar();
   const int w = 200, h = 150;
   const Eigen::Vector3f tint(0.85f, 0.62f, 0.35f);
-  const io::Image uniform = draw_bar(b, w, h, tint, nullptr);
+  const io::Image uniform = draw_bar(b, w, h, tint, {});
   std::vector<float> rgb;
   for (long long i = 0; i < b.ev->points(); ++i) rgb.insert(rgb.end(), {tint.x(), tint.y(), tint.z()});
-  const io::Image per_point = draw_bar(b, w, h, {0, 0, 0}, &rgb);
+  const io::Image per_point = draw_bar(b, w, h, {0, 0, 0}, rgb);
   CHECK(covered(uniform) > w * h / 10);
   CHECK(per_point.rgb == uniform.rgb);
   // pure red everywhere: every covered pixel red only, as many as before
   for (size_t i = 0; i < rgb.size(); ++i) rgb[i] = i % 3 == 0 ? 1.0f : 0.0f;
-  const io::Image red = draw_bar(b, w, h, tint, &rgb);
+  const io::Image red = draw_bar(b, w, h, tint, rgb);
   CHECK(covered(red) == covered(uniform));
   long long not_red = 0;
   for (int y = 0; y < h; ++y)
@@ -372,7 +373,7 @@ TEST_CASE("gpu: the surface refuses faces of another shape, negative indices, co
   CHECK_THROWS_WITH(surface.set_faces(F), "Surface: negative index in face 3");
   surface.set_faces(b.F);
   const std::vector<float> short_rgb(3 * static_cast<size_t>(b.ev->points()) - 1, 0.5f);
-  CHECK_THROWS_WITH(surface.draw(*b.ev, {.colors = &short_rgb}),
+  CHECK_THROWS_WITH(surface.draw(*b.ev, {.colors = short_rgb}),
                     Catch::StartsWith("Surface: " + std::to_string(short_rgb.size()) + " colour values for "));
   b.ev->evaluate(b.pipe->bezier_with(pl::Method::ModifiedBI), false);  // a pass without normals
   CHECK_THROWS_WITH(surface.draw(*b.ev), "Surface: normals asked of a pass without them");

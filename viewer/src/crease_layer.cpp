@@ -54,7 +54,7 @@ void CreaseLayer::draw(const gpu::GpuEvaluator& ev, size_t k, const Eigen::Matri
   glUniformMatrix4fv(glGetUniformLocation(program_, "view_projection"), 1, GL_FALSE, vp.data());
   glUniform3f(glGetUniformLocation(program_, "eye_direction"), eye.x(), eye.y(), eye.z());
   // in front of the renderer's surface (offset 1), behind its wireframe
-  surface_.draw(ev, {.colors = &views_[k].rgb, .offset = 0.5f});
+  surface_.draw(ev, {.colors = views_[k].rgb, .offset = 0.5f});
   glUseProgram(0);
   glDisable(GL_DEPTH_TEST);
 }

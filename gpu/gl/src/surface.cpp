@@ -3,6 +3,7 @@
 #include "gl_util.hpp"
 
 #include <string>
+#include <vector>
 
 namespace mbi::gpu {
 namespace {
@@ -54,18 +55,18 @@ void Surface::set_faces(const Eigen::Ref<const Eigen::MatrixXi>& F) {
 
 void Surface::draw(const GpuEvaluator& ev, const SurfaceInputs& in) {
   if (in.normals && !ev.has_normals()) throw Error("Surface: normals asked of a pass without them");
-  if (in.colors && in.colors->size() != 3 * static_cast<size_t>(ev.points()))
-    throw Error("Surface: " + std::to_string(in.colors->size()) + " colour values for " +
+  if (!in.colors.empty() && in.colors.size() != 3 * static_cast<size_t>(ev.points()))
+    throw Error("Surface: " + std::to_string(in.colors.size()) + " colour values for " +
                 std::to_string(ev.points()) + " points (3 a point)");
   glBindVertexArray(vao_);
   attribute(0, ev.rest_buffer());
   attribute(1, ev.displacement_buffer());
   if (in.normals) attribute(2, ev.normal_buffer());
   else glDisableVertexAttribArray(2);
-  if (in.colors) {
+  if (!in.colors.empty()) {
     glBindBuffer(GL_ARRAY_BUFFER, colors_);
-    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(in.colors->size() * sizeof(float)),
-                 in.colors->data(), GL_STREAM_DRAW);
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(in.colors.size_bytes()), in.colors.data(),
+                 GL_STREAM_DRAW);
     attribute(3, colors_);
   } else {
     glDisableVertexAttribArray(3);

@@ -6,7 +6,7 @@
 
 #include <Eigen/Core>
 
-#include <vector>
+#include <span>
 
 namespace mbi::gpu {
 
@@ -17,7 +17,7 @@ Eigen::Matrix4f relative_to(const Eigen::Matrix4d& view_projection, const Eigen:
 /// What Surface::draw feeds the program besides the positions (rest + displacement).
 struct SurfaceInputs {
   bool normals = true;                         ///< the evaluator's normals (needs a pass with them)
-  const std::vector<float>* colors = nullptr;  ///< RGB per point, 0..1, uploaded at each draw
+  std::span<const float> colors = {};  ///< RGB per point, 0..1, uploaded at each draw; empty: none
   float offset = 0;  ///< > 0: pushed back by glPolygonOffset(offset, offset), behind lines drawn there
 };
 
