@@ -1,5 +1,5 @@
 // Legacy VTK unstructured grids: read (format 2.0-5.1, ASCII or BINARY; points, cells and cell
-// types, point and cell data skipped) and written (ASCII, with optional point vectors).
+// types; the point data for read_point_data) and written (ASCII, with optional point vectors).
 #include "control.hpp"
 #include "cursor.hpp"
 
