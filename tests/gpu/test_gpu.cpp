@@ -379,3 +379,34 @@ TEST_CASE("gpu: the surface refuses faces of another shape, negative indices, co
   CHECK_THROWS_WITH(surface.draw(*b.ev), "Surface: normals asked of a pass without them");
   CHECK(glGetError() == GL_NO_ERROR);
 }
+
+TEST_CASE("gpu: the renderer's colours per point cover the surface it drew, its wireframe stays in front",
+          "[gpu][render]") {
+  TwistedBar b = twisted_bar();
+  const int w = 200, h = 150;
+  gpu::Renderer r(context());
+  r.set_faces(b.F);
+  const raster::View view = bar_view(b);
+  const Eigen::Matrix4d vp = gpu::Renderer::view_matrix(view, w, h);
+  std::vector<float> red;
+  for (long long i = 0; i < b.ev->points(); ++i) red.insert(red.end(), {1.0f, 0.0f, 0.0f});
+  const Target target(w, h);
+  glClearColor(1, 1, 1, 1);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  r.draw(*b.ev, vp, view.direction, {0.85, 0.62, 0.35}, &b.X, &b.T);
+  r.draw_colors(*b.ev, vp, view.direction, red);
+  const io::Image img = gpu::read_picture(w, h);
+  long long reds = 0, greys = 0, others = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const auto* px = img.at(x, y);
+      if (px[0] == 255 && px[1] == 255 && px[2] == 255) continue;
+      if (px[0] > 0 && px[1] == 0 && px[2] == 0) ++reds;
+      else if (px[0] == px[1] && px[1] == px[2]) ++greys;  // the wireframe's dark grey
+      else ++others;
+    }
+  CHECK(reds > w * h / 10);
+  CHECK(greys > 100);
+  CHECK(others == 0);
+  CHECK(glGetError() == GL_NO_ERROR);
+}

@@ -1,22 +1,12 @@
 #include "crease_layer.hpp"
 
-#include <mbi/gpu/program.hpp>
-
-#include <epoxy/gl.h>
-
 #include <algorithm>
-#include <string>
 
 namespace mbi::viewer {
 
 CreaseLayer::CreaseLayer(const Stage& stage)
     : creases_(stage.U, stage.T),
-      near_(creases_.near_faces(stage.pipe.embedding())),
-      program_(gpu::program("crease colours", gpu::shaders::mesh, "#define VERTEX_COLOR\n")) {
-  surface_.set_faces(stage.F);
-}
-
-CreaseLayer::~CreaseLayer() { glDeleteProgram(program_); }
+      near_(creases_.near_faces(stage.pipe.embedding())) {}
 
 void CreaseLayer::update(Stage& stage) {
   std::vector<Eigen::VectorXd> jumps;
@@ -41,22 +31,6 @@ void CreaseLayer::update(Stage& stage) {
     }
     cv.mean_near = near_count ? near_sum / static_cast<double>(near_count) : 0.0;
   }
-}
-
-void CreaseLayer::draw(const gpu::GpuEvaluator& ev, size_t k, const Eigen::Matrix4d& view_projection,
-                       const Eigen::Vector3d& eye_direction) {
-  if (k >= views_.size()) return;
-  const Eigen::Matrix4f vp = gpu::relative_to(view_projection, ev.origin());
-  const Eigen::Vector3f eye = eye_direction.normalized().cast<float>();
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
-  glUseProgram(program_);
-  glUniformMatrix4fv(glGetUniformLocation(program_, "view_projection"), 1, GL_FALSE, vp.data());
-  glUniform3f(glGetUniformLocation(program_, "eye_direction"), eye.x(), eye.y(), eye.z());
-  // in front of the renderer's surface (offset 1), behind its wireframe
-  surface_.draw(ev, {.colors = views_[k].rgb, .offset = 0.5f});
-  glUseProgram(0);
-  glDisable(GL_DEPTH_TEST);
 }
 
 }  // namespace mbi::viewer

@@ -1,11 +1,9 @@
 #pragma once
 // The creases in colour in the viewer (internal): while the toggle is on, each frame computes
-// every view's face jumps on the CPU (mbi/pipeline/creases.hpp), one scale for all views, and draws the
-// dense surface from the evaluator's buffers with a colour per vertex. Nothing runs while off.
+// every view's face jumps on the CPU (mbi/pipeline/creases.hpp), one scale for all views: the
+// colours per dense point that gpu::Renderer::draw_colors draws. Nothing runs while off.
 #include "stage.hpp"
 
-#include <mbi/gpu/evaluator.hpp>
-#include <mbi/gpu/surface.hpp>
 #include <mbi/pipeline/creases.hpp>
 
 #include <vector>
@@ -21,18 +19,10 @@ struct CreaseView {
 
 class CreaseLayer {
  public:
-  /// Needs the viewer's OpenGL context current. Throws Error when its shaders fail.
-  CreaseLayer(const Stage& stage);
-  ~CreaseLayer();
-  CreaseLayer(const CreaseLayer&) = delete;
-  CreaseLayer& operator=(const CreaseLayer&) = delete;
+  explicit CreaseLayer(const Stage& stage);
 
   /// This frame's colours of stage.views on one shared scale.
   void update(Stage& stage);
-  /// Draws view k's surface from `ev`'s buffers (as gpu::Renderer::draw, coloured per vertex),
-  /// slightly in front of a surface drawn there already (the wireframe pass).
-  void draw(const gpu::GpuEvaluator& ev, size_t k, const Eigen::Matrix4d& view_projection,
-            const Eigen::Vector3d& eye_direction);
 
   double top() const { return top_; }  ///< the scale's top: the largest face jump of the views
   const std::vector<CreaseView>& views() const { return views_; }
@@ -44,8 +34,6 @@ class CreaseLayer {
   std::vector<bool> near_;
   std::vector<CreaseView> views_;
   double top_ = 0;
-  gpu::Surface surface_;
-  unsigned program_ = 0;
 };
 
 }  // namespace mbi::viewer

@@ -65,7 +65,8 @@ void draw_views(gpu::Renderer& renderer, Stage& stage, const Interaction& in, co
     if (stage.d == 3 && (!creases || options.wireframe) && (!scenery || options.wireframe))
       renderer.draw(stage.gpu, vp, camera.direction(), color, options.wireframe ? &X3 : nullptr,
                     options.wireframe ? &stage.T : nullptr);
-    if (creases) stage.creases->draw(stage.gpu, static_cast<size_t>(k), vp, camera.direction());
+    if (creases)
+      renderer.draw_colors(stage.gpu, vp, camera.direction(), stage.creases->views()[static_cast<size_t>(k)].rgb);
     if (stage.d == 2)
       renderer.draw_textured(stage.gpu, vp, *stage.image);
     draw_markers(renderer, in, options, X3, vp);

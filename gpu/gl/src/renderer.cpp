@@ -63,6 +63,7 @@ Renderer::~Renderer() {
   for (GLuint r : rbs)
     if (r) glDeleteRenderbuffers(1, &r);
   if (mesh_program_) glDeleteProgram(mesh_program_);
+  if (colors_program_) glDeleteProgram(colors_program_);
   if (line_program_) glDeleteProgram(line_program_);
   if (texture_program_) glDeleteProgram(texture_program_);
   if (texture_) glDeleteTextures(1, &texture_);
@@ -137,6 +138,24 @@ void Renderer::draw(const GpuEvaluator& ev, const Eigen::Matrix4d& view_projecti
   glUseProgram(0);
   glDisable(GL_DEPTH_TEST);
   detail::check("Renderer::draw");
+}
+
+void Renderer::draw_colors(const GpuEvaluator& ev, const Eigen::Matrix4d& view_projection,
+                           const Eigen::Vector3d& eye_direction, std::span<const float> rgb) {
+  if (ev.dim() != 3 || !ev.has_normals())
+    throw Error("Renderer: needs a 3D evaluation with normals");
+  if (!colors_program_) colors_program_ = program("renderer colours", shaders::mesh, "#define VERTEX_COLOR\n");
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  const Eigen::Matrix4f vp = relative_to(view_projection, ev.origin());
+  const Eigen::Vector3f eye = eye_direction.normalized().cast<float>();
+  glUseProgram(colors_program_);
+  glUniformMatrix4fv(glGetUniformLocation(colors_program_, "view_projection"), 1, GL_FALSE, vp.data());
+  glUniform3f(glGetUniformLocation(colors_program_, "eye_direction"), eye.x(), eye.y(), eye.z());
+  surface_.draw(ev, {.colors = rgb, .offset = 0.5f});  // in front of draw()'s (offset 1), behind its wireframe
+  glUseProgram(0);
+  glDisable(GL_DEPTH_TEST);
+  detail::check("Renderer::draw_colors");
 }
 
 void Renderer::draw_textured(const GpuEvaluator& ev, const Eigen::Matrix4d& view_projection,

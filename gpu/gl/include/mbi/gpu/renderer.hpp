@@ -8,6 +8,7 @@
 #include <mbi/io/image.hpp>
 #include <mbi/raster/raster.hpp>
 
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -37,6 +38,10 @@ class Renderer {
   void draw(const GpuEvaluator& evaluator, const Eigen::Matrix4d& view_projection,
             const Eigen::Vector3d& eye_direction, const Eigen::Vector3d& color,
             const Eigen::MatrixXd* wire_X = nullptr, const Eigen::MatrixXi* wire_T = nullptr);
+  /// Draws the surface as draw() does, with a colour per point (`rgb`: 3 floats a point, 0..1)
+  /// and slightly in front of a surface that draw() drew there (its wireframe stays in front).
+  void draw_colors(const GpuEvaluator& evaluator, const Eigen::Matrix4d& view_projection,
+                   const Eigen::Vector3d& eye_direction, std::span<const float> rgb);
   /// 2D: draws the evaluator's triangles textured with `image`, texture coordinates from the rest
   /// positions (pixels: x right, y down, as the scene's image grid). Uploads the image once per
   /// new image pointer.
@@ -54,7 +59,7 @@ class Renderer {
   void ensure_target(int width, int height);
   Context& context_;
   Surface surface_;
-  unsigned mesh_program_ = 0, line_program_ = 0;
+  unsigned mesh_program_ = 0, line_program_ = 0, colors_program_ = 0;
   unsigned line_vao_ = 0, line_buffer_ = 0;
   unsigned fbo_ = 0, color_ = 0, depth_ = 0;
   unsigned texture_program_ = 0, texture_ = 0;
