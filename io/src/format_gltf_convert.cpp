@@ -189,59 +189,66 @@ ObjLayout obj_layout(const ObjAttributes& a) {
   return o;
 }
 
+using Corner = std::pair<int, int>;  // (v, vt), vt -1: none
+using Triangle = std::array<Corner, 3>;
+
+// One part's triangles as written: a vertex for each (v, vt) the part uses, numbered in (v, vt)
+// order (a part without seams keeps the mesh's vertex order), appended to `asset`; its UVs when
+// any corner has one (`missing_uv` set for a corner without).
+GltfPart split_part(const std::vector<Triangle>& triangles, const ObjLayout& lay, GltfAsset& asset, bool& missing_uv) {
+  GltfPart part;
+  part.first_vertex = static_cast<long long>(asset.source.size());
+  part.first_face = static_cast<long long>(asset.triangles.size());
+  std::map<Corner, int> split;
+  bool any_uv = false;
+  for (const Triangle& tri : triangles)
+    for (const Corner& c : tri) {
+      split.emplace(c, 0);
+      any_uv |= c.second >= 0;
+    }
+  for (auto& [c, index] : split) {
+    index = static_cast<int>(asset.source.size());
+    asset.source.push_back(c.first);
+    if (!any_uv) continue;
+    const std::array<double, 2> uv = c.second >= 0 ? lay.vt[static_cast<std::size_t>(c.second)] : std::array<double, 2>{0, 0};
+    missing_uv |= c.second < 0;
+    part.uv0.push_back(static_cast<float>(uv[0]));
+    part.uv0.push_back(static_cast<float>(1 - uv[1]));  // glTF's v runs down the image
+  }
+  for (const Triangle& tri : triangles) asset.triangles.push_back({split.at(tri[0]), split.at(tri[1]), split.at(tri[2])});
+  part.vertices = static_cast<long long>(asset.source.size()) - part.first_vertex;
+  part.faces = static_cast<long long>(asset.triangles.size()) - part.first_face;
+  return part;
+}
+
+// Null when the OBJ has nothing glTF would keep (no vt, one group, no material): written plain.
 std::shared_ptr<GltfAsset> obj_asset(const ObjAttributes& a, const Polygons& triangles, const path& output) {
   const ObjLayout lay = obj_layout(a);
   const bool any_vt = std::any_of(a.face_vt.begin(), a.face_vt.end(),
                                   [](const std::vector<int>& f) { return std::any_of(f.begin(), f.end(), [](int t) { return t >= 0; }); });
   const std::set<std::pair<std::string, std::string>> kinds(lay.face_part.begin(), lay.face_part.end());
-  if (!any_vt && kinds.size() <= 1 && (kinds.empty() || kinds.begin()->second.empty())) return nullptr;  // nothing to keep
-  auto asset = std::make_shared<GltfAsset>();
-  // parts by (group, material) in order of first appearance; faces (fan-triangulated) by part
+  if (!any_vt && kinds.size() <= 1 && (kinds.empty() || kinds.begin()->second.empty())) return nullptr;
+  // parts by (group, material) in order of first appearance, their faces fan-triangulated
   std::map<std::pair<std::string, std::string>, std::size_t> part_of;
-  std::vector<std::vector<std::array<std::pair<int, int>, 3>>> corners;  // per part: (v, vt) triangles
-  std::vector<std::string> material_names;
+  std::vector<std::pair<std::string, std::string>> keys;
+  std::vector<std::vector<Triangle>> corners;
   std::size_t t = 0;
   for (std::size_t j = 0; j < a.face_vt.size(); ++j) {
     const auto [it, fresh] = part_of.emplace(lay.face_part[j], corners.size());
-    if (fresh) corners.emplace_back();
+    if (fresh) corners.emplace_back(), keys.push_back(lay.face_part[j]);
     const std::vector<int>& vt = a.face_vt[j];
     for (std::size_t k = 1; k + 1 < vt.size(); ++k, ++t) {
       const std::vector<int>& tri = triangles[t];
       corners[it->second].push_back({{{tri[0], vt[0]}, {tri[1], vt[k]}, {tri[2], vt[k + 1]}}});
     }
   }
-  std::vector<std::pair<std::string, std::string>> keys(corners.size());
-  for (const auto& [key, p] : part_of) keys[p] = key;
+  auto asset = std::make_shared<GltfAsset>();
+  std::vector<std::string> material_names;
   bool missing_uv = false;
   for (std::size_t p = 0; p < corners.size(); ++p) {
-    GltfPart part;
+    GltfPart part = split_part(corners[p], lay, *asset, missing_uv);
     part.name = keys[p].first.empty() ? "default" : keys[p].first;
-    part.first_vertex = static_cast<long long>(asset->source.size());
-    part.first_face = static_cast<long long>(asset->triangles.size());
-    // (v, vt) -> written vertex, numbered in (v, vt) order: a part without seams keeps the
-    // mesh's vertex order
-    std::map<std::pair<int, int>, int> split;
-    bool any_uv = false;
-    for (const auto& tri : corners[p])
-      for (const auto& c : tri) {
-        split.emplace(c, 0);
-        any_uv |= c.second >= 0;
-      }
-    for (auto& [c, index] : split) {
-      index = static_cast<int>(asset->source.size());
-      asset->source.push_back(c.first);
-      if (!any_uv) continue;
-      const std::array<double, 2> uv = c.second >= 0 ? lay.vt[static_cast<std::size_t>(c.second)] : std::array<double, 2>{0, 0};
-      missing_uv |= c.second < 0;
-      part.uv0.push_back(static_cast<float>(uv[0]));
-      part.uv0.push_back(static_cast<float>(1 - uv[1]));  // glTF's v runs down the image
-    }
-    for (const auto& tri : corners[p])
-      asset->triangles.push_back({split.at(tri[0]), split.at(tri[1]), split.at(tri[2])});
-    part.vertices = static_cast<long long>(asset->source.size()) - part.first_vertex;
-    part.faces = static_cast<long long>(asset->triangles.size()) - part.first_face;
-    const std::string& mat = keys[p].second;
-    if (!mat.empty()) {
+    if (const std::string& mat = keys[p].second; !mat.empty()) {
       const auto m = std::find(material_names.begin(), material_names.end(), mat);
       part.material = static_cast<int>(m - material_names.begin());
       if (m == material_names.end()) material_names.push_back(mat);

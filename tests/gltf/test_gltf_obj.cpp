@@ -1,5 +1,6 @@
 // OBJ and PLY into glTF through mbi deform: an OBJ's UVs (its vertices split at UV seams, every
-// frame's positions following the split), groups and MTL materials, a PLY's vertex colours. The
+// frame's positions and normals following the split), groups and MTL materials, a PLY's vertex
+// colours. The
 // Khronos validator, three.js (tests/gltf/node/obj_corners.mjs: every corner's UV and position
 // against the OBJ and a point cache of the same run) and, where installed, Blender's importer read
 // the files back.
@@ -97,6 +98,7 @@ TEST_CASE("glTF from OBJ: UVs split at seams, groups and MTL materials, every fr
   REQUIRE(prims.size() == 2);
   CHECK(j["accessors"][prims[0]["attributes"]["POSITION"].get<int>()]["count"] == 18);
   CHECK(j["accessors"][prims[1]["attributes"]["POSITION"].get<int>()]["count"] == 4);
+  CHECK(j["accessors"][prims[1]["attributes"]["NORMAL"].get<int>()]["count"] == 4);
   CHECK(j["materials"][0]["name"] == "wood");
   CHECK(j["materials"][1]["alphaMode"] == "BLEND");
   // the texture lies outside the output's folder (which glTF readers refuse to look in): its
@@ -117,7 +119,17 @@ TEST_CASE("glTF from OBJ: UVs split at seams, groups and MTL materials, every fr
   CHECK(one["materials"].size() == 2);
   CHECK(one["images"][0]["uri"] == "textures/checker.png");
   CHECK(one["meshes"][0]["primitives"][0].contains("/attributes/TEXCOORD_0"_json_pointer));
-  CHECK(mbi::io::read_surface(dir / "model" / "one.gltf").V.rows() == 22);
+  // every split vertex has its OBJ vertex's position and deformed normal (the OBJ output's)
+  REQUIRE(run_mbi(deform("twist_0001.txt", "--mesh model/crate.obj --out one.obj"), dir, "", dir.path()).code == 0);
+  const mbi::io::SurfaceMesh split = mbi::io::read_surface(dir / "model" / "one.gltf"), plain = mbi::io::read_surface(dir / "one.obj");
+  REQUIRE(split.V.rows() == 22);
+  REQUIRE(split.N.rows() == 22);
+  for (Eigen::Index i = 0; i < split.V.rows(); ++i) {
+    Eigen::Index nearest = 0;
+    (plain.V.rowwise() - split.V.row(i)).rowwise().norm().minCoeff(&nearest);
+    CHECK((plain.V.row(nearest) - split.V.row(i)).cwiseAbs().maxCoeff() < 1e-6);
+    CHECK((plain.N.row(nearest) - split.N.row(i)).cwiseAbs().maxCoeff() < 1e-6);
+  }
 
   if (!have_node_packages()) mbi::test::skip("node or tests/gltf/node/node_modules missing (scripts/install-deps.sh test)");
   std::ofstream(dir / "materials.json") << R"({"wood": {"color": [0.8, 0.6, 0.4], "opacity": 1, "map": "stored"},
