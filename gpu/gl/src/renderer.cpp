@@ -44,6 +44,22 @@ Eigen::Matrix4d ortho_view(const raster::View& v, int w, int h) {
   return M;
 }
 
+// Depth test on and a program of gpu::shaders::mesh in use with its camera uniforms; returns its
+// view_projection (relative to the evaluator's origin).
+Eigen::Matrix4f use_mesh_program(GLuint program, const GpuEvaluator& ev, const Eigen::Matrix4d& view_projection,
+                                 const Eigen::Vector3d& eye_direction) {
+  if (ev.dim() != 3 || !ev.has_normals())
+    throw Error("Renderer: needs a 3D evaluation with normals");
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  const Eigen::Matrix4f vp = relative_to(view_projection, ev.origin());
+  const Eigen::Vector3f eye = eye_direction.normalized().cast<float>();
+  glUseProgram(program);
+  glUniformMatrix4fv(glGetUniformLocation(program, "view_projection"), 1, GL_FALSE, vp.data());
+  glUniform3f(glGetUniformLocation(program, "eye_direction"), eye.x(), eye.y(), eye.z());
+  return vp;
+}
+
 }  // namespace
 
 Renderer::Renderer(Context& context) : context_(context) {
@@ -98,17 +114,9 @@ Eigen::Matrix4d Renderer::view_matrix(const raster::View& view, int width, int h
 void Renderer::draw(const GpuEvaluator& ev, const Eigen::Matrix4d& view_projection,
                     const Eigen::Vector3d& eye_direction, const Eigen::Vector3d& color,
                     const Eigen::MatrixXd* wire_X, const Eigen::MatrixXi* wire_T) {
-  if (ev.dim() != 3 || !ev.has_normals())
-    throw Error("Renderer: needs a 3D evaluation with normals");
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
-  const Eigen::Matrix4f vp = relative_to(view_projection, ev.origin());
-  const Eigen::Vector3f eye = eye_direction.normalized().cast<float>();
-  glUseProgram(mesh_program_);
-  glUniformMatrix4fv(glGetUniformLocation(mesh_program_, "view_projection"), 1, GL_FALSE, vp.data());
+  const Eigen::Matrix4f vp = use_mesh_program(mesh_program_, ev, view_projection, eye_direction);
   glUniform3f(glGetUniformLocation(mesh_program_, "color"), static_cast<float>(color.x()),
               static_cast<float>(color.y()), static_cast<float>(color.z()));
-  glUniform3f(glGetUniformLocation(mesh_program_, "eye_direction"), eye.x(), eye.y(), eye.z());
   surface_.draw(ev, {.offset = 1.0f});  // behind the wireframe
   if (wire_X && wire_T && wire_T->cols() == 4) {
     if (wire_T->rows() != edges_of_ || wire_T->size() == 0 || edges_.empty()) {  // once per control mesh
@@ -142,16 +150,8 @@ void Renderer::draw(const GpuEvaluator& ev, const Eigen::Matrix4d& view_projecti
 
 void Renderer::draw_colors(const GpuEvaluator& ev, const Eigen::Matrix4d& view_projection,
                            const Eigen::Vector3d& eye_direction, std::span<const float> rgb) {
-  if (ev.dim() != 3 || !ev.has_normals())
-    throw Error("Renderer: needs a 3D evaluation with normals");
   if (!colors_program_) colors_program_ = program("renderer colours", shaders::mesh, "#define VERTEX_COLOR\n");
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
-  const Eigen::Matrix4f vp = relative_to(view_projection, ev.origin());
-  const Eigen::Vector3f eye = eye_direction.normalized().cast<float>();
-  glUseProgram(colors_program_);
-  glUniformMatrix4fv(glGetUniformLocation(colors_program_, "view_projection"), 1, GL_FALSE, vp.data());
-  glUniform3f(glGetUniformLocation(colors_program_, "eye_direction"), eye.x(), eye.y(), eye.z());
+  use_mesh_program(colors_program_, ev, view_projection, eye_direction);
   surface_.draw(ev, {.colors = rgb, .offset = 0.5f});  // in front of draw()'s (offset 1), behind its wireframe
   glUseProgram(0);
   glDisable(GL_DEPTH_TEST);
