@@ -32,14 +32,15 @@ run_packages=(
 # wrapper, venv for the install test, Dask's distributed scheduler for the batch recipe and its
 # test on a LocalCluster); meshio (the VTK XML fixtures' writer, tests/data/vtu); ffmpeg (the
 # viewer's --video pipes frames to it at run time, optional; its tests use ffprobe); Emscripten
-# (the web preset; its linker needs Debian's acorn) and Chromium (the page's browser test).
+# (the web preset; its linker needs Debian's acorn) and Chromium (the page's browser test);
+# Blender (headless, `blender -b`: its glTF importer reads our files back).
 test_packages=(
   catch2 xvfb xauth python3
   libbenchmark-dev python3-matplotlib git
   clang libclang-rt-14-dev
   pybind11-dev python3-dev python3-numpy python3-pytest python3-torch python3-venv python3-setuptools
   python3-meshio python3-distributed python3-hypothesis python3-mypy ffmpeg
-  emscripten node-acorn chromium
+  emscripten node-acorn chromium blender
 )
 # The glTF tests check our files with the Khronos validator and three.js, the browser test drives
 # chromium with playwright-core (node packages pinned by tests/gltf/node/package-lock.json and
