@@ -80,6 +80,24 @@ const double* mbi_discontinuity(void);
 /// the mean of `repeats` solves after one untimed.
 double mbi_bench_solve(int repeats);
 
+/// The page's cameras (mbi::interact::PerspectiveCamera; camera.cpp), any number of them,
+/// independent of the loaded model. A new camera's handle (>= 0), or -1: the reason in mbi_camera_error().
+int mbi_camera_new(double cx, double cy, double cz, double size, double ux, double uy, double uz, double yaw,
+                   double pitch);
+void mbi_camera_delete(int camera);
+/// Why the last camera call failed ("" when it did not).
+const char* mbi_camera_error(void);
+/// A drag of (dx, dy) pixels, a wheel turn of dy; 0 for an unknown camera.
+int mbi_camera_orbit(int camera, double dx, double dy);
+int mbi_camera_zoom(int camera, double dy);
+/// The eye, then the frame's forward, right and up: 12 doubles; null on failure.
+const double* mbi_camera_pose(int camera);
+/// Projection * view for a width x height viewport, 16 floats, column-major; null on failure.
+const float* mbi_camera_matrix(int camera, int width, int height);
+/// The ray through pixel (x, y) of a width x height view (y down): origin then direction, 6
+/// doubles; null on failure.
+const double* mbi_camera_ray(int camera, double x, double y, int width, int height);
+
 #ifdef __cplusplus
 }
 #endif

@@ -1,7 +1,10 @@
 // A view drawn on a 2D canvas, for browsers without WebGL2: the triangles facing the camera,
 // projected in script, sorted back to front and filled flat-shaded in the view's tint or the
 // crease colours (a face's mean of its corners').
-import { sub, cross, dot, unit } from './camera.js';
+const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+const unit = (a) => { const s = 1 / Math.hypot(a[0], a[1], a[2]); return [a[0] * s, a[1] * s, a[2] * s]; };
 
 export class CanvasView {
   constructor(canvas, tint) {
