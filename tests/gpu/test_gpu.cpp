@@ -1,13 +1,15 @@
 // The GPU transform-feedback evaluator and renderer against the CPU evaluator (independent
 // kernel, double), on Mesa llvmpipe in CI: positions and normals, BI and modified-BI, 2D and 3D,
 // small meshes and 1M points, far from the origin, split into several draws; and pictures: the
-// shader programs and the surface draw with and without a colour per point.
+// shader programs, the surface draw with and without a colour per point, the viewer's ground and
+// material.
 #include <catch2/catch.hpp>
 
 #include <mbi/generate/procedural.hpp>
 #include <mbi/gpu/program.hpp>
 #include <mbi/gpu/renderer.hpp>
 #include <mbi/gpu/surface.hpp>
+#include <mbi/gpu/window.hpp>
 #include <mbi/interp.hpp>
 #include <mbi/pipeline/frame_pipeline.hpp>
 
@@ -16,6 +18,7 @@
 
 #include <epoxy/gl.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <random>
 #include <span>
@@ -408,5 +411,91 @@ TEST_CASE("gpu: the renderer's colours per point cover the surface it drew, its 
   CHECK(reds > w * h / 10);
   CHECK(greys > 100);
   CHECK(others == 0);
+  CHECK(glGetError() == GL_NO_ERROR);
+}
+
+TEST_CASE("gpu: the renderer's ground lies where its plane is, the shadow darkens it, its edge fades into the "
+          "background", "[gpu][render]") {
+  context();
+  gpu::Renderer r(context());
+  const int w = 200, h = 200;
+  // seen from above: world x right, world z up the picture, 2 units across the picture's half
+  Eigen::Matrix4d vp = Eigen::Matrix4d::Zero();
+  vp(0, 0) = 0.5, vp(1, 2) = 0.5, vp(2, 1) = -0.1, vp(3, 3) = 1;
+  gpu::Ground g;  // centre 0, e1 x, e2 z, half side 1, grid every 1
+  g.shadow_center = {0.3, 0.3};
+  g.shadow_half = {0.1, 0.1};
+  g.shadow_soft = 0.05;
+  g.background = {0, 0, 1};
+  const Target target(w, h);
+  glClearColor(1, 0, 0, 1);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  r.draw_ground(g, vp);
+  const io::Image img = gpu::read_picture(w, h);
+  glDisable(GL_DEPTH_TEST);
+  // the plane point (x, z) at pixel (100 + 50 x, 100 - 50 z)
+  auto at = [&](double x, double z) { return img.at(int(100 + 50 * x), int(100 - 50 * z)); };
+  const auto* outside = at(1.5, 1.5);  // beyond the square: not drawn
+  CHECK((outside[0] == 255 && outside[1] == 0 && outside[2] == 0));
+  const auto* faded = at(0.9, 0.9);  // in the square, past the fade: the background
+  CHECK((faded[0] < 3 && faded[1] < 3 && faded[2] > 252));
+  const auto* lit = at(-0.3, 0.3);
+  const auto* shaded = at(0.3, 0.3);
+  CHECK(lit[0] > 200);
+  CHECK(std::abs(int(lit[0]) - int(lit[1])) < 4);  // the ground's grey
+  CHECK(shaded[0] < 0.7 * lit[0]);
+  CHECK(glGetError() == GL_NO_ERROR);
+}
+
+TEST_CASE("gpu: the renderer's ground refuses values it cannot draw, the material a pass without normals, the "
+          "window helpers negative sizes", "[gpu]") {
+  TwistedBar b = twisted_bar();
+  gpu::Renderer r(context());
+  r.set_faces(b.F);
+  const Eigen::Matrix4d vp = Eigen::Matrix4d::Identity();
+  auto refused = [&](auto change, const std::string& message) {
+    gpu::Ground g;
+    change(g);
+    CHECK_THROWS_WITH(r.draw_ground(g, vp), "Renderer::draw_ground: " + message);
+  };
+  refused([](gpu::Ground& g) { g.center.x() = std::nan(""); }, "center is not finite");
+  refused([](gpu::Ground& g) { g.half = 0; }, "half must be positive and finite, not 0");
+  refused([](gpu::Ground& g) { g.spacing = -1; }, "spacing must be positive and finite, not -1");
+  refused([](gpu::Ground& g) { g.shadow_soft = INFINITY; }, "shadow_soft must be positive and finite, not inf");
+  refused([](gpu::Ground& g) { g.shadow_half = {0.1, -0.1}; }, "shadow_half must not be negative");
+  refused([](gpu::Ground& g) { g.e1 *= 2; }, "e1 and e2 must be unit vectors");
+  b.ev->evaluate(b.pipe->bezier_with(pl::Method::ModifiedBI), false);  // a pass without normals
+  CHECK_THROWS_WITH(r.draw_material(*b.ev, vp, Eigen::Matrix3d::Identity(), {1, 1, 1}),
+                    "Renderer: needs a 3D evaluation with normals");
+  CHECK_THROWS_WITH(gpu::viewport(0, 0, -1, 2), "viewport: negative size -1 x 2");
+  CHECK_THROWS_WITH(gpu::clear_window(3, -2, {1, 1, 1}), "clear_window: negative size 3 x -2");
+  CHECK_THROWS_WITH(gpu::read_picture(-4, 1), "read_picture: negative size -4 x 1");
+  CHECK(glGetError() == GL_NO_ERROR);
+}
+
+TEST_CASE("gpu: the renderer's material covers the surface draw() covers, in front of it", "[gpu][render]") {
+  TwistedBar b = twisted_bar();
+  const int w = 200, h = 150;
+  gpu::Renderer r(context());
+  r.set_faces(b.F);
+  const raster::View view = bar_view(b);
+  const Eigen::Matrix4d vp = gpu::Renderer::view_matrix(view, w, h);
+  Eigen::Matrix3d rotation;  // world -> camera: right, up, toward the eye
+  rotation.row(2) = -view.direction.normalized().transpose();
+  rotation.row(0) = view.direction.cross(view.up).normalized().transpose();
+  rotation.row(1) = rotation.row(2).cross(rotation.row(0));
+  const Target target(w, h);
+  auto picture = [&](bool surface, bool material) {
+    glClearColor(1, 1, 1, 1);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    if (surface) r.draw(*b.ev, vp, view.direction, {0.1, 0.8, 0.1});
+    if (material) r.draw_material(*b.ev, vp, rotation, {0.85, 0.62, 0.35});
+    glDisable(GL_DEPTH_TEST);
+    return gpu::read_picture(w, h);
+  };
+  const io::Image surface = picture(true, false), material = picture(false, true), both = picture(true, true);
+  CHECK(covered(material) > w * h / 10);
+  CHECK(covered(material) == covered(surface));
+  CHECK(both.rgb == material.rgb);  // nothing of draw()'s green shows through
   CHECK(glGetError() == GL_NO_ERROR);
 }

@@ -2,8 +2,8 @@
 // glTF, a scene of several [[dense]] models and a
 // generated flat one start paused, take a scripted poke and close cleanly; a scripted drop
 // loads a model (and a bad one is said, the session going on); --video writes a video that
-// ffprobe reads with the frames and size asked for (so does the o key's), and is refused at once
-// without ffmpeg.
+// ffprobe reads with the frames and size asked for, its last frame the window's last picture
+// upright (so does the o key's), and is refused at once without ffmpeg.
 #include <catch2/catch.hpp>
 
 #include <mbi/io/io.hpp>
@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <vector>
@@ -61,6 +62,19 @@ nlohmann::json view_and_poke(const std::string& model, const TempDir& dir) {
   CHECK(frames.back()["max_displacement"].get<double>() > 0);
   CHECK(frames.back()["looks"] == "software");  // llvmpipe: chosen automatically
   return frames;
+}
+
+// Mean absolute difference (0..255) of the window's picture `shot` and a decoded video frame
+// (the window's lower left part), the frame's rows taken bottom to top when `flip`.
+double video_difference(const mbi::io::Image& shot, const mbi::io::Image& frame, bool flip) {
+  REQUIRE(shot.width >= frame.width);
+  REQUIRE(shot.height == frame.height);
+  double sum = 0;
+  for (int y = 0; y < frame.height; ++y)
+    for (int x = 0; x < frame.width; ++x)
+      for (int c = 0; c < 3; ++c)
+        sum += std::abs(int(shot.at(x, y)[c]) - int(frame.at(x, flip ? frame.height - 1 - y : y)[c]));
+  return sum / (3.0 * frame.width * frame.height);
 }
 
 }  // namespace
@@ -153,7 +167,9 @@ TEST_CASE("mbi view --video: ffprobe reads the frames and size asked for, and wi
   const fs::path video = dir / "out.mp4";
   const int frames = mbi::test::kSanitized ? 6 : 12;
   const mbi::test::ViewRun r = mbi::test::view(
-      q(cube()) + " --width 321 --height 240 --no-panel --frames " + std::to_string(frames) + " --video " + q(video), dir);
+      q(cube()) + " --width 321 --height 240 --no-panel --frames " + std::to_string(frames) + " --video " + q(video) +
+          " --screenshot " + q(dir / "last.png"),
+      dir);
   INFO(r.err);
   REQUIRE(r.code == 0);
   CHECK(r.err.find("320 x 240 at 30 fps") != std::string::npos);  // even sizes for the codec
@@ -161,6 +177,12 @@ TEST_CASE("mbi view --video: ffprobe reads the frames and size asked for, and wi
                             "stream=width,height,nb_read_frames -of csv=p=0 " + q(video) + " > " + q(dir / "probe.txt");
   REQUIRE(std::system(probe.c_str()) == 0);
   CHECK(mbi::test::slurp(dir / "probe.txt") == "320,240," + std::to_string(frames) + "\n");
+  const std::string decode = "ffmpeg -v error -sseof -0.04 -i " + q(video) + " -frames:v 1 " + q(dir / "decoded.png");
+  REQUIRE(std::system(decode.c_str()) == 0);
+  const mbi::io::Image shot = mbi::io::read_png(dir / "last.png"), decoded = mbi::io::read_png(dir / "decoded.png");
+  const double upright = video_difference(shot, decoded, false), flipped = video_difference(shot, decoded, true);
+  CHECK(upright < 6);  // the codec's loss only
+  CHECK(flipped > 3 * upright);
   for (const auto& e : fs::directory_iterator(dir.path())) CHECK(e.path().filename().string().rfind(".mbi-tmp", 0) != 0);
   // the o key: a video from one press to the next, in the current folder, named by the frame
   std::ofstream(dir / "o.txt") << "1 key o\n6 key o\n";

@@ -3,11 +3,10 @@
 #include "crease_layer.hpp"
 #include "scenery.hpp"
 
-#include <epoxy/gl.h>
-
 #include <algorithm>
 #include <chrono>
 #include <mbi/base/timer.hpp>
+#include <mbi/gpu/window.hpp>
 
 namespace mbi::viewer {
 namespace {
@@ -32,13 +31,9 @@ void draw_markers(gpu::Renderer& renderer, const Interaction& in, const ViewerOp
 
 void draw_views(gpu::Renderer& renderer, Stage& stage, const Interaction& in, const Camera& camera,
                 const ViewerOptions& options, const Eigen::MatrixXd& X3, int fb_width, int fb_height,
-                FrameTimes& times, Scenery* scenery) {
+                FrameTimes& times, bool looks) {
   const auto started = Clock::now();
-  glBindFramebuffer(GL_FRAMEBUFFER, 0);
-  glViewport(0, 0, fb_width, fb_height);
-  if (scenery) glClearColor(float(kBackground[0]), float(kBackground[1]), float(kBackground[2]), 1);
-  else glClearColor(1, 1, 1, 1);
-  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  gpu::clear_window(fb_width, fb_height, looks ? kBackground : Eigen::Vector3d(1, 1, 1));
   const Eigen::Vector3d color(0.85, 0.62, 0.35);
   const bool creases = options.creases && stage.d == 3;
   if (creases) {  // the CPU's share only while on
@@ -46,7 +41,7 @@ void draw_views(gpu::Renderer& renderer, Stage& stage, const Interaction& in, co
     stage.creases->update(stage);
   }
   if (stage.creases) stage.creases->shown = creases;
-  scenery = stage.d == 3 ? scenery : nullptr;
+  const bool scenery = looks && stage.d == 3;
   if (scenery && !stage.ground) stage.ground = std::make_shared<Ground>(ground_at_rest(stage.U, stage.rest_dense, options.up));
   Ground ground = scenery ? *stage.ground : Ground{};
   if (scenery) cast_shadow(ground, X3);
@@ -55,13 +50,13 @@ void draw_views(gpu::Renderer& renderer, Stage& stage, const Interaction& in, co
   for (int k = 0; k < n; ++k) {
     const Rect& vp_rect = stage.layout.view_viewports[static_cast<size_t>(k)];
     const int x0 = static_cast<int>(vp_rect.x), x1 = static_cast<int>(vp_rect.x + vp_rect.w);
-    glViewport(x0, 0, x1 - x0, fb_height);
+    gpu::viewport(x0, 0, x1 - x0, fb_height);
     stage.evaluator.evaluate(stage.pipe.bezier_with(stage.views[static_cast<size_t>(k)]), stage.d == 3);
     gpu_ms += stage.evaluator.timings().upload_ms + stage.evaluator.timings().pass_ms;
     const Eigen::Matrix4d vp = camera.view_projection(static_cast<double>(x1 - x0) / std::max(fb_height, 1));
-    if (scenery) scenery->draw_ground(ground, vp);
-    if (scenery && !creases) scenery->draw_surface(stage.gpu, vp, camera, color);
-    // with the looks the renderer only adds the wireframe: its own surface is behind ours
+    if (scenery) renderer.draw_ground(ground, vp);
+    if (scenery && !creases) renderer.draw_material(stage.gpu, vp, view_rotation(camera), color);
+    // with the looks draw() only adds the wireframe: its surface lies behind the material's
     if (stage.d == 3 && (!creases || options.wireframe) && (!scenery || options.wireframe))
       renderer.draw(stage.gpu, vp, camera.direction(), color, options.wireframe ? &X3 : nullptr,
                     options.wireframe ? &stage.T : nullptr);
@@ -71,18 +66,13 @@ void draw_views(gpu::Renderer& renderer, Stage& stage, const Interaction& in, co
       renderer.draw_textured(stage.gpu, vp, *stage.image);
     draw_markers(renderer, in, options, X3, vp);
   }
-  glViewport(0, 0, fb_width, fb_height);
-  glFinish();
+  gpu::viewport(0, 0, fb_width, fb_height);
+  gpu::finish();
   times.interpolation_ms = gpu_ms;
   times.drawing_ms = ms_since(started) - gpu_ms;
   const double dt = ms_since(times.last_frame);
   times.last_frame = Clock::now();
   times.fps = dt > 0 ? 0.9 * times.fps + 0.1 * 1000.0 / dt : times.fps;
-}
-
-io::Image read_framebuffer(int width, int height) {
-  glReadBuffer(GL_BACK);
-  return gpu::read_picture(width, height);
 }
 
 }  // namespace mbi::viewer

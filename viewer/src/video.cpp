@@ -1,9 +1,8 @@
 #include "video.hpp"
 
+#include <mbi/gpu/window.hpp>
 #include <mbi/io/io.hpp>
 #include <mbi/viewer/error.hpp>
-
-#include <epoxy/gl.h>
 
 #include <cerrno>
 #include <csignal>
@@ -53,9 +52,8 @@ VideoRecorder::VideoRecorder(const fs::path& ffmpeg, const fs::path& file, std::
   if (::pipe(fds) != 0) throw Error(name_ + ": no pipe to ffmpeg (" + std::strerror(errno) + ")");
   const std::string size = std::to_string(width_) + "x" + std::to_string(height_);
   const std::string fps = std::to_string(kVideoFps);
-  // GL rows run bottom to top: vflip
   std::vector<std::string> args = {"ffmpeg", "-hide_banner", "-loglevel", "error", "-y", "-f", "rawvideo",
-                                   "-pix_fmt", "rgb24", "-s", size, "-r", fps, "-i", "pipe:0", "-vf", "vflip",
+                                   "-pix_fmt", "rgb24", "-s", size, "-r", fps, "-i", "pipe:0",
                                    "-pix_fmt", "yuv420p", file.string()};
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
@@ -87,10 +85,7 @@ VideoRecorder::~VideoRecorder() {
 }
 
 void VideoRecorder::add_frame() {
-  std::vector<unsigned char> rgb(static_cast<size_t>(width_) * height_ * 3);
-  glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  glReadBuffer(GL_BACK);
-  glReadPixels(0, 0, width_, height_, GL_RGB, GL_UNSIGNED_BYTE, rgb.data());
+  const std::vector<std::uint8_t> rgb = gpu::read_window(width_, height_).rgb;
   size_t done = 0;
   while (done < rgb.size()) {
     const ssize_t n = ::write(pipe_, rgb.data() + done, rgb.size() - done);

@@ -5,10 +5,10 @@
 #include "interaction.hpp"
 #include "panel.hpp"
 #include "recordings.hpp"
-#include "scenery.hpp"
 #include "session_io.hpp"
 
-#include <epoxy/gl.h>
+#include <mbi/gpu/window.hpp>
+
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
 #include <backends/imgui_impl_glfw.h>
@@ -71,8 +71,7 @@ GLFWwindow* open_window(const ViewerOptions& options, int samples) {
 // The looks `asked` for on this OpenGL renderer: Auto is Software on a software renderer.
 Looks resolve_looks(Looks asked) {
   if (asked != Looks::Auto) return asked;
-  const char* r = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
-  const std::string renderer = r ? r : "";
+  const std::string renderer = gpu::renderer_name();
   const bool software = renderer.find("llvmpipe") != std::string::npos || renderer.find("softpipe") != std::string::npos;
   return software ? Looks::Software : Looks::Full;
 }
@@ -101,7 +100,6 @@ struct Viewer::Impl {
   std::string evaluator_why;  ///< why options.gpu chose the evaluator (the HUD)
   std::unique_ptr<gpu::Renderer> renderer;
   Looks looks = Looks::Plain;         ///< resolved: never Auto
-  std::unique_ptr<Scenery> scenery;   ///< the looks' ground and material; none when plain
   std::unique_ptr<Recordings> videos;
   std::filesystem::path dropped;      ///< a model dropped on the window: show() returns for it
   Camera camera;
@@ -186,7 +184,6 @@ Viewer::Viewer(const ViewerOptions& options, std::unique_ptr<SessionFiles> files
   impl_->window = open_window_for_looks(options, impl_->looks);
   impl_->context = gpu::Context::adopt_current();
   impl_->renderer = std::make_unique<gpu::Renderer>(*impl_->context);
-  if (impl_->looks != Looks::Plain) impl_->scenery = std::make_unique<Scenery>();
   impl_->videos = std::make_unique<Recordings>(*impl_->files);
   glfwSetWindowUserPointer(impl_->window, impl_.get());
   glfwSetMouseButtonCallback(impl_->window, &Impl::on_mouse_button);
@@ -204,7 +201,6 @@ Viewer::Viewer(const ViewerOptions& options, std::unique_ptr<SessionFiles> files
 Viewer::~Viewer() {
   if (!impl_ || !impl_->window) return;
   impl_->videos.reset();  // stops an unfinished ffmpeg
-  impl_->scenery.reset();
   impl_->renderer.reset();
   ImGui_ImplOpenGL3_Shutdown();
   ImGui_ImplGlfw_Shutdown();
@@ -309,10 +305,10 @@ Eigen::MatrixXd Viewer::Impl::draw(Stage& stage, Interaction& in, bool keep) {
   glfwGetFramebufferSize(window, &fbw, &fbh);
   Eigen::MatrixXd X3 = stage.control_positions_3d();
   lay_out(stage);
-  draw_views(*renderer, stage, in, camera, opt, X3, fbw, fbh, times, scenery.get());
+  draw_views(*renderer, stage, in, camera, opt, X3, fbw, fbh, times, looks != Looks::Plain);
   draw_gui(stage, in, opt, controls, times, window_size());
   videos->add_frame(controls.message);
-  if (keep || controls.snapshot) last_shot = read_framebuffer(fbw, fbh);
+  if (keep || controls.snapshot) last_shot = gpu::read_window(fbw, fbh);
   if (controls.snapshot) snapshot();
   return X3;
 }
@@ -328,7 +324,6 @@ void Viewer::show(const Shown& shown) {
   stage.evaluator_why = s.evaluator_why;
   stage.looks = kLooksNames.name(s.looks);
   s.renderer->set_faces(shown.faces);
-  if (s.scenery && shown.faces.cols() == 3) s.scenery->set_faces(shown.faces);
   s.dropped.clear();
   if (s.frame == 0) {
     int fbw, fbh;

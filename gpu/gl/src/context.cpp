@@ -138,4 +138,9 @@ void Context::make_current() {
     eglMakeCurrent(egl_->display, EGL_NO_SURFACE, EGL_NO_SURFACE, egl_->context);
 }
 
+std::string renderer_name() {
+  const auto* r = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+  return r ? r : "";
+}
+
 }  // namespace mbi::gpu

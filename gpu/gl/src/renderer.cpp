@@ -83,6 +83,10 @@ Renderer::~Renderer() {
   if (line_program_) glDeleteProgram(line_program_);
   if (texture_program_) glDeleteProgram(texture_program_);
   if (texture_) glDeleteTextures(1, &texture_);
+  if (material_program_) glDeleteProgram(material_program_);
+  if (ground_program_) glDeleteProgram(ground_program_);
+  if (ground_corners_) glDeleteBuffers(1, &ground_corners_);
+  if (ground_vao_) glDeleteVertexArrays(1, &ground_vao_);
 }
 
 void Renderer::set_faces(const Eigen::Ref<const Eigen::MatrixXi>& F) { surface_.set_faces(F); }
@@ -231,6 +235,8 @@ io::Image Renderer::render(const GpuEvaluator& ev, const raster::View& view, int
 }
 
 io::Image read_picture(int width, int height) {
+  if (width < 0 || height < 0)
+    throw Error("read_picture: negative size " + std::to_string(width) + " x " + std::to_string(height));
   std::vector<std::uint8_t> rgba(static_cast<size_t>(width) * height * 4);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());

@@ -15,7 +15,7 @@ struct Rect {
 struct Layout {
   Rect panel;               ///< logical pixels; w = 0 without a panel
   std::vector<Rect> views;  ///< logical pixels, left to right
-  /// The views in framebuffer pixels for glViewport: x, y from the bottom-left corner.
+  /// The views in framebuffer pixels for gpu::viewport: x, y from the bottom-left corner.
   std::vector<Rect> view_viewports;
 };
 

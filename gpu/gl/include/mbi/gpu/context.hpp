@@ -49,4 +49,8 @@ class Context {
   unsigned fbo_ = 0, rbo_ = 0;
 };
 
+/// GL_RENDERER of the context current on this thread (a window's, before any Context adopts
+/// it); empty where the driver gives none.
+std::string renderer_name();
+
 }  // namespace mbi::gpu

@@ -14,6 +14,19 @@
 
 namespace mbi::gpu {
 
+/// The viewer's ground: a square of half side `half` in the plane through `center` spanned by
+/// the unit vectors e1, e2, with grid lines `spacing` apart (every tenth darker) and a shadow, a
+/// rectangle of half sides `shadow_half` around center + shadow_center (in (e1, e2)) whose edge
+/// fades over `shadow_soft`; the square's edge fades into `background` (RGB, 0..1). World units.
+struct Ground {
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  Eigen::Vector3d e1 = Eigen::Vector3d::UnitX(), e2 = Eigen::Vector3d::UnitZ();
+  double half = 1, spacing = 1;
+  Eigen::Vector2d shadow_center = Eigen::Vector2d::Zero(), shadow_half = Eigen::Vector2d::Zero();
+  double shadow_soft = 0.1;
+  Eigen::Vector3d background = Eigen::Vector3d::Ones();
+};
+
 class Renderer {
  public:
   /// Needs `context` current whenever a member is called. Throws Error.
@@ -47,6 +60,15 @@ class Renderer {
   /// new image pointer.
   void draw_textured(const GpuEvaluator& evaluator, const Eigen::Matrix4d& view_projection,
                      const io::Image& image);
+  /// Draws `ground` into the bound framebuffer and viewport, depth written; the depth test stays
+  /// on. Throws Error naming the field for a value not finite, half, spacing or shadow_soft not
+  /// positive, a negative shadow_half, or e1, e2 not of unit length.
+  void draw_ground(const Ground& ground, const Eigen::Matrix4d& view_projection);
+  /// Draws the surface (3D, evaluated with normals) in the viewer's clay material, a matcap of the
+  /// normal in camera space (`view_rotation`: world -> camera, rows right, up, toward the eye),
+  /// slightly in front of a surface that draw() drew there; the depth test stays on.
+  void draw_material(const GpuEvaluator& evaluator, const Eigen::Matrix4d& view_projection,
+                     const Eigen::Matrix3d& view_rotation, const Eigen::Vector3d& color);
   /// Draws points (k x 3, world) as squares of `size` pixels in a flat colour, over everything.
   void draw_points(const Eigen::MatrixXd& points, const Eigen::Matrix4d& view_projection,
                    const Eigen::Vector3d& color, float size);
@@ -63,6 +85,7 @@ class Renderer {
   unsigned line_vao_ = 0, line_buffer_ = 0;
   unsigned fbo_ = 0, color_ = 0, depth_ = 0;
   unsigned texture_program_ = 0, texture_ = 0;
+  unsigned material_program_ = 0, ground_program_ = 0, ground_vao_ = 0, ground_corners_ = 0;
   const io::Image* texture_image_ = nullptr;
   int width_ = 0, height_ = 0;
   std::vector<std::pair<int, int>> edges_;  // unique control-mesh edges (wireframe)
@@ -70,7 +93,7 @@ class Renderer {
 };
 
 /// The picture of the bound read framebuffer's read buffer, width x height pixels from the
-/// lower left corner, as RGB with the top row first.
+/// lower left corner, as RGB with the top row first. Throws Error for a negative size.
 io::Image read_picture(int width, int height);
 
 }  // namespace mbi::gpu
