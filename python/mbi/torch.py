@@ -14,7 +14,7 @@ taken as a tensor that needs no gradient. Tensors of any strides are taken (expa
 the zero-stride gradient of loss.sum()): mbi reads them as numpy views and copies what it cannot
 read in place. Importing this module needs torch; importing mbi does not.
 """
-from typing import Any, Optional, Tuple
+from typing import Any, Callable, Optional, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -22,23 +22,44 @@ import torch
 
 from . import _mbi
 
-__all__ = ["deform", "Deform", "DeformFunction"]
+__all__ = ["deform", "Deform", "DeformFunction", "VjpFunction"]
 
 
 class DeformFunction(torch.autograd.Function):
-    """positions = deformer.deform(X); the backward pass is deformer.vjp(dL/dpositions)."""
+    """positions = deformer.deform(X); the backward pass is deformer.vjp(dL/dpositions), itself
+    differentiable (VjpFunction), so that second derivatives and Hessian-vector products flow."""
 
     @staticmethod
     def forward(ctx: Any, X: torch.Tensor, deformer: _mbi.Deformer) -> torch.Tensor:  # type: ignore[override]
         ctx.deformer = deformer
-        positions = torch.from_numpy(deformer.deform(_as_numpy(X)))
-        return positions.to(X.device, X.dtype)
+        return _apply(deformer.deform, X)
 
     @staticmethod
-    @torch.autograd.function.once_differentiable  # type: ignore[misc]  # torch leaves it untyped
-    def backward(ctx: Any, grad: torch.Tensor) -> Tuple[torch.Tensor, None]:
-        dX = torch.from_numpy(ctx.deformer.vjp(_as_numpy(grad)))
-        return dX.to(grad.device, grad.dtype), None
+    def backward(ctx: Any, grad: torch.Tensor) -> Tuple[torch.Tensor, None]:  # type: ignore[override]
+        dX: Optional[torch.Tensor] = VjpFunction.apply(grad, ctx.deformer)
+        assert dX is not None
+        return dX, None
+
+
+class VjpFunction(torch.autograd.Function):
+    """dL/dX = deformer.vjp(G): the transpose J^T of the linear map J = deform, so its backward is
+    J itself, deformer.deform(dL/d(dL/dX)), and every higher derivative is J or J^T again."""
+
+    @staticmethod
+    def forward(ctx: Any, G: torch.Tensor, deformer: _mbi.Deformer) -> torch.Tensor:  # type: ignore[override]
+        ctx.deformer = deformer
+        return _apply(deformer.vjp, G)
+
+    @staticmethod
+    def backward(ctx: Any, grad: torch.Tensor) -> Tuple[torch.Tensor, None]:  # type: ignore[override]
+        dG: Optional[torch.Tensor] = DeformFunction.apply(grad, ctx.deformer)
+        assert dG is not None
+        return dG, None
+
+
+def _apply(f: Callable[[npt.NDArray[np.float64]], npt.NDArray[np.float64]], t: torch.Tensor) -> torch.Tensor:
+    """f (deform or vjp) of t in float64 on the CPU, returned in t's dtype and on its device."""
+    return torch.from_numpy(f(_as_numpy(t))).to(t.device, t.dtype)
 
 
 def _as_numpy(t: torch.Tensor) -> npt.NDArray[np.float64]:

@@ -1,5 +1,6 @@
 """Deformer.vjp (the exact adjoint of the linear map X -> positions) against finite differences,
-and through PyTorch: torch.autograd.gradcheck in double for BI, Phong and modified-BI, 2D and 3D."""
+and through PyTorch: torch.autograd.gradcheck and gradgradcheck in double for BI, Phong and
+modified-BI, 2D and 3D, and a Hessian-vector product against the Hessian of a quadratic loss."""
 import numpy as np
 import pytest
 
@@ -72,6 +73,37 @@ def test_torch_gradcheck(mesh, method):
     # a batch of poses
     Xb = torch.tensor(np.stack([meshes.pose(U, seed=s) for s in range(2)]), requires_grad=True)
     assert torch.autograd.gradcheck(mt.Deform(deformer), (Xb,), eps=1e-6, atol=1e-8)
+
+
+@needs_torch
+@pytest.mark.parametrize("method", METHODS)
+def test_torch_gradgradcheck(mesh, method):
+    import mbi.torch as mt
+    U, T = mesh
+    deformer = mbi.Deformer(U, T, meshes.points(U, 30, seed=12), method=method)
+    X = torch.tensor(meshes.pose(U), dtype=torch.float64, requires_grad=True)
+    assert torch.autograd.gradgradcheck(lambda Y: mt.deform(deformer, Y), (X,), eps=1e-6, atol=1e-8)
+    Xb = torch.tensor(np.stack([meshes.pose(U, seed=s) for s in range(2)]), requires_grad=True)
+    assert torch.autograd.gradgradcheck(mt.Deform(deformer), (Xb,), eps=1e-6, atol=1e-8)
+
+
+@needs_torch
+@pytest.mark.parametrize("method", METHODS)
+def test_torch_hessian_vector_product(mesh, method):
+    # L = sum(W * positions^2) has Hessian J^T diag(2W) J: H V = vjp(2 W * deform(V)), V a direction
+    import mbi.torch as mt
+    U, T = mesh
+    p = 50
+    deformer = mbi.Deformer(U, T, meshes.points(U, p, seed=13), method=method)
+    rng = np.random.default_rng(14)
+    W, V = rng.uniform(0.5, 2, (p, U.shape[1])), rng.standard_normal(U.shape)
+    X = torch.tensor(meshes.pose(U), requires_grad=True)
+    loss = (torch.from_numpy(W) * mt.deform(deformer, X) ** 2).sum()
+    (grad,) = torch.autograd.grad(loss, X, create_graph=True)
+    (hv,) = torch.autograd.grad(grad, X, grad_outputs=torch.from_numpy(V))
+    expect = deformer.vjp(2 * W * deformer.deform(V))
+    assert np.abs(hv.numpy() - expect).max() < 1e-10 * (1 + np.abs(expect).max())
+    assert np.abs(expect).max() > 1e-3
 
 
 @needs_torch
