@@ -1,10 +1,8 @@
 // The views' camera: mbi::interact::PerspectiveCamera in the module (web/api/camera.cpp), the
 // viewer's library, so the page holds no camera maths: an orbiting perspective camera, its
 // projection * view matrix (column-major, for WebGL) and rays through pixels (pokes).
-import createMbi from './mbi-web.js';
+import M from './module.js';
 
-// A module instance of its own: the camera needs no model.
-const M = await createMbi();
 const fail = () => { throw new Error('camera: ' + M.UTF8ToString(M._mbi_camera_error())); };
 const doubles = (ptr, n) => (ptr ? Array.from(new Float64Array(M.HEAPF64.buffer, ptr, n)) : fail());
 const released = new FinalizationRegistry((id) => M._mbi_camera_delete(id));

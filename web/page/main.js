@@ -3,14 +3,13 @@
 // The dense points are evaluated on the GPU (WebGL2 transform feedback, gpu_evaluator.js) where
 // the pass builds, else (or when asked: ?eval=cpu, the evaluator switch) on the CPU in wasm.
 // window.mbiPage exposes the state to the browser test (web/test).
-import createMbi from './mbi-web.js';
+import M from './module.js';
 import { Camera } from './camera.js';
 import { GlView } from './gl_view.js';
 import { CanvasView } from './canvas_view.js';
 
 const $ = (id) => document.getElementById(id);
 const params = new URLSearchParams(location.search);
-const M = await createMbi();
 
 // The API; the calls that change the model are journaled, so that a test can replay them in
 // the native build (mbi-web-twin replay).

@@ -55,8 +55,11 @@ function serve(dir) {
 async function open(browser, url) {
   const page = await browser.newPage({ viewport: { width: 1200, height: 900 } });
   page.on('pageerror', (e) => check(false, 'page error: ' + e.message));
+  const wasm = [];
+  page.on('request', (r) => { if (r.url().endsWith('.wasm')) wasm.push(r.url()); });
   await page.goto(url);
   await page.waitForFunction(() => window.mbiPage !== undefined, null, { timeout: 30000 });
+  check(wasm.length === 1, `one instance of the module (main.js and camera.js share it): ${wasm.length} .wasm fetches`);
   return page;
 }
 
