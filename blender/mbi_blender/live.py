@@ -1,0 +1,154 @@
+"""The live path: each frame, the evaluated cage's nodes deform the bound meshes into their "mbi" shape key.
+
+A frame-change handler reads the cage as Blender evaluated it (armature, shape keys, hooks,
+lattice), runs the bound Deformer (float32 kernel, no allocation) and writes the positions into
+the model's shape key "mbi" (value 1, relative to the basis), so the mesh data's basis stays the
+rest shape. The Deformers are not saved: they are rebuilt from the .blend's data on first use
+after a file load, an undo or a change of the bind (docs/blender.md).
+"""
+import bpy
+import numpy as np
+from bpy.app.handlers import persistent
+
+from . import module, settings, storage
+
+SHAPE_KEY = "mbi"
+_bound = {}   # model.name_full -> _Binding
+errors = {}   # model name -> last message of the live path (shown in the panel)
+
+
+class _Binding:
+    def __init__(self, key, deformer, inverse):
+        self.key = key
+        self.deformer = deformer
+        self.inverse = inverse  # cage space to the model's space, None when the identity
+        self.out = np.empty((deformer.points, 3), dtype=np.float32)
+
+
+def _key(model, cage, tets):
+    s = model.mbi
+    return (cage.name_full, len(cage.data.vertices), len(tets), len(model.data.vertices), s.method, s.alpha,
+            tuple(s.bind_matrix))
+
+
+def _matrix(flat):
+    return np.array(flat, dtype=np.float64).reshape(4, 4)
+
+
+def _build(model, cage):
+    mbi = module.load()
+    tets = storage.tets(cage.data)
+    if tets is None:
+        raise ValueError("%s holds no tetrahedra (not an mbi cage)" % cage.name)
+    s = model.mbi
+    B = _matrix(s.bind_matrix)
+    P = storage.positions(model.data).astype(np.float64) @ B[:3, :3].T + B[:3, 3]
+    U = storage.positions(cage.data).astype(np.float64)
+    alpha = s.alpha if s.alpha > 0 else None
+    deformer = mbi.Deformer(U, tets, P, method=s.method, alpha=alpha)
+    inverse = None if np.allclose(B, np.eye(4), rtol=0, atol=0) else np.linalg.inv(B)
+    return _Binding(_key(model, cage, tets), deformer, inverse)
+
+
+def _binding(model):
+    """The model's Deformer, rebuilt when missing or when its cage, mesh or options changed."""
+    cage = model.mbi.cage
+    entry = _bound.get(model.name_full)
+    tets_count = len(cage.data.get(storage.TETS_KEY, [])) // 4
+    if entry is None or entry.key != _key(model, cage, range(tets_count)):
+        entry = _bound[model.name_full] = _build(model, cage)
+    return entry
+
+
+def _shape_key(model):
+    if model.data.shape_keys is None:
+        model.shape_key_add(name="Basis", from_mix=False)
+    keys = model.data.shape_keys.key_blocks
+    block = keys.get(SHAPE_KEY) or model.shape_key_add(name=SHAPE_KEY, from_mix=False)
+    block.value = 1.0
+    return block
+
+
+def bind(model, cage, method, alpha):
+    """Binds the model to the cage now; returns the seconds the embedding and precompute took."""
+    import time
+    s = model.mbi
+    s.cage, s.method, s.alpha = cage, method, alpha
+    B = np.array(cage.matrix_world.inverted() @ model.matrix_world)
+    s.bind_matrix = B.ravel().tolist()
+    start = time.perf_counter()
+    _bound.pop(model.name_full, None)
+    _binding(model)
+    _shape_key(model)
+    return time.perf_counter() - start
+
+
+def unbind(model):
+    _bound.pop(model.name_full, None)
+    keys = model.data.shape_keys
+    if keys is not None and SHAPE_KEY in keys.key_blocks:
+        model.shape_key_remove(keys.key_blocks[SHAPE_KEY])
+    model.mbi.cage = None
+
+
+def deform(model, depsgraph):
+    """Writes the model's positions for the cage as evaluated in depsgraph into its shape key."""
+    entry = _binding(model)
+    cage_eval = model.mbi.cage.evaluated_get(depsgraph).data
+    n = entry.deformer.vertices
+    if len(cage_eval.vertices) != n:
+        raise ValueError("the evaluated cage %s has %d vertices, its tetrahedra %d: a modifier changed its topology"
+                         % (model.mbi.cage.name, len(cage_eval.vertices), n))
+    X = storage.positions(cage_eval).astype(np.float64)
+    out = entry.deformer.deform(X, out=entry.out)
+    if entry.inverse is not None:
+        inv = entry.inverse
+        out = (out @ inv[:3, :3].T + inv[:3, 3]).astype(np.float32)
+    block = _shape_key(model)
+    block.data.foreach_set("co", out.ravel())
+    model.data.update()
+
+
+def update_all(depsgraph):
+    errors.clear()
+    for model in bpy.data.objects:
+        if model.type != "MESH" or model.mbi.cage is None:
+            continue
+        try:
+            deform(model, depsgraph)
+        except (RuntimeError, ValueError) as error:
+            errors[model.name] = str(error)
+            print("mbi: %s: %s" % (model.name, error))
+
+
+@persistent
+def _on_frame(scene, depsgraph=None):
+    update_all(depsgraph or bpy.context.evaluated_depsgraph_get())
+
+
+@persistent
+def _on_load(*_):
+    _bound.clear()
+    update_all(bpy.context.evaluated_depsgraph_get())
+
+
+@persistent
+def _on_undo(*_):
+    update_all(bpy.context.evaluated_depsgraph_get())
+
+
+_HANDLERS = ((bpy.app.handlers.frame_change_post, _on_frame), (bpy.app.handlers.load_post, _on_load),
+             (bpy.app.handlers.undo_post, _on_undo), (bpy.app.handlers.redo_post, _on_undo))
+
+
+def register():
+    for handlers, function in _HANDLERS:
+        if function not in handlers:
+            handlers.append(function)
+
+
+def unregister():
+    for handlers, function in _HANDLERS:
+        if function in handlers:
+            handlers.remove(function)
+    _bound.clear()

@@ -1,0 +1,34 @@
+"""The sidebar panel: cage, bind, and the state of the selected object."""
+import bpy
+
+from . import live
+
+
+class MBI_PT_panel(bpy.types.Panel):
+    bl_label = "mbi"
+    bl_space_type = "VIEW_3D"
+    bl_region_type = "UI"
+    bl_category = "mbi"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.operator("mbi.cage")
+        layout.operator("mbi.bind")
+        layout.operator("mbi.unbind")
+        obj = context.active_object
+        if obj is None:
+            return
+        if obj.mbi.is_cage:
+            layout.label(text="Cage: %d nodes" % len(obj.data.vertices))
+        elif obj.mbi.cage is not None:
+            layout.label(text="Bound to %s (%s)" % (obj.mbi.cage.name, obj.mbi.method))
+            if obj.name in live.errors:
+                layout.label(text=live.errors[obj.name], icon="ERROR")
+
+
+def register():
+    bpy.utils.register_class(MBI_PT_panel)
+
+
+def unregister():
+    bpy.utils.unregister_class(MBI_PT_panel)

@@ -1,0 +1,27 @@
+"""What the add-on keeps on an object (saved in the .blend): its role, its cage and the bind options."""
+import bpy
+
+METHODS = [("modified-bi", "Modified BI", "Smooth, the default"),
+           ("phong", "Phong", "Phong-style Bezier points"),
+           ("bi", "BI", "Plain barycentric interpolation of Bezier points")]
+
+
+class MbiObjectSettings(bpy.types.PropertyGroup):
+    is_cage: bpy.props.BoolProperty(name="Is an mbi cage", default=False)
+    cage: bpy.props.PointerProperty(name="Cage", type=bpy.types.Object,
+                                    description="The mbi cage this mesh is bound to")
+    method: bpy.props.EnumProperty(name="Method", items=METHODS, default="modified-bi")
+    alpha: bpy.props.FloatProperty(name="Alpha", default=0.0, min=0.0,
+                                   description="Weight of modified-BI's E_vibr (0: the default, 0.1)")
+    # the model's matrix in the cage's space at bind time (4x4, row-major): the bind is in cage space
+    bind_matrix: bpy.props.FloatVectorProperty(size=16)
+
+
+def register():
+    bpy.utils.register_class(MbiObjectSettings)
+    bpy.types.Object.mbi = bpy.props.PointerProperty(type=MbiObjectSettings)
+
+
+def unregister():
+    del bpy.types.Object.mbi
+    bpy.utils.unregister_class(MbiObjectSettings)

@@ -1,0 +1,165 @@
+"""Inside `blender -b --factory-startup`: the add-on cages and binds a model, the cage is animated by a
+keyframed shape key, and Blender's evaluated model equals `mbi deform` on the same data (to 1e-6 of
+the model's size), before and after saving and reopening the .blend; an empty mesh is refused.
+
+    blender -b --factory-startup --python live_cage.py -- <work dir> <mbi executable>
+"""
+import math
+import os
+import subprocess
+import sys
+
+import addon_utils
+import bpy
+import numpy as np
+
+FRAMES = (1, 6, 11)
+
+
+def fail(message):
+    print("FAIL: " + message)
+    sys.exit(1)
+
+
+def check(condition, message):
+    if not condition:
+        fail(message)
+    print("ok: " + message)
+
+
+def world(obj, local):
+    M = np.array(obj.matrix_world)
+    return local @ M[:3, :3].T + M[:3, 3]
+
+
+def positions(mesh):
+    co = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
+    mesh.vertices.foreach_get("co", co)
+    return co.reshape(-1, 3).astype(np.float64)
+
+
+def select_only(objects, active):
+    bpy.ops.object.select_all(action="DESELECT")
+    for obj in objects:
+        obj.select_set(True)
+    bpy.context.view_layer.objects.active = active
+
+
+def make_model():
+    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=4, radius=1.0, location=(0.4, -0.2, 0.1))
+    model = bpy.context.active_object
+    model.name = "model"
+    model.scale = (1.6, 0.8, 0.6)
+    bpy.context.view_layer.update()  # matrix_world follows the scale
+    return model
+
+
+def twist(U, size):
+    """A twist about z and a bend, large enough that a wrong deformation shows."""
+    c = U.mean(axis=0)
+    R = U - c
+    angle = 3.0 * R[:, 2] / size
+    x = R[:, 0] * np.cos(angle) - R[:, 1] * np.sin(angle)
+    y = R[:, 0] * np.sin(angle) + R[:, 1] * np.cos(angle)
+    z = R[:, 2] + 0.5 * size * (R[:, 0] / size) ** 2
+    return np.stack([x, y, z], axis=1) + c
+
+
+def animate_cage(cage):
+    U = positions(cage.data)
+    cage.shape_key_add(name="Basis", from_mix=False)
+    pose = cage.shape_key_add(name="pose", from_mix=False)
+    pose.data.foreach_set("co", twist(U, np.ptp(U, axis=0).max()).astype(np.float32).ravel())
+    pose.value = 0.0
+    pose.keyframe_insert("value", frame=FRAMES[0])
+    pose.value = 1.0
+    pose.keyframe_insert("value", frame=FRAMES[-1])
+
+
+def blender_frame(model, cage, frame):
+    """The model's and the cage's evaluated positions at a frame, in world (= cage) space."""
+    bpy.context.scene.frame_set(frame)
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    P = world(model, positions(model.evaluated_get(depsgraph).data))
+    X = positions(cage.evaluated_get(depsgraph).data)
+    return P, X
+
+
+def mbi_deform(mbi, exe, work, cage, rest_model, X, tag):
+    base = os.path.join(work, "cage")
+    mbi.write_tetgen(base, positions(cage.data), np.asarray(cage.data["mbi_tets"].to_list()).reshape(-1, 4))
+    np.savetxt(os.path.join(work, "x_%s.txt" % tag), X, fmt="%.17g")
+    mbi.write_points(os.path.join(work, "model.txt"), rest_model)
+    out = os.path.join(work, "out_%s.txt" % tag)
+    run = subprocess.run([exe, "deform", "--control", base, "--deformed", os.path.join(work, "x_%s.txt" % tag),
+                          "--mesh", os.path.join(work, "model.txt"), "--out", out, "--force"],
+                         capture_output=True, text=True)
+    if run.returncode != 0:
+        fail("mbi deform: " + run.stderr)
+    return mbi.read_points(out)
+
+
+def compare(mbi, exe, work, model, cage, rest_model, size, tag):
+    moved = 0.0
+    for frame in FRAMES:
+        P, X = blender_frame(model, cage, frame)
+        expected = mbi_deform(mbi, exe, work, cage, rest_model, X, "%s%d" % (tag, frame))
+        error = np.abs(P - expected).max() / size
+        check(error <= 1e-6, "%s frame %d: Blender's evaluated model equals mbi deform (%.2e of its size)"
+              % (tag, frame, error))
+        moved = max(moved, np.abs(P - rest_model).max() / size)
+    check(moved > 0.05, "%s: the model followed the cage (moved %.3f of its size)" % (tag, moved))
+
+
+def bad_input():
+    mesh = bpy.data.meshes.new("empty")
+    empty = bpy.data.objects.new("empty", mesh)
+    bpy.context.collection.objects.link(empty)
+    select_only([empty], empty)
+    count = len(bpy.data.objects)
+    try:
+        bpy.ops.mbi.cage()
+        fail("an empty mesh was caged")
+    except RuntimeError as error:
+        check("has no faces" in str(error), "an empty mesh is refused: %s" % str(error).strip())
+    check(len(bpy.data.objects) == count, "no cage object is left behind")
+
+
+def main(work, exe):
+    addon_utils.enable("mbi_blender", default_set=True)
+    from mbi_blender import module
+    mbi = module.load()
+    model = make_model()
+    rest_model = world(model, positions(model.data))
+    size = np.linalg.norm(np.ptp(rest_model, axis=0))
+    select_only([model], model)
+    check(bpy.ops.mbi.cage(vertices=150) == {"FINISHED"}, "the cage operator ran")
+    cage = next(o for o in bpy.data.objects if o.mbi.is_cage)
+    tets = np.asarray(cage.data["mbi_tets"].to_list()).reshape(-1, 4)
+    check(len(tets) > 0 and tets.max() < len(cage.data.vertices), "the cage holds %d tetrahedra" % len(tets))
+    select_only([model, cage], cage)
+    check(bpy.ops.mbi.bind(method="modified-bi") == {"FINISHED"}, "the bind operator ran")
+    animate_cage(cage)
+    compare(mbi, exe, work, model, cage, rest_model, size, "live")
+
+    path = os.path.join(work, "scene.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=path)
+    bpy.ops.wm.open_mainfile(filepath=path)
+    model, cage = bpy.data.objects["model"], next(o for o in bpy.data.objects if o.mbi.is_cage)
+    reopened = np.asarray(cage.data["mbi_tets"].to_list()).reshape(-1, 4)
+    check(np.array_equal(reopened, tets), "the tetrahedra survive save and reopen")
+    check(model.mbi.cage == cage, "the model is still bound after reopening")
+    compare(mbi, exe, work, model, cage, rest_model, size, "reopened")
+    bad_input()
+    print("PASS")
+
+
+if __name__ == "__main__":
+    args = sys.argv[sys.argv.index("--") + 1:]
+    try:
+        main(*args)
+    except Exception as error:  # noqa: BLE001 - any escape is a failure with its message, not Blender's exit 0
+        import traceback
+        traceback.print_exc()
+        fail("%s: %s" % (type(error).__name__, error))
+    sys.exit(0)
