@@ -41,6 +41,9 @@ class Error(ValueError):
 class FileError(Error, OSError):
     """A file that could not be read or written; the message starts with the file's name."""
 
+class OutsideWarning(UserWarning):
+    """Dense points outside the control mesh, extrapolated from the nearest element."""
+
 # ------------------------------------------------------------------ the method (core)
 
 class Embedding:
@@ -70,7 +73,12 @@ class Deformer:
     """Embedding and the method's precompute, once; then poses to dense positions."""
     def __init__(self, U: ArrayLike, T: ArrayLike, P: ArrayLike, *, method: Method = "modified-bi",
                  alpha: Optional[float] = None, beta: float = 0.0, pin_boundary: bool = False,
-                 rest_normals: Optional[ArrayLike] = None, threads: int = 0) -> None: ...
+                 rest_normals: Optional[ArrayLike] = None, threads: int = 0,
+                 max_outside: Optional[float] = None) -> None: ...
+    @property
+    def outside_points(self) -> int: """points outside the control mesh"""
+    @property
+    def max_outside_distance(self) -> float: """the farthest outside point's distance to the mesh (units of P)"""
     # mypy takes Type[np.float64] and Type[np.float32] (aliases of one generic class) to overlap
     @overload
     def deform(  # type: ignore[misc]

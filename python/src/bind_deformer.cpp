@@ -4,15 +4,45 @@
 
 #include <mbi/pipeline/deformer.hpp>
 
+#include "deform_outside.hpp"  // mbi deform's --max-outside check (app/), shared with the command line
+
+#include <cmath>
+#include <cstdio>
+
 namespace mbi::python {
 namespace {
 
 using pipeline::Deformer;
 using Bound = Guarded<Deformer>;
 
+py::handle outside_warning;  // mbi.OutsideWarning, made in bind_deformer (lives as long as the module)
+
+// Points outside the control mesh, as `mbi deform` reports them: refused beyond max_outside x the
+// model size (the command's --max-outside check), else an mbi.OutsideWarning.
+void report_outside(const interp::Embedding& emb, const Mesh& c, const Input& p, std::optional<double> max_outside) {
+  if (max_outside && !(std::isfinite(*max_outside) && *max_outside >= 0))
+    throw Error("max_outside must be a finite number >= 0 (x the model size), got " + std::to_string(*max_outside));
+  if (emb.outside.empty()) return;
+  if (max_outside) {
+    try {
+      cli::refuse_far_points(emb, c.U.map, c.T, p.map, *max_outside, "P", "(U, T)");
+    } catch (const std::runtime_error& e) {
+      std::string msg = e.what();
+      const std::string flag = "--max-outside ";
+      if (const auto at = msg.find(flag); at != std::string::npos) msg.replace(at, flag.size(), "max_outside=");
+      throw Error(msg);
+    }
+  }
+  char msg[256];
+  std::snprintf(msg, sizeof msg, "%zu of %d points lie outside the control mesh (farthest %.3g); they follow the "
+                "nearest element by extrapolation", emb.outside.size(), emb.size(), emb.max_outside_distance);
+  // stack level 2: past the wrapper of mbi/_errors.py around every method, to the caller's line
+  if (PyErr_WarnEx(outside_warning.ptr(), msg, 2) < 0) throw py::error_already_set();  // warnings as errors
+}
+
 std::unique_ptr<Bound> make_deformer(const py::object& U, const py::object& T, const py::object& P,
                                      const std::string& method, std::optional<double> alpha, double beta, bool pin_boundary,
-                                     const py::object& rest_normals, int threads) {
+                                     const py::object& rest_normals, int threads, std::optional<double> max_outside) {
   const Mesh c = control_mesh(U, T);
   const Input p = float_matrix(P, "P", {-1, c.U.map.cols()});
   pipeline::DeformerOptions o;
@@ -23,7 +53,9 @@ std::unique_ptr<Bound> make_deformer(const py::object& U, const py::object& T, c
   o.threads = threads;
   Eigen::MatrixXd normals;
   if (!rest_normals.is_none()) normals = float_matrix(rest_normals, "rest_normals", {p.map.rows(), p.map.cols()}).map;
-  return without_gil([&] { return std::make_unique<Bound>(c.U.map, c.T, p.map, o, normals); });
+  interp::Embedding emb = without_gil([&] { return interp::embed(c.U.map, c.T, p.map); });
+  report_outside(emb, c, p, max_outside);
+  return without_gil([&] { return std::make_unique<Bound>(c.U.map, c.T, std::move(emb), o, normals); });
 }
 
 // float32 results (the fast kernel) when out is float32 or dtype asks for it; float64 otherwise
@@ -102,14 +134,23 @@ py::object vjp(Bound& b, const py::object& G, const py::object& out) {
 
 void bind_deformer(py::module_& m) {
   using namespace pybind11::literals;
+  outside_warning = PyErr_NewExceptionWithDoc("mbi._mbi.OutsideWarning",
+                                              "Dense points outside the control mesh, extrapolated from the nearest "
+                                              "element (Deformer's max_outside= refuses those too far out).",
+                                              PyExc_UserWarning, nullptr);
+  if (!outside_warning) throw py::error_already_set();
+  m.attr("OutsideWarning") = outside_warning;
   py::class_<Bound>(m, "Deformer",
                     "Bind once, deform many: the dense points P embedded in a rest control mesh (U, T) and the "
                     "method's precompute, made once; deform() maps poses X (n, d) to positions (p, d).")
       .def(py::init(&make_deformer), "U"_a, "T"_a, "P"_a, py::kw_only(), "method"_a = "modified-bi", "alpha"_a = py::none(),
            "beta"_a = 0.0, "pin_boundary"_a = false, "rest_normals"_a = py::none(), "threads"_a = 0,
+           "max_outside"_a = py::none(),
            "U (n, d) rest control vertices, T (m, d+1) elements, P (p, d) dense rest points (units of U). method: "
            "bi, modified-bi or phong; alpha (None: 0.1 in 3D, 0.2 in 2D), beta (0: automatic), pin_boundary: modified-BI's; rest_normals: unit "
-           "normals (p, d) for deform(..., normals=True); threads: 0 = all cores.")
+           "normals (p, d) for deform(..., normals=True); threads: 0 = all cores. Points outside the control mesh "
+           "warn (mbi.OutsideWarning); max_outside refuses those farther out than max_outside x the model size "
+           "(the diagonal of P's bounding box), as mbi deform --max-outside.")
       .def("deform", &deform, "X"_a, py::kw_only(), "out"_a = py::none(), "normals"_a = false,
            "normals_out"_a = py::none(), "dtype"_a = py::none(),
            "Positions (p, d) of pose X (n, d), or (frames, p, d) of a batch X (frames, n, d). normals: also the "
@@ -143,6 +184,10 @@ void bind_deformer(py::module_& m) {
       .def_property_readonly("vertices", [](Bound& b) { return b.object.vertices(); }, "n")
       .def_property_readonly("elements", [](Bound& b) { return b.object.elements(); }, "m")
       .def_property_readonly("points", [](Bound& b) { return b.object.points(); }, "p")
+      .def_property_readonly("outside_points", [](Bound& b) { return b.object.embedding().outside.size(); },
+                             "how many points lie outside the control mesh (extrapolated from the nearest element)")
+      .def_property_readonly("max_outside_distance", [](Bound& b) { return b.object.embedding().max_outside_distance; },
+                             "the farthest outside point's distance to the control mesh (units of P; 0 when none)")
       .def_property_readonly("has_rest_normals", [](Bound& b) { return b.object.has_rest_normals(); })
       .def_property_readonly("alpha", [](Bound& b) { return b.run([](Deformer& e) { return e.solver().alpha(); }); },
                              "modified-BI's alpha (mbi.Error for the other methods)")

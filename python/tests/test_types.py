@@ -49,7 +49,7 @@ def test_the_typing_usage_names_every_public_name():
     text = open(USAGE).read()
     assert [name for name in mbi.__all__ if f"mbi.{name}" not in text] == []
     assert [name for name in mbi.batch.__all__ if f"mbi.batch.{name}" not in text] == []
-    assert all(f"mbi.torch.{name}" in text for name in ("deform", "Deform", "DeformFunction"))
+    assert all(f"mbi.torch.{name}" in text for name in ("deform", "Deform", "DeformFunction", "VjpFunction"))
 
 
 def test_the_typing_usage_runs(tmp_path):

@@ -3,6 +3,7 @@
 calls are real. Argument: a scratch folder; MBI_SOURCE_DIR: the repository (for a scene)."""
 import os
 import sys
+import warnings
 from typing import Any, Dict, List, Tuple
 
 import numpy as np
@@ -35,6 +36,12 @@ def core(tmp: str) -> None:
         assert same is out and batch.shape == (2, 40, 3) and fast.dtype == np.float32 and pos.shape == nrm.shape
         assert grad.shape == into.shape == U.shape and deformer.M(U).shape == (27 * 3, 3)
         assert deformer.bezier(U).shape[1] == 3 and deformer.method == method
+    with warnings.catch_warnings(record=True) as caught:  # points outside the control mesh: a warning, counts
+        warnings.simplefilter("always")
+        outside = mbi.Deformer(U, T, P + (0.0, 0.0, 3.0), max_outside=2.0)
+    far: int = outside.outside_points
+    distance: float = outside.max_outside_distance
+    assert far > 0 and distance > 0 and issubclass(caught[0].category, mbi.OutsideWarning)
     embedding: mbi.Embedding = mbi.embed(U, T, P)
     element: I32 = embedding.element
     assert element.dtype == np.int32 and mbi.embedded_positions(U, T, embedding).shape == P.shape
@@ -68,7 +75,10 @@ def core(tmp: str) -> None:
     loss.backward()
     from_numpy: torch.Tensor = mbi.torch.deform(model.deformer, U)
     assert X.grad is not None and from_numpy.shape == (40, 3)
-    assert mbi.torch.DeformFunction is not None
+    assert mbi.torch.DeformFunction is not None and mbi.torch.VjpFunction is not None
+    (g,) = torch.autograd.grad((mbi.torch.deform(model.deformer, X) ** 2).sum(), X, create_graph=True)
+    (hv,) = torch.autograd.grad(g, X, grad_outputs=torch.ones_like(X))  # a Hessian-vector product
+    assert hv.shape == X.shape
 
 
 def simulation(tmp: str) -> None:
