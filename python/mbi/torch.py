@@ -8,8 +8,10 @@ positions X through Deformer.vjp (exact: the positions are linear in X for every
     loss = ((positions - target) ** 2).sum()
     loss.backward()                                # X.grad = dL/dX
 
-Computed in float64 on the CPU: X of another dtype or device is converted, the result and the
-gradient are converted back. X may be a numpy array (or anything numpy.asarray takes): it is
+Differentiable to any order (the backward is VjpFunction, whose backward is deform again):
+double backward gives Hessian-vector products. Computed in float64 on the CPU: a float64 CPU
+tensor is shared with numpy both ways, without a copy; X of another dtype or device is
+converted, the result and the gradient are converted back. X may be a numpy array (or anything numpy.asarray takes): it is
 taken as a tensor that needs no gradient. Tensors of any strides are taken (expand()ed, t()ed,
 the zero-stride gradient of loss.sum()): mbi reads them as numpy views and copies what it cannot
 read in place. Importing this module needs torch; importing mbi does not.
