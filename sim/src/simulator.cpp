@@ -173,6 +173,13 @@ struct Simulator::Impl {
   Eigen::VectorXd f_el, f_ext, Kv, r, delta;
   double last_elastic = 0.0;
 
+  // extra potential (fact 14) and its per-iteration scratch
+  std::shared_ptr<const Potential> potential;
+  std::vector<NodeBlock> pot_blocks;
+  Eigen::VectorXd pot_grad, trial, x_trial;
+  int halvings = 0;                 // line-search halvings of the current step
+  std::vector<double> phi_history;  // incremental potential of the last substep
+
   void build(const Eigen::Ref<const Eigen::MatrixXd>& U_, const Eigen::Ref<const Eigen::MatrixXi>& T_,
              const Material& material, const std::vector<Material>& per_element);
   void build_pattern();
@@ -189,6 +196,16 @@ struct Simulator::Impl {
     return p;
   }
   void check_element_bary(int element, const Eigen::Vector4d& bary) const;
+  int block_index(int i, int j) const;  // stored block of the pair, -1 outside the pattern
+  double elastic_energy_at(const Eigen::VectorXd& xe) const;
+  double poke_energy(const Eigen::VectorXd& xe) const;
+  // Backward Euler's incremental potential at velocity vk (positions x + h vk into xs).
+  double incremental(const Eigen::VectorXd& vk, double h, Eigen::VectorXd& xs) const;
+  // Adds c times the potential's Hessian blocks at xe to the system; empty or why not.
+  std::string add_potential_hessian(const Eigen::VectorXd& xe, double c);
+  // Moves vk along delta by the largest of 1, 1/2, 1/4, ... that satisfies Armijo's rule on
+  // the incremental potential phi (updated); false when none does (no descent left).
+  bool line_search(Eigen::VectorXd& vk, double h, double& phi);
   void check_nodes(const std::vector<int>& nodes) const;
 
   // Assembles at positions xe: elastic forces into f_el, A = cM M + cK K_el + cP K_poke (lower,
@@ -378,6 +395,77 @@ void Simulator::Impl::check_nodes(const std::vector<int>& nodes) const {
     if (seen[i]) throw Error("node " + std::to_string(i) + " listed twice");
     seen[i] = 1;
   }
+}
+
+int Simulator::Impl::block_index(int i, int j) const {
+  if (i < j) std::swap(i, j);
+  if (i == j) return blk_outer[j];
+  const auto first = blk_row.begin() + blk_outer[j] + 1, last = blk_row.begin() + blk_outer[j + 1];
+  const auto it = std::lower_bound(first, last, i);
+  return (it != last && *it == i) ? static_cast<int>(it - blk_row.begin()) : -1;
+}
+
+double Simulator::Impl::elastic_energy_at(const Eigen::VectorXd& xe) const {
+  double E = 0.0;
+  for (const Elem& el : elems) {
+    Eigen::Matrix<double, 3, 4> xc;
+    for (int a = 0; a < 4; ++a) xc.col(a) = xe.segment<3>(3 * el.node[a]);
+    Eigen::Matrix3d F;
+    F.noalias() = xc * el.grad.transpose();
+    E += el.volume * corotational_psi(F, rotation(F), el.lame);
+  }
+  return E;
+}
+
+double Simulator::Impl::poke_energy(const Eigen::VectorXd& xe) const {
+  double E = 0.0;
+  for (const auto& [id, pk] : pokes)
+    E += 0.5 * pk.stiffness * (pk.target - material_point(xe, pk.element, pk.bary)).squaredNorm();
+  return E;
+}
+
+double Simulator::Impl::incremental(const Eigen::VectorXd& vk, double h, Eigen::VectorXd& xs) const {
+  xs = x + h * vk;
+  const Eigen::VectorXd dv = vk - v;
+  // Its gradient in vk is M (vk - v) - h (f_el + f_ext + f_poke - a M vk - dE/dx) = -r.
+  double phi = 0.5 * dv.dot(mass_dof.cwiseProduct(dv)) +
+               0.5 * h * params.mass_damping * vk.dot(mass_dof.cwiseProduct(vk)) - h * f_ext.dot(vk);
+  return phi + elastic_energy_at(xs) + poke_energy(xs) + potential->energy(xs);
+}
+
+std::string Simulator::Impl::add_potential_hessian(const Eigen::VectorXd& xe, double c) {
+  pot_blocks.clear();
+  potential->hessian_blocks(xe, pot_blocks);
+  for (const NodeBlock& b : pot_blocks) {
+    const int q = (b.row >= 0 && b.row < n && b.col >= 0 && b.col < n) ? block_index(b.row, b.col) : -1;
+    if (q < 0)
+      return "potential Hessian block (" + std::to_string(b.row) + ", " + std::to_string(b.col) +
+             ") is outside the element pattern";
+    if (!b.value.allFinite()) return "potential Hessian block is not finite";
+    if (b.row == b.col) blk_val[q] += (0.5 * c) * (b.value + b.value.transpose());
+    else if (b.row > b.col) blk_val[q] += c * b.value;  // stored: rows of the larger node
+    else blk_val[q] += c * b.value.transpose();
+  }
+  for (int p : zero_blocks) blk_val[p].setZero();
+  return {};
+}
+
+bool Simulator::Impl::line_search(Eigen::VectorXd& vk, double h, double& phi) {
+  const double slope = -r.dot(delta);  // d phi / ds at s = 0 (r = -grad phi on free dofs)
+  if (!(slope < 0)) return false;
+  double step = 1.0;
+  for (int k = 0; k < 40; ++k, step *= 0.5) {
+    trial = vk + step * delta;
+    const double value = incremental(trial, h, x_trial);
+    if (std::isfinite(value) && value <= phi + 1e-4 * step * slope) {
+      vk.swap(trial);
+      phi = value;
+      delta *= step;
+      return true;
+    }
+    ++halvings;
+  }
+  return false;
 }
 
 double Simulator::Impl::assemble_elastic(const Eigen::VectorXd& xe, double cK,
@@ -576,8 +664,15 @@ std::string Simulator::Impl::substep(double h, int& newton, int& iters, double& 
     if (damp_k || a > 0) vd = ph1 * v + ph2 * vk;
     last_elastic = assemble(xe, 1.0 + h * ph2 * a, h * h * th2 + h * ph2 * b, h * h * th2,
                             damp_k ? &vd : nullptr);
-    // r = -(M (vk - v) - h (f_el + f_ext + f_poke - a M vd - b K vd))
+    // r = -(M (vk - v) - h (f_el + f_ext + f_poke - a M vd - b K vd - dE/dx))
     Eigen::VectorXd f = f_el + f_ext;
+    if (potential) {
+      if (std::string why = add_potential_hessian(xe, h * h * th2); !why.empty()) return why;
+      pot_grad.setZero(3 * n);
+      potential->add_gradient(xe, pot_grad);
+      if (!pot_grad.allFinite()) return "potential gradient is not finite";
+      f -= pot_grad;
+    }
     add_poke_forces(xe, f);
     if (a > 0) f -= a * mass_dof.cwiseProduct(vd);
     if (damp_k) f -= b * Kv;
@@ -597,7 +692,17 @@ std::string Simulator::Impl::substep(double h, int& newton, int& iters, double& 
     t_solve += ms_since(t0);
     ++newton;
     if (!ok) return why;
-    vk += delta;
+    if (!potential) {
+      vk += delta;
+    } else {
+      if (it == 0) {
+        phi_history.assign(1, incremental(vk, h, x_trial));
+        if (!std::isfinite(phi_history[0])) return "incremental potential is not finite";
+      }
+      double phi = phi_history.back();
+      if (!line_search(vk, h, phi)) break;  // no descent left: converged to round-off
+      phi_history.push_back(phi);
+    }
     if (params.newton_tolerance > 0) {
       double dmax = 0.0;
       for (int i = 0; i < n; ++i) dmax = std::max(dmax, delta.segment<3>(3 * i).norm());
@@ -752,10 +857,14 @@ StepResult Simulator::step() {
   const double time0 = s.t;
   const double h = s.params.dt / s.params.substeps;
   std::string why;
+  s.halvings = 0;
+  s.phi_history.clear();
   for (int k = 0; k < s.params.substeps && why.empty(); ++k) {
     why = s.substep(h, res.newton_iterations, res.solver_iterations, res.assemble_ms, res.solve_ms);
     if (why.empty()) s.t = time0 + (k + 1) * h;
   }
+  res.line_search_halvings = s.halvings;
+  res.incremental_potential = s.phi_history;
   if (!why.empty()) {
     s.x = x0;
     s.v = v0;
@@ -931,18 +1040,7 @@ double Simulator::kinetic_energy() const {
   return 0.5 * impl_->v.dot(impl_->mass_dof.cwiseProduct(impl_->v));
 }
 
-double Simulator::elastic_energy() const {
-  const Impl& s = *impl_;
-  double E = 0.0;
-  for (const Elem& el : s.elems) {
-    Eigen::Matrix<double, 3, 4> xc;
-    for (int a = 0; a < 4; ++a) xc.col(a) = s.x.segment<3>(3 * el.node[a]);
-    Eigen::Matrix3d F;
-    F.noalias() = xc * el.grad.transpose();
-    E += el.volume * corotational_psi(F, rotation(F), el.lame);
-  }
-  return E;
-}
+double Simulator::elastic_energy() const { return impl_->elastic_energy_at(impl_->x); }
 
 double Simulator::gravity_energy() const {
   const Impl& s = *impl_;
@@ -988,8 +1086,31 @@ const Eigen::MatrixXi& Simulator::tets() const { return impl_->T; }
 const Eigen::VectorXd& Simulator::masses() const { return impl_->mass; }
 const Parameters& Simulator::params() const { return impl_->params; }
 
+static void check_potential_params(const Parameters& p) {
+  if (p.integrator != Integrator::BackwardEuler)
+    throw Error("parameter integrator must be BackwardEuler with a potential");
+  if (p.stiffness_damping != 0.0)
+    throw Error("parameter stiffness_damping must be 0 with a potential");
+}
+
+void Simulator::set_potential(std::shared_ptr<const Potential> potential) {
+  if (potential) check_potential_params(impl_->params);
+  impl_->potential = std::move(potential);
+}
+
+const std::shared_ptr<const Potential>& Simulator::potential() const { return impl_->potential; }
+
+bool Simulator::adjacent(int i, int j) const {
+  const Impl& s = *impl_;
+  if (i < 0 || i >= s.n || j < 0 || j >= s.n)
+    throw Error("node pair (" + std::to_string(i) + ", " + std::to_string(j) + ") outside [0, " +
+                std::to_string(s.n) + ")");
+  return s.block_index(i, j) >= 0;
+}
+
 void Simulator::set_params(const Parameters& params) {
   check_params(params);
+  if (impl_->potential) check_potential_params(params);
   impl_->params = params;
   impl_->resolve_solver();
 }

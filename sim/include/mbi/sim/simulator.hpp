@@ -24,6 +24,7 @@
 // angular momentum (to the Newton tolerance) and does not damp, but is not L-stable: use it
 // with newton_iterations > 1 and a tolerance.
 #include <mbi/sim/corotational.hpp>
+#include <mbi/sim/potential.hpp>
 
 #include <Eigen/Core>
 #include <memory>
@@ -97,6 +98,11 @@ struct StepResult {
   double time = 0.0;         ///< s, simulated time after the step (unchanged on failure)
   int newton_iterations = 0; ///< summed over substeps
   int solver_iterations = 0; ///< PCG iterations summed over solves; 0 for LDLT
+  /// With a potential (set_potential): halvings of the Newton step summed over substeps, and
+  /// the incremental potential (J) of the last substep before its first and after each Newton
+  /// iteration (never increasing). Empty without a potential.
+  int line_search_halvings = 0;
+  std::vector<double> incremental_potential;
   double assemble_ms = 0.0;  ///< forces, rotations, warped stiffness, constraints (1 thread)
   double solve_ms = 0.0;     ///< factorisation + solve (or PCG)
   double total_ms = 0.0;
@@ -141,6 +147,18 @@ class Simulator {
   /// Removes any handle. Kinematic nodes become free with their current velocity.
   void remove(int handle);
   bool has_handle(int handle) const;
+
+  /// An extra potential E(x) added to every step (method.md fact 14), or nullptr to remove it.
+  /// With one, each Newton iteration adds its gradient and Hessian blocks and takes a
+  /// backtracking line search on the incremental potential, so newton_iterations and
+  /// newton_tolerance become a real Newton solve. Needs BackwardEuler and stiffness_damping =
+  /// 0 (Error otherwise, here or in set_params): the other step equations are not the
+  /// minimum of a potential. The simulator shares ownership; the potential must not change
+  /// during a step.
+  void set_potential(std::shared_ptr<const Potential> potential);
+  const std::shared_ptr<const Potential>& potential() const;
+  /// Whether nodes i and j share an element (the pattern Potential::hessian_blocks must keep).
+  bool adjacent(int i, int j) const;
 
   // ------------------------------------------------------------ stepping
   /// Advances by params().dt. On failure (non-finite state, runaway energy, solver failure) the

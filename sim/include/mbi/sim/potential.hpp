@@ -1,0 +1,39 @@
+#pragma once
+// An extra potential energy that the simulator's implicit step takes from the layer above (for
+// example contact at points embedded in the control mesh), method.md fact 14.
+//
+//   struct Spring : sim::Potential { ... };
+//   sim.set_potential(std::make_shared<Spring>(...));   // nullptr removes it
+//
+// Positions x are the stacked node positions (3 n, m): node i, axis c at index 3 i + c.
+// Energy in J, gradient dE/dx in N (J/m), Hessian blocks in N/m.
+#include <Eigen/Core>
+#include <vector>
+
+namespace mbi::sim {
+
+/// One 3x3 block of a symmetric Hessian: value = d^2 E / (dx_row dx_col^T). A block with
+/// row != col stands for itself and its transpose at (col, row): give each node pair once.
+/// Blocks for the same pair add up.
+struct NodeBlock {
+  int row = 0;
+  int col = 0;
+  Eigen::Matrix3d value = Eigen::Matrix3d::Zero();
+};
+
+class Potential {
+ public:
+  virtual ~Potential() = default;
+  /// E(x), J. Must be finite wherever the step evaluates it (or the step fails).
+  virtual double energy(const Eigen::Ref<const Eigen::VectorXd>& x) const = 0;
+  /// Adds dE/dx (3 n, N) to `gradient`.
+  virtual void add_gradient(const Eigen::Ref<const Eigen::VectorXd>& x,
+                            Eigen::Ref<Eigen::VectorXd> gradient) const = 0;
+  /// Appends the Hessian of E at x, or a symmetric positive semi-definite surrogate of it, as
+  /// node blocks. Every pair (row, col) must share an element of the control mesh (the FEM's
+  /// sparsity pattern); the step fails naming the first pair that does not.
+  virtual void hessian_blocks(const Eigen::Ref<const Eigen::VectorXd>& x,
+                              std::vector<NodeBlock>& blocks) const = 0;
+};
+
+}  // namespace mbi::sim
