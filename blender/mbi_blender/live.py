@@ -1,6 +1,6 @@
-"""The live path: each frame, the evaluated cage's nodes deform the bound meshes into their "mbi" shape key.
+"""The live path: the evaluated cage's nodes deform the bound meshes into their "mbi" shape key.
 
-A frame-change handler reads the cage as Blender evaluated it (armature, shape keys, hooks,
+On each frame change, and when a cage is edited in place, a handler reads the cage as Blender evaluated it (armature, shape keys, hooks,
 lattice), runs the bound Deformer (float32 kernel, no allocation) and writes the positions into
 the model's shape key "mbi" (value 1, relative to the basis), so the mesh data's basis stays the
 rest shape. The Deformers are not saved: they are rebuilt from the .blend's data on first use
@@ -109,11 +109,14 @@ def deform(model, depsgraph):
     model.data.update()
 
 
-def update_all(depsgraph):
-    errors.clear()
+def update_all(depsgraph, cages=None):
+    """Deforms every bound model, or those bound to the cages named in cages."""
     for model in bpy.data.objects:
         if model.type != "MESH" or model.mbi.cage is None:
             continue
+        if cages is not None and model.mbi.cage.name_full not in cages:
+            continue
+        errors.pop(model.name, None)
         try:
             deform(model, depsgraph)
         except (RuntimeError, ValueError) as error:
@@ -127,8 +130,18 @@ def _on_frame(scene, depsgraph=None):
 
 
 @persistent
+def _on_depsgraph(scene, depsgraph):
+    """A cage edited without a frame change (edit mode, a posed armature, a key's value)."""
+    cages = {u.id.original.name_full for u in depsgraph.updates
+             if isinstance(u.id, bpy.types.Object) and u.is_updated_geometry and u.id.mbi.is_cage}
+    if cages:  # the models written here are no cages: no second round
+        update_all(depsgraph, cages)
+
+
+@persistent
 def _on_load(*_):
     _bound.clear()
+    errors.clear()
     update_all(bpy.context.evaluated_depsgraph_get())
 
 
@@ -137,7 +150,8 @@ def _on_undo(*_):
     update_all(bpy.context.evaluated_depsgraph_get())
 
 
-_HANDLERS = ((bpy.app.handlers.frame_change_post, _on_frame), (bpy.app.handlers.load_post, _on_load),
+_HANDLERS = ((bpy.app.handlers.frame_change_post, _on_frame),
+             (bpy.app.handlers.depsgraph_update_post, _on_depsgraph), (bpy.app.handlers.load_post, _on_load),
              (bpy.app.handlers.undo_post, _on_undo), (bpy.app.handlers.redo_post, _on_undo))
 
 

@@ -76,9 +76,10 @@ def animate_cage(cage):
     pose.keyframe_insert("value", frame=FRAMES[-1])
 
 
-def blender_frame(model, cage, frame):
-    """The model's and the cage's evaluated positions at a frame, in world (= cage) space."""
-    bpy.context.scene.frame_set(frame)
+def blender_frame(model, cage, frame=None):
+    """The model's and the cage's evaluated positions at a frame (None: as they are), in world (= cage) space."""
+    if frame is not None:
+        bpy.context.scene.frame_set(frame)
     depsgraph = bpy.context.evaluated_depsgraph_get()
     P = world(model, positions(model.evaluated_get(depsgraph).data))
     X = positions(cage.evaluated_get(depsgraph).data)
@@ -109,6 +110,20 @@ def compare(mbi, exe, work, model, cage, rest_model, size, tag):
               % (tag, frame, error))
         moved = max(moved, np.abs(P - rest_model).max() / size)
     check(moved > 0.05, "%s: the model followed the cage (moved %.3f of its size)" % (tag, moved))
+
+
+def edit_in_place(mbi, exe, work, model, cage, rest_model, size):
+    """The cage's pose changed without a frame change: the model follows at the next update."""
+    keys = cage.data.shape_keys
+    keys.animation_data_clear()
+    before, _ = blender_frame(model, cage)
+    keys.key_blocks["pose"].value = 0.5
+    bpy.context.view_layer.update()
+    P, X = blender_frame(model, cage)
+    expected = mbi_deform(mbi, exe, work, cage, rest_model, X, "edit")
+    check(np.abs(P - before).max() / size > 0.01, "editing the cage's key moved the model")
+    error = np.abs(P - expected).max() / size
+    check(error <= 1e-6, "after an edit in place the model equals mbi deform (%.2e of its size)" % error)
 
 
 def bad_input():
@@ -150,6 +165,7 @@ def main(work, exe):
     check(np.array_equal(reopened, tets), "the tetrahedra survive save and reopen")
     check(model.mbi.cage == cage, "the model is still bound after reopening")
     compare(mbi, exe, work, model, cage, rest_model, size, "reopened")
+    edit_in_place(mbi, exe, work, model, cage, rest_model, size)
     bad_input()
     print("PASS")
 
