@@ -1,3 +1,4 @@
+#include <mbi/error.hpp>
 #include <mbi/pipeline/colliders.hpp>
 
 #include <Eigen/Geometry>
