@@ -30,6 +30,8 @@ def make_cage(context, mbi, objects, vertices, mesher):
     obj.mbi.is_cage = True
     obj.display_type = "WIRE"
     context.collection.objects.link(obj)
+    obj.select_set(True)
+    context.view_layer.objects.active = obj  # the meshes selected, the cage active: ready to bind
     return obj, cage
 
 

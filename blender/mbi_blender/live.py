@@ -69,18 +69,42 @@ def _shape_key(model):
     return block
 
 
+OUTSIDE_TOLERANCE = 1e-4  # of the model's size: points farther outside the cage are refused
+
+
+def _require_enclosed(model, entry, P_size):
+    embedding = entry.deformer.embedding
+    distance = embedding.max_outside_distance if len(embedding.outside) else 0.0
+    if distance > OUTSIDE_TOLERANCE * P_size:
+        raise ValueError("%d of %d points of %s lie outside the cage %s, up to %.3g (%.2g of the model's size): "
+                         "make the cage around this mesh" % (len(embedding.outside), entry.deformer.points,
+                                                            model.name, model.mbi.cage.name, distance,
+                                                            distance / P_size))
+
+
 def bind(model, cage, method, alpha):
-    """Binds the model to the cage now; returns the seconds the embedding and precompute took."""
+    """Binds the model to the cage now; returns the seconds the embedding and precompute took.
+
+    A refused bind (the cage does not enclose the model, mbi refused the data) leaves the model's
+    earlier binding as it was."""
     import time
     s = model.mbi
-    s.cage, s.method, s.alpha = cage, method, alpha
+    earlier = (s.cage, s.method, s.alpha, tuple(s.bind_matrix))
     B = np.array(cage.matrix_world.inverted() @ model.matrix_world)
-    s.bind_matrix = B.ravel().tolist()
+    s.cage, s.method, s.alpha, s.bind_matrix = cage, method, alpha, B.ravel().tolist()
     start = time.perf_counter()
     _bound.pop(model.name_full, None)
-    _binding(model)
+    try:
+        entry = _binding(model)
+        P = storage.positions(model.data) @ B[:3, :3].T
+        _require_enclosed(model, entry, float(np.linalg.norm(np.ptp(P, axis=0))) or 1.0)
+    except (RuntimeError, ValueError):
+        _bound.pop(model.name_full, None)
+        s.cage, s.method, s.alpha, s.bind_matrix = earlier
+        raise
+    seconds = time.perf_counter() - start
     _shape_key(model)
-    return time.perf_counter() - start
+    return seconds
 
 
 def unbind(model):

@@ -139,6 +139,22 @@ def bad_input():
         check("has no faces" in str(error), "an empty mesh is refused: %s" % str(error).strip())
     check(len(bpy.data.objects) == count, "no cage object is left behind")
 
+    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=2, radius=0.3, location=(3.0, 0.0, 0.0))
+    bpy.ops.mbi.cage(vertices=60)
+    small_cage = bpy.context.active_object
+    check(small_cage.mbi.is_cage, "the new cage is the active object")
+    model = bpy.data.objects["model"]
+    cage = model.mbi.cage
+    select_only([model, small_cage], small_cage)
+    try:
+        bpy.ops.mbi.bind()
+        fail("a cage that does not enclose the model was bound")
+    except RuntimeError as error:
+        check("outside the cage" in str(error), "a cage that does not enclose the model is refused: %s"
+              % str(error).strip())
+    check(model.mbi.cage == cage and len(model.data.shape_keys.key_blocks) == 2,
+          "the refused bind leaves the earlier one as it was")
+
 
 def main(work, exe):
     addon_utils.enable("mbi_blender", default_set=True)
