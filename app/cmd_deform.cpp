@@ -49,8 +49,7 @@ const Registrar reg{
       sub.add_flag("--pin-boundary", a->pin_boundary, "M = 0 on the control mesh boundary");
       sub.add_option("--stats", a->stats, "write statistics and timings as JSON");
       sub.add_option("--max-outside", a->max_outside,
-                     "refuse dense points farther outside the control mesh than this times the model size")
-          ->check(CLI::NonNegativeNumber);
+                     "refuse dense points farther outside the control mesh than this times the model size");
       sub.add_option_function<std::string>(
           "--fps",
           [a](const std::string& s) {

@@ -3,7 +3,6 @@
 #include "commands.hpp"
 #include "deform.hpp"
 #include "deform_outputs.hpp"
-#include "deform_outside.hpp"
 #include "signals.hpp"
 
 #include <mbi/base/timer.hpp>
@@ -59,6 +58,7 @@ class Progress {
 
 void check_args(const DeformArgs& a) {
   if (a.alpha) check_option("--alpha", [&] { interp::check_alpha(*a.alpha); });
+  if (a.max_outside) check_option("--max-outside", [&] { interp::check_max_outside(*a.max_outside); });
   if (!a.example.empty()) {
     if (a.outs.size() > 1) throw std::runtime_error("--example writes one --out");
     if (!a.displacement.empty()) throw std::runtime_error("--displacement: --example has no --deformed files");
@@ -91,10 +91,12 @@ interp::Embedding embed_points(const DeformArgs& a, const Model& m, Run& run) {
     throw std::runtime_error(m.mesh_name + ": " + e.what());
   }
   run.embed_ms = ms_since(t0);
-  if (!emb.outside.empty())
-    std::fprintf(stderr, "mbi deform: warning: %zu of %d points lie outside the control mesh (farthest %.3g); they follow "
-                 "the nearest element by extrapolation\n", emb.outside.size(), emb.size(), emb.max_outside_distance);
-  if (a.max_outside) refuse_far_points(emb, m.U, m.T, m.P, *a.max_outside, m.mesh_name, m.control_name);
+  if (!emb.outside.empty()) std::fprintf(stderr, "mbi deform: warning: %s\n", interp::outside_message(emb).c_str());
+  if (a.max_outside) {
+    const interp::FarPoints far = interp::far_points(emb, m.P, *a.max_outside);
+    if (far.count > 0)
+      throw std::runtime_error(m.mesh_name + ": " + interp::far_points_message(far, "--max-outside ", m.control_name));
+  }
   return emb;
 }
 

@@ -4,7 +4,7 @@
 
 #include <mbi/pipeline/deformer.hpp>
 
-#include "deform_outside.hpp"  // mbi deform's --max-outside check (app/), shared with the command line
+#include <mbi/interp/outside.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -19,25 +19,15 @@ py::handle outside_warning;  // mbi.OutsideWarning, made in bind_deformer (lives
 
 // Points outside the control mesh, as `mbi deform` reports them: refused beyond max_outside x the
 // model size (the command's --max-outside check), else an mbi.OutsideWarning.
-void report_outside(const interp::Embedding& emb, const Mesh& c, const Input& p, std::optional<double> max_outside) {
-  if (max_outside && !(std::isfinite(*max_outside) && *max_outside >= 0))
-    throw Error("max_outside must be a finite number >= 0 (x the model size), got " + std::to_string(*max_outside));
-  if (emb.outside.empty()) return;
+void report_outside(const interp::Embedding& emb, const Input& p, std::optional<double> max_outside) {
   if (max_outside) {
-    try {
-      cli::refuse_far_points(emb, c.U.map, c.T, p.map, *max_outside, "P", "(U, T)");
-    } catch (const std::runtime_error& e) {
-      std::string msg = e.what();
-      const std::string flag = "--max-outside ";
-      if (const auto at = msg.find(flag); at != std::string::npos) msg.replace(at, flag.size(), "max_outside=");
-      throw Error(msg);
-    }
+    const interp::FarPoints far = interp::far_points(emb, p.map, *max_outside);
+    if (far.count > 0) throw Error("P: " + interp::far_points_message(far, "max_outside=", "(U, T)"));
   }
-  char msg[256];
-  std::snprintf(msg, sizeof msg, "%zu of %d points lie outside the control mesh (farthest %.3g); they follow the "
-                "nearest element by extrapolation", emb.outside.size(), emb.size(), emb.max_outside_distance);
+  if (emb.outside.empty()) return;
   // stack level 2: past the wrapper of mbi/_errors.py around every method, to the caller's line
-  if (PyErr_WarnEx(outside_warning.ptr(), msg, 2) < 0) throw py::error_already_set();  // warnings as errors
+  if (PyErr_WarnEx(outside_warning.ptr(), interp::outside_message(emb).c_str(), 2) < 0)
+    throw py::error_already_set();  // warnings as errors
 }
 
 std::unique_ptr<Bound> make_deformer(const py::object& U, const py::object& T, const py::object& P,
@@ -54,7 +44,7 @@ std::unique_ptr<Bound> make_deformer(const py::object& U, const py::object& T, c
   Eigen::MatrixXd normals;
   if (!rest_normals.is_none()) normals = float_matrix(rest_normals, "rest_normals", {p.map.rows(), p.map.cols()}).map;
   interp::Embedding emb = without_gil([&] { return interp::embed(c.U.map, c.T, p.map); });
-  report_outside(emb, c, p, max_outside);
+  report_outside(emb, p, max_outside);
   return without_gil([&] { return std::make_unique<Bound>(c.U.map, c.T, std::move(emb), o, normals); });
 }
 

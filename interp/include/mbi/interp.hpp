@@ -8,5 +8,6 @@
 #include <mbi/interp/mesh.hpp>
 #include <mbi/interp/metrics.hpp>
 #include <mbi/interp/modified_bi.hpp>
+#include <mbi/interp/outside.hpp>
 #include <mbi/interp/phong.hpp>
 #include <mbi/interp/threads.hpp>

@@ -326,6 +326,7 @@ Embedding embed(const Eigen::Ref<const Eigen::MatrixXd>& U,
       throw Error("point " + std::to_string(i) + ": no element found (distance overflow)");
     if (dist(i) > 0 || emb.bary.row(i).minCoeff() < -kInsideTol) {
       emb.outside.push_back(i);
+      emb.outside_distance.push_back(dist(i) * s);
       emb.max_outside_distance = std::max(emb.max_outside_distance, dist(i) * s);
     }
   }

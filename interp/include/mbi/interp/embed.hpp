@@ -11,6 +11,7 @@ struct Embedding {
   Eigen::MatrixXd bary;      ///< p x (d+1), barycentric coordinates in that element (sum 1)
   std::vector<int> outside;  ///< points outside every element, attached to the nearest one
                              ///< with extrapolated coordinates (some negative)
+  std::vector<double> outside_distance;  ///< distance of each outside point to the mesh (P's units)
   double max_outside_distance = 0.0;  ///< largest distance of an outside point to the mesh
   /// (m (d+1)) x d: rows [e (d+1), e (d+1) + d] are basis_gradients(U, T, e). Filled by embed();
   /// evaluate() needs it for normals only (J = sum_k dx/dphi_k a_k^T, fact 6).
