@@ -13,6 +13,7 @@ from bpy.app.handlers import persistent
 from . import module, settings, storage
 
 SHAPE_KEY = "mbi"
+OUTSIDE_TOLERANCE = 1e-4  # of the model's size: points farther outside the cage are refused (mbi's check)
 _bound = {}   # model.name_full -> _Binding
 errors = {}   # model name -> last message of the live path (shown in the panel)
 
@@ -45,7 +46,10 @@ def _build(model, cage):
     P = storage.positions(model.data).astype(np.float64) @ B[:3, :3].T + B[:3, 3]
     U = storage.positions(cage.data).astype(np.float64)
     alpha = s.alpha if s.alpha > 0 else None
-    deformer = mbi.Deformer(U, tets, P, method=s.method, alpha=alpha)
+    try:
+        deformer = mbi.Deformer(U, tets, P, method=s.method, alpha=alpha, max_outside=OUTSIDE_TOLERANCE)
+    except mbi.Error as error:
+        raise ValueError("%s does not fit in the cage %s: %s" % (model.name, cage.name, error)) from error
     inverse = None if np.allclose(B, np.eye(4), rtol=0, atol=0) else np.linalg.inv(B)
     return _Binding(_key(model, cage, tets), deformer, inverse)
 
@@ -69,19 +73,6 @@ def _shape_key(model):
     return block
 
 
-OUTSIDE_TOLERANCE = 1e-4  # of the model's size: points farther outside the cage are refused
-
-
-def _require_enclosed(model, entry, P_size):
-    embedding = entry.deformer.embedding
-    distance = embedding.max_outside_distance if len(embedding.outside) else 0.0
-    if distance > OUTSIDE_TOLERANCE * P_size:
-        raise ValueError("%d of %d points of %s lie outside the cage %s, up to %.3g (%.2g of the model's size): "
-                         "make the cage around this mesh" % (len(embedding.outside), entry.deformer.points,
-                                                            model.name, model.mbi.cage.name, distance,
-                                                            distance / P_size))
-
-
 def bind(model, cage, method, alpha):
     """Binds the model to the cage now; returns the seconds the embedding and precompute took.
 
@@ -95,9 +86,7 @@ def bind(model, cage, method, alpha):
     start = time.perf_counter()
     _bound.pop(model.name_full, None)
     try:
-        entry = _binding(model)
-        P = storage.positions(model.data) @ B[:3, :3].T
-        _require_enclosed(model, entry, float(np.linalg.norm(np.ptp(P, axis=0))) or 1.0)
+        _binding(model)
     except (RuntimeError, ValueError):
         _bound.pop(model.name_full, None)
         s.cage, s.method, s.alpha, s.bind_matrix = earlier
