@@ -1,7 +1,7 @@
 """Bind: the selected meshes to the active cage (embedding and precompute, kept by the live path)."""
 import bpy
 
-from . import live, module
+from . import live, module, settings
 
 
 class MBI_OT_bind(bpy.types.Operator):
@@ -10,7 +10,7 @@ class MBI_OT_bind(bpy.types.Operator):
     bl_label = "Bind to mbi cage"
     bl_options = {"REGISTER", "UNDO"}
 
-    method: bpy.props.EnumProperty(name="Method", items=live.settings.METHODS, default="modified-bi")
+    method: bpy.props.EnumProperty(name="Method", items=settings.METHODS, default="modified-bi")
     alpha: bpy.props.FloatProperty(name="Alpha", default=0.0, min=0.0,
                                    description="Weight of modified-BI's E_vibr (0: the default, 0.1)")
 

@@ -1,16 +1,17 @@
 """The live path: the evaluated cage's nodes deform the bound meshes into their "mbi" shape key.
 
-On each frame change, and when a cage is edited in place, a handler reads the cage as Blender evaluated it (armature, shape keys, hooks,
-lattice), runs the bound Deformer (float32 kernel, no allocation) and writes the positions into
-the model's shape key "mbi" (value 1, relative to the basis), so the mesh data's basis stays the
-rest shape. The Deformers are not saved: they are rebuilt from the .blend's data on first use
-after a file load, an undo or a change of the bind (docs/blender.md).
+On each frame change, and when a cage is edited in place, a handler reads the cage as Blender
+evaluated it (armature, shape keys, hooks, lattice), runs the bound Deformer (float32 kernel, no
+allocation) and writes the positions into the model's shape key "mbi" (value 1, relative to the
+basis), so the mesh data's basis stays the rest shape. The Deformers are not saved: they are
+rebuilt from the .blend's data on first use after a file load, an undo or a change of the bind
+(docs/blender.md).
 """
 import bpy
 import numpy as np
 from bpy.app.handlers import persistent
 
-from . import module, settings, storage
+from . import module, storage
 
 SHAPE_KEY = "mbi"
 OUTSIDE_TOLERANCE = 1e-4  # of the model's size: points farther outside the cage are refused (mbi's check)

@@ -4,7 +4,6 @@ the model's size), before and after saving and reopening the .blend; an empty me
 
     blender -b --factory-startup --python live_cage.py -- <work dir> <mbi executable>
 """
-import math
 import os
 import subprocess
 import sys
@@ -150,8 +149,9 @@ def bad_input():
         bpy.ops.mbi.bind()
         fail("a cage that does not enclose the model was bound")
     except RuntimeError as error:
-        check("does not fit in the cage" in str(error) and "outside" in str(error), "a cage that does not enclose the model is refused: %s"
-              % str(error).strip())
+        message = str(error).strip()
+        check("does not fit in the cage" in message and "outside" in message,
+              "a cage that does not enclose the model is refused: %s" % message)
     check(model.mbi.cage == cage and len(model.data.shape_keys.key_blocks) == 2,
           "the refused bind leaves the earlier one as it was")
 
