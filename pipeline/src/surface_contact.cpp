@@ -22,6 +22,11 @@ void SurfaceContact::set_time(double time) {
   time_ = time;
 }
 
+void SurfaceContact::begin_substep(double end_time, const Eigen::Ref<const Eigen::VectorXd>&,
+                                   const Eigen::Ref<const Eigen::VectorXd>&) {
+  set_time(end_time);
+}
+
 void SurfaceContact::deform(const Eigen::Ref<const Eigen::VectorXd>& x) const {
   const int n = deformer_->vertices();
   if (x.size() != 3 * n)

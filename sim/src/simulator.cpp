@@ -174,7 +174,7 @@ struct Simulator::Impl {
   double last_elastic = 0.0;
 
   // extra potential (fact 14) and its per-iteration scratch
-  std::shared_ptr<const Potential> potential;
+  std::shared_ptr<Potential> potential;
   std::vector<NodeBlock> pot_blocks;
   Eigen::VectorXd pot_grad, trial, x_trial;
   int halvings = 0;                 // line-search halvings of the current step
@@ -650,6 +650,7 @@ std::string Simulator::Impl::substep(double h, int& newton, int& iters, double& 
   const double ps1 = be ? 0.0 : 0.5, ps2 = be ? 1.0 : 0.5;
   const double a = params.mass_damping, b = params.stiffness_damping;
   external_forces();
+  if (potential) potential->begin_substep(t + h, x, v);
   Eigen::VectorXd vk = v;
   Eigen::VectorXd target = x;
   prescribed(t + h, target);
@@ -1093,12 +1094,12 @@ static void check_potential_params(const Parameters& p) {
     throw Error("parameter stiffness_damping must be 0 with a potential");
 }
 
-void Simulator::set_potential(std::shared_ptr<const Potential> potential) {
+void Simulator::set_potential(std::shared_ptr<Potential> potential) {
   if (potential) check_potential_params(impl_->params);
   impl_->potential = std::move(potential);
 }
 
-const std::shared_ptr<const Potential>& Simulator::potential() const { return impl_->potential; }
+const std::shared_ptr<Potential>& Simulator::potential() const { return impl_->potential; }
 
 bool Simulator::adjacent(int i, int j) const {
   const Impl& s = *impl_;

@@ -52,6 +52,15 @@ struct WeakQuartic : Potential {
   }
 };
 
+/// Records the times begin_substep is called with.
+struct Recorder : MassSprings {
+  std::vector<double> times;
+  void begin_substep(double end_time, const Eigen::Ref<const Eigen::VectorXd>&,
+                     const Eigen::Ref<const Eigen::VectorXd>&) override {
+    times.push_back(end_time);
+  }
+};
+
 /// A block between two nodes that share no element.
 struct OutsidePattern : MassSprings {
   int a = 0, b = 0;
@@ -200,4 +209,19 @@ TEST_CASE("potential: bad Hessian pattern and incompatible parameters are refuse
   sim.set_params(mid);
   CHECK_THROWS_WITH(sim.set_potential(pot), "parameter integrator must be BackwardEuler with a potential");
   CHECK(sim.step().success);
+}
+
+TEST_CASE("potential: begin_substep is told the end time of every substep", "[sim][potential]") {
+  const auto M = mbi::test::bar(2, 1, 1, 1.0, 0.25);
+  Parameters p;
+  p.substeps = 3;
+  Simulator sim(M.U, M.T, Material{}, p);
+  auto rec = std::make_shared<Recorder>();
+  rec->k_dof = Eigen::VectorXd::Zero(3 * M.U.rows());
+  rec->target = Eigen::VectorXd::Zero(3 * M.U.rows());
+  sim.set_potential(rec);
+  REQUIRE(sim.step().success);
+  REQUIRE(sim.step().success);
+  REQUIRE(rec->times.size() == 6);
+  for (int k = 0; k < 6; ++k) CHECK(rec->times[k] == Approx((k + 1) * p.dt / 3));
 }

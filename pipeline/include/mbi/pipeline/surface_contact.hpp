@@ -5,7 +5,7 @@
 //   auto deformer = std::make_shared<pipeline::Deformer>(U, T, contact_points, options);
 //   auto contact = std::make_shared<pipeline::SurfaceContact>(deformer, colliders, 1e4);
 //   sim.set_potential(contact);
-//   per step: contact->set_time(sim.time() + sim.params().dt); sim.step();
+//   per step: sim.step();   // the simulator poses the colliders at each substep's end
 //
 // The dense positions are p = W x (W the deformer's linear map, method.md facts 1 and 11), so
 // the energy E(x) = sum_points sum_colliders k/2 min(d(p), 0)^2 (a quadratic penalty on the
@@ -32,8 +32,11 @@ class SurfaceContact : public sim::Potential {
   SurfaceContact(std::shared_ptr<const Deformer> deformer, std::vector<Collider> colliders,
                  double stiffness);
 
-  /// Time (s) at which the colliders are posed: the end of the coming step or substep.
+  /// Time (s) at which the colliders are posed; the simulator sets the end of each substep
+  /// (begin_substep).
   void set_time(double time);
+  void begin_substep(double end_time, const Eigen::Ref<const Eigen::VectorXd>& x,
+                     const Eigen::Ref<const Eigen::VectorXd>& v) override;
   double time() const { return time_; }
   const std::vector<Collider>& colliders() const { return colliders_; }
   double stiffness() const { return stiffness_; }

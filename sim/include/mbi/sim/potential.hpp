@@ -24,6 +24,11 @@ struct NodeBlock {
 class Potential {
  public:
   virtual ~Potential() = default;
+  /// Called once at the start of every substep, before any other call of that substep: time
+  /// (s) at its end (the time at which the implicit step evaluates E) and the node positions
+  /// and velocities at its start (3 n), e.g. to pose moving colliders or lag friction.
+  virtual void begin_substep(double /*end_time*/, const Eigen::Ref<const Eigen::VectorXd>& /*x*/,
+                             const Eigen::Ref<const Eigen::VectorXd>& /*v*/) {}
   /// E(x), J. Must be finite wherever the step evaluates it (or the step fails).
   virtual double energy(const Eigen::Ref<const Eigen::VectorXd>& x) const = 0;
   /// Adds dE/dx (3 n, N) to `gradient`.

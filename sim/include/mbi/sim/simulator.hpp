@@ -155,8 +155,8 @@ class Simulator {
   /// 0 (Error otherwise, here or in set_params): the other step equations are not the
   /// minimum of a potential. The simulator shares ownership; the potential must not change
   /// during a step.
-  void set_potential(std::shared_ptr<const Potential> potential);
-  const std::shared_ptr<const Potential>& potential() const;
+  void set_potential(std::shared_ptr<Potential> potential);
+  const std::shared_ptr<Potential>& potential() const;
   /// Whether nodes i and j share an element (the pattern Potential::hessian_blocks must keep).
   bool adjacent(int i, int j) const;
 
