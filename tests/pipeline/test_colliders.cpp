@@ -70,7 +70,7 @@ TEST_CASE("colliders: the normal is the unit gradient of the distance (finite di
     }
 }
 
-TEST_CASE("colliders: a moving collider is the static one moved rigidly; its velocity is the "
+TEST_CASE("colliders: a moving collider is the static one moved rigidly, its velocity is the "
           "motion's derivative", "[pipeline][colliders]") {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
