@@ -8,7 +8,10 @@
 #       (MBI_MODELS_DIR is unset for this pass: the release pass runs them, and under ASan they
 #       take many minutes), and so do the cases tagged [long]: numerical properties over many
 #       steps or frames ("scene large runs" alone takes 9 minutes under ASan) whose code the
-#       shorter cases run under the sanitizers too; the release pass runs them all.
+#       shorter cases run under the sanitizers too; the release pass runs them all. The browser
+#       test (label web) runs in the release pass only: the page is WebAssembly either way, and
+#       the native code it is compared with runs under the sanitizers in test_page_model and
+#       test_page_scenes (the comparison of the 252K-point scene takes minutes under ASan).
 #       LeakSanitizer is on, except in the four test programs that make
 #       OpenGL contexts (test_gpu, test_scenes, test_app, test_viewer, and bad-input cases of
 #       mbi run / view without --gpu off: Mesa's driver leaks
@@ -30,9 +33,9 @@ if [ "${1:-}" = "--sanitizers" ]; then
   read -r gl rest <<<"$lists"
   status=0
   env -u MBI_MODELS_DIR ASAN_OPTIONS="detect_leaks=1${ASAN_OPTIONS:+:$ASAN_OPTIONS}" \
-    ctest --preset debug -j "${MBI_JOBS:-$(nproc)}" -I "$rest" "$@" || status=1
+    ctest --preset debug -j "${MBI_JOBS:-$(nproc)}" -I "$rest" -LE web "$@" || status=1
   env -u MBI_MODELS_DIR ASAN_OPTIONS="detect_leaks=0${ASAN_OPTIONS:+:$ASAN_OPTIONS}" \
-    ctest --preset debug -j "${MBI_JOBS:-$(nproc)}" -I "$gl" "$@" || status=1
+    ctest --preset debug -j "${MBI_JOBS:-$(nproc)}" -I "$gl" -LE web "$@" || status=1
   exit $status
 fi
 if [ -z "${MBI_MODELS_DIR:-}" ] && [ -d ../shared/models ]; then
