@@ -54,6 +54,15 @@ struct Elem {
   std::array<std::array<int, 4>, 4> blk;
 };
 
+// The element's deformation gradient F = x_c grad^T at the stacked positions x (3n).
+Eigen::Matrix3d deformation_gradient(const Elem& el, const Eigen::VectorXd& x) {
+  Eigen::Matrix<double, 3, 4> xc;
+  for (int a = 0; a < 4; ++a) xc.col(a) = x.segment<3>(3 * el.node[a]);
+  Eigen::Matrix3d F;
+  F.noalias() = xc * el.grad.transpose();
+  return F;
+}
+
 /// Polar rotation of F by Newton iterations from a nearby rotation R (the element's rotation of
 /// the previous assembly): with S = R^T F, solve (tr(S) I - S) w = axial(S - S^T) and update
 /// R <- R cay(w) (Cayley, exactly orthogonal) until S is symmetric to round-off. tr(S) I - S is
@@ -408,10 +417,7 @@ int Simulator::Impl::block_index(int i, int j) const {
 double Simulator::Impl::elastic_energy_at(const Eigen::VectorXd& xe) const {
   double E = 0.0;
   for (const Elem& el : elems) {
-    Eigen::Matrix<double, 3, 4> xc;
-    for (int a = 0; a < 4; ++a) xc.col(a) = xe.segment<3>(3 * el.node[a]);
-    Eigen::Matrix3d F;
-    F.noalias() = xc * el.grad.transpose();
+    const Eigen::Matrix3d F = deformation_gradient(el, xe);
     E += el.volume * corotational_psi(F, rotation(F), el.lame);
   }
   return E;
@@ -477,10 +483,7 @@ double Simulator::Impl::assemble_elastic(const Eigen::VectorXd& xe, double cK,
   if (vd) Kvd.setZero(3 * n);
   double energy = 0.0;
   for (const Elem& el : elems) {
-    Eigen::Matrix<double, 3, 4> xc;
-    for (int a = 0; a < 4; ++a) xc.col(a) = xe.segment<3>(3 * el.node[a]);
-    Eigen::Matrix3d F;
-    F.noalias() = xc * el.grad.transpose();
+    const Eigen::Matrix3d F = deformation_gradient(el, xe);
     Eigen::Matrix3d& R = rots[&el - elems.data()];
     if (!warm || !refine_rotation(F, R)) R = rotation(F);
     energy += el.volume * corotational_psi(F, R, el.lame);
@@ -1071,10 +1074,7 @@ double Simulator::volume() const {
   const Impl& s = *impl_;
   double V = 0.0;
   for (const Elem& el : s.elems) {
-    Eigen::Matrix<double, 3, 4> xc;
-    for (int a = 0; a < 4; ++a) xc.col(a) = s.x.segment<3>(3 * el.node[a]);
-    Eigen::Matrix3d F;
-    F.noalias() = xc * el.grad.transpose();
+    const Eigen::Matrix3d F = deformation_gradient(el, s.x);
     V += el.volume * F.determinant();
   }
   return V;
