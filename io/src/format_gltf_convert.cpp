@@ -23,6 +23,14 @@ using std::filesystem::path;
 using nlohmann::json;
 using Kind = ObjAttributes::Record::Kind;
 
+// A file's path relative to a folder, links resolved; empty when the file lies outside it.
+path relative_inside(const path& file, const path& folder) {
+  std::error_code ec;
+  const path base = std::filesystem::weakly_canonical(std::filesystem::absolute(folder, ec), ec);
+  const path rel = std::filesystem::relative(std::filesystem::weakly_canonical(std::filesystem::absolute(file, ec), ec), base, ec);
+  return ec || rel.empty() || *rel.begin() == ".." ? path() : rel;
+}
+
 // The MTL keys written into a glTF material; every other key is named in a note.
 const std::set<std::string, std::less<>> kMapped = {"newmtl", "Kd", "map_Kd", "d", "Tr"};
 
@@ -33,9 +41,13 @@ struct MtlMaterial {
 };
 
 // The materials of one MTL file; keys that do not map are gathered into `unmapped`.
-void read_mtl(const path& file, std::map<std::string, MtlMaterial>& out, std::set<std::string>& unmapped,
-              std::vector<std::string>& notes) {
+void read_mtl(const path& file, const path& model_folder, std::map<std::string, MtlMaterial>& out,
+              std::set<std::string>& unmapped, std::vector<std::string>& notes) {
   std::error_code ec;
+  if (relative_inside(file, model_folder).empty()) {  // read nothing the user did not name
+    notes.push_back(file.string() + ": material library outside the model's folder: not read");
+    return;
+  }
   if (!std::filesystem::is_regular_file(file, ec)) {
     notes.push_back(file.string() + ": material library not found; materials are written by name only");
     return;
@@ -61,6 +73,10 @@ void read_mtl(const path& file, std::map<std::string, MtlMaterial>& out, std::se
     } else if (key == "map_Kd" && l.tok.size() >= 2) {
       if (l.tok.size() > 2) unmapped.insert("map_Kd options");
       m->texture = file.parent_path() / std::string(l.tok.back());
+      if (relative_inside(m->texture, model_folder).empty()) {
+        notes.push_back(m->texture.string() + ": texture (map_Kd) outside the model's folder: left out");
+        m->texture.clear();
+      }
     }
   }
 }
@@ -68,10 +84,8 @@ void read_mtl(const path& file, std::map<std::string, MtlMaterial>& out, std::se
 // A file's path relative to the output's folder, as a URI reference (RFC 3986 escapes); empty
 // when the file lies outside that folder (glTF readers, mbi's among them, refuse such URIs).
 std::string relative_uri(const path& file, const path& output) {
-  std::error_code ec;
-  const path folder = std::filesystem::weakly_canonical(std::filesystem::absolute(output_name(output), ec).parent_path(), ec);
-  const path rel = std::filesystem::relative(std::filesystem::weakly_canonical(std::filesystem::absolute(file, ec), ec), folder, ec);
-  if (ec || rel.empty() || *rel.begin() == "..") return "";
+  const path rel = relative_inside(file, output_name(output).parent_path());
+  if (rel.empty()) return "";
   std::string uri;
   for (const unsigned char c : rel.generic_string()) {
     if (std::isalnum(c) || std::string_view("-._~/").find(static_cast<char>(c)) != std::string_view::npos) {
@@ -112,11 +126,11 @@ bool add_image(const path& texture, const path& output, nlohmann::json& images, 
 }
 
 // The glTF materials, textures and images of the materials the parts use, by name.
-void add_materials(const std::vector<std::string>& names, const std::vector<path>& libraries, const path& output,
-                   GltfAsset& asset) {
+void add_materials(const std::vector<std::string>& names, const std::vector<path>& libraries,
+                   const path& model_folder, const path& output, GltfAsset& asset) {
   std::map<std::string, MtlMaterial> mtl;
   std::set<std::string> unmapped;
-  for (const path& lib : libraries) read_mtl(lib, mtl, unmapped, asset.notes);
+  for (const path& lib : libraries) read_mtl(lib, model_folder, mtl, unmapped, asset.notes);
   json materials = json::array(), textures = json::array(), images = json::array();
   std::map<path, int> texture_of;  // one texture an image file
   for (const std::string& name : names) {
@@ -256,7 +270,8 @@ std::shared_ptr<GltfAsset> obj_asset(const ObjAttributes& a, const Polygons& tri
     asset->parts.push_back(std::move(part));
   }
   if (missing_uv) asset->notes.push_back("faces without texture coordinates in a textured group get UV (0, 0)");
-  add_materials(material_names, lay.libraries, output, *asset);
+  const path folder = a.file.has_parent_path() ? a.file.parent_path() : path(".");
+  add_materials(material_names, lay.libraries, folder, output, *asset);
   return asset;
 }
 

@@ -174,3 +174,29 @@ TEST_CASE("glTF from PLY: vertex colours become COLOR_0", "[app][gltf]") {
   for (std::size_t i = 0; i < c.size(); ++i) CHECK(std::abs(c[i] - want[i]) < 1e-7);
   if (have_node_packages()) node("validate.mjs", "tet.glb", dir);
 }
+
+TEST_CASE("glTF from OBJ: a material library or texture outside the model's folder is not read", "[app][gltf]") {
+  TempDir dir("gltf_obj_outside");
+  copy_crate(dir);
+  // a PNG beside the model's folder, named by the MTL; a second library beside it, named by the OBJ
+  fs::copy_file(source("tests/gltf/data/textures/checker.png"), dir / "secret.png");
+  std::ofstream(dir / "other.mtl") << "newmtl glass\nKd 0.1 0.1 0.1\n";
+  std::string mtl = mbi::test::slurp(dir / "model" / "crate.mtl");
+  mtl.replace(mtl.find("textures/checker.png"), std::strlen("textures/checker.png"), "../secret.png");
+  std::ofstream(dir / "model" / "crate.mtl", std::ios::trunc) << mtl;
+  std::string obj = mbi::test::slurp(dir / "model" / "crate.obj");
+  obj.replace(obj.find("mtllib crate.mtl"), std::strlen("mtllib crate.mtl"), "mtllib ../other.mtl crate.mtl");
+  std::ofstream(dir / "model" / "crate.obj", std::ios::trunc) << obj;
+  fs::create_directories(dir / "out");
+  const auto r = run_mbi(deform("twist.pc2", "--mesh model/crate.obj --out out/anim.glb"), dir, "", dir.path());
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK_THAT(r.err, Catch::Contains("other.mtl: material library outside the model's folder: not read") &&
+                        Catch::Contains("secret.png: texture (map_Kd) outside the model's folder: left out"));
+  const auto [j, bin] = read_glb(dir / "out" / "anim.glb");
+  CHECK_FALSE(j.contains("images"));
+  CHECK(bin.find("\x89PNG") == std::string::npos);
+  // the glass material comes from crate.mtl, not from other.mtl
+  const auto& glass = j["materials"][1];
+  CHECK(glass["pbrMetallicRoughness"]["baseColorFactor"][0].get<double>() == Approx(0.5));
+}
