@@ -11,12 +11,13 @@ import bpy
 import numpy as np
 from bpy.app.handlers import persistent
 
-from . import module, storage
+from . import harmonic, module, storage
 
 SHAPE_KEY = "mbi"
 OUTSIDE_TOLERANCE = 1e-4  # of the model's size: points farther outside the cage are refused (mbi's check)
 _bound = {}   # model.name_full -> _Binding
 errors = {}   # model name -> last message of the live path (shown in the panel)
+_extensions = {}  # cage.name_full -> (rest key, harmonic.Extension)
 
 
 class _Binding:
@@ -65,6 +66,34 @@ def _binding(model):
     return entry
 
 
+def _extension(cage, tets_count):
+    """The cage's harmonic extension, built again when its rest nodes changed."""
+    U = storage.positions(cage.data).astype(np.float64)
+    key = (tets_count, U.tobytes())
+    entry = _extensions.get(cage.name_full)
+    if entry is None or entry[0] != key:
+        tets = storage.tets(cage.data)
+        entry = _extensions[cage.name_full] = (key, harmonic.Extension(U, tets, module.load().boundary_faces(U, tets)))
+    return entry[1]
+
+
+def cage_nodes(cage, depsgraph):
+    """The cage's nodes as evaluated, the interior ones moved with the boundary per the cage's setting."""
+    data = cage.evaluated_get(depsgraph).data
+    X = storage.positions(data)
+    tets_count = len(cage.data.get(storage.TETS_KEY, [])) // 4
+    if len(X) != len(cage.data.vertices):
+        raise ValueError("the evaluated cage %s has %d vertices, its mesh %d: a modifier changed its topology"
+                         % (cage.name, len(X), len(cage.data.vertices)))
+    mode = cage.mbi.interior
+    if mode == "animated" or tets_count == 0:
+        return X.astype(np.float64)
+    extension = _extension(cage, tets_count)
+    if mode == "harmonic" or extension.boundary_moved_only(X):
+        return extension.apply(X)
+    return X.astype(np.float64)
+
+
 def _shape_key(model):
     if model.data.shape_keys is None:
         model.shape_key_add(name="Basis", from_mix=False)
@@ -108,12 +137,7 @@ def unbind(model):
 def deform(model, depsgraph):
     """Writes the model's positions for the cage as evaluated in depsgraph into its shape key."""
     entry = _binding(model)
-    cage_eval = model.mbi.cage.evaluated_get(depsgraph).data
-    n = entry.deformer.vertices
-    if len(cage_eval.vertices) != n:
-        raise ValueError("the evaluated cage %s has %d vertices, its tetrahedra %d: a modifier changed its topology"
-                         % (model.mbi.cage.name, len(cage_eval.vertices), n))
-    X = storage.positions(cage_eval).astype(np.float64)
+    X = cage_nodes(model.mbi.cage, depsgraph)
     out = entry.deformer.deform(X, out=entry.out)
     if entry.inverse is not None:
         inv = entry.inverse
@@ -155,6 +179,7 @@ def _on_depsgraph(scene, depsgraph):
 @persistent
 def _on_load(*_):
     _bound.clear()
+    _extensions.clear()
     errors.clear()
     update_all(bpy.context.evaluated_depsgraph_get())
 
@@ -180,3 +205,4 @@ def unregister():
         if function in handlers:
             handlers.remove(function)
     _bound.clear()
+    _extensions.clear()

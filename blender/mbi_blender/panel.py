@@ -20,6 +20,7 @@ class MBI_PT_panel(bpy.types.Panel):
             return
         if obj.mbi.is_cage:
             layout.label(text="Cage: %d nodes" % len(obj.data.vertices))
+            layout.prop(obj.mbi, "interior")
         elif obj.mbi.cage is not None:
             layout.label(text="Bound to %s (%s)" % (obj.mbi.cage.name, obj.mbi.method))
             if obj.name in live.errors:

@@ -5,9 +5,15 @@ METHODS = [("modified-bi", "Modified BI", "Smooth, the default"),
            ("phong", "Phong", "Phong-style Bezier points"),
            ("bi", "BI", "Plain barycentric interpolation of Bezier points")]
 
+INTERIOR = [("auto", "Auto", "Follow the boundary (harmonic) when only the boundary moved, else as animated"),
+            ("harmonic", "Follow boundary", "Always the harmonic extension of the boundary's motion"),
+            ("animated", "As animated", "Every node as Blender evaluated it")]
+
 
 class MbiObjectSettings(bpy.types.PropertyGroup):
     is_cage: bpy.props.BoolProperty(name="Is an mbi cage", default=False)
+    interior: bpy.props.EnumProperty(name="Interior nodes", items=INTERIOR, default="auto",
+                                     description="How a cage's interior nodes move (a cage's setting)")
     cage: bpy.props.PointerProperty(name="Cage", type=bpy.types.Object,
                                     description="The mbi cage this mesh is bound to")
     method: bpy.props.EnumProperty(name="Method", items=METHODS, default="modified-bi")

@@ -3,6 +3,7 @@
 #   run.sh live <mbi executable> <folder holding the mbi package> <work dir>
 #     its message when mbi is not found, then live_cage.py under blender -b --factory-startup
 #   run.sh undo <same>: undo_ui.py in Blender's UI under Xvfb (undo needs a window)
+#   run.sh <name> <same>: <name>.py under blender -b --factory-startup
 set -u
 mode=$1 mbi_exe=$2 module_dir=$3 work=$4
 if ! command -v blender > /dev/null 2>&1; then
@@ -39,6 +40,10 @@ cat "$work/install.txt"
 if [ "$mode" = live ]; then
   echo "== cage, bind, animate, save, reopen, edit in place, bad input"
   MBI_PYTHON_DIR="$module_dir" blender -b --factory-startup --python "$here/live_cage.py" -- "$work" "$mbi_exe" \
+    > "$work/out.txt" 2>&1
+elif [ "$mode" != undo ]; then
+  echo "== $mode.py"
+  MBI_PYTHON_DIR="$module_dir" blender -b --factory-startup --python "$here/$mode.py" -- "$work" "$mbi_exe" \
     > "$work/out.txt" 2>&1
 else
   echo "== undo and redo of a bind and of a cage edit, in the UI"

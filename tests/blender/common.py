@@ -1,0 +1,75 @@
+"""Helpers of the add-on's tests inside Blender: checks, positions, selection, `mbi deform`."""
+import os
+import subprocess
+import sys
+
+import bpy
+import numpy as np
+
+
+def fail(message):
+    print("FAIL: " + message)
+    sys.exit(1)
+
+
+def check(condition, message):
+    if not condition:
+        fail(message)
+    print("ok: " + message)
+
+
+def world(obj, local):
+    M = np.array(obj.matrix_world)
+    return local @ M[:3, :3].T + M[:3, 3]
+
+
+def positions(mesh):
+    co = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
+    mesh.vertices.foreach_get("co", co)
+    return co.reshape(-1, 3).astype(np.float64)
+
+
+def tets(cage):
+    return np.asarray(cage.data["mbi_tets"].to_list()).reshape(-1, 4)
+
+
+def select_only(objects, active):
+    bpy.ops.object.select_all(action="DESELECT")
+    for obj in objects:
+        obj.select_set(True)
+    bpy.context.view_layer.objects.active = active
+
+
+def evaluated(obj, frame=None):
+    """The object's evaluated vertices in world space at a frame (None: as it is)."""
+    if frame is not None:
+        bpy.context.scene.frame_set(frame)
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    return world(obj, positions(obj.evaluated_get(depsgraph).data))
+
+
+def mbi_deform(mbi, exe, work, U, T, rest_model, X, tag):
+    """`mbi deform` of the model's rest points by the cage (U, T) deformed to X."""
+    base = os.path.join(work, "cage_" + tag)
+    mbi.write_tetgen(base, U, T)
+    np.savetxt(os.path.join(work, "x_%s.txt" % tag), X, fmt="%.17g")
+    mbi.write_points(os.path.join(work, "model_%s.txt" % tag), rest_model)
+    out = os.path.join(work, "out_%s.txt" % tag)
+    run = subprocess.run([exe, "deform", "--control", base, "--deformed", os.path.join(work, "x_%s.txt" % tag),
+                          "--mesh", os.path.join(work, "model_%s.txt" % tag), "--out", out, "--force"],
+                         capture_output=True, text=True)
+    if run.returncode != 0:
+        fail("mbi deform: " + run.stderr)
+    return mbi.read_points(out)
+
+
+def run_main(main):
+    """Runs main(*arguments after --); any exception is a failure with its message, not Blender's exit 0."""
+    args = sys.argv[sys.argv.index("--") + 1:]
+    try:
+        main(*args)
+    except Exception as error:  # noqa: BLE001
+        import traceback
+        traceback.print_exc()
+        fail("%s: %s" % (type(error).__name__, error))
+    sys.exit(0)
