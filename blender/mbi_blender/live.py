@@ -14,6 +14,7 @@ from bpy.app.handlers import persistent
 from . import harmonic, module, storage
 
 SHAPE_KEY = "mbi"
+CACHE_MODIFIER = "mbi cache"  # the Mesh Cache modifier of a baked model
 OUTSIDE_TOLERANCE = 1e-4  # of the model's size: points farther outside the cage are refused (mbi's check)
 _bound = {}   # model.name_full -> _Binding
 errors = {}   # model name -> last message of the live path (shown in the panel)
@@ -94,7 +95,7 @@ def cage_nodes(cage, depsgraph):
     return X.astype(np.float64)
 
 
-def _shape_key(model):
+def shape_key(model):
     if model.data.shape_keys is None:
         model.shape_key_add(name="Basis", from_mix=False)
     keys = model.data.shape_keys.key_blocks
@@ -122,12 +123,23 @@ def bind(model, cage, method, alpha):
         s.cage, s.method, s.alpha, s.bind_matrix = earlier
         raise
     seconds = time.perf_counter() - start
-    _shape_key(model)
+    shape_key(model)
     return seconds
+
+
+def shape_positions(model):
+    """(p, 3) float32: the model's live positions (its shape key, in the model's space)."""
+    block = shape_key(model)
+    co = np.empty(len(block.data) * 3, dtype=np.float32)
+    block.data.foreach_get("co", co)
+    return co.reshape(-1, 3)
 
 
 def unbind(model):
     _bound.pop(model.name_full, None)
+    if CACHE_MODIFIER in model.modifiers:
+        model.modifiers.remove(model.modifiers[CACHE_MODIFIER])
+    model.mbi.baked = False
     keys = model.data.shape_keys
     if keys is not None and SHAPE_KEY in keys.key_blocks:
         model.shape_key_remove(keys.key_blocks[SHAPE_KEY])
@@ -142,7 +154,7 @@ def deform(model, depsgraph):
     if entry.inverse is not None:
         inv = entry.inverse
         out = (out @ inv[:3, :3].T + inv[:3, 3]).astype(np.float32)
-    block = _shape_key(model)
+    block = shape_key(model)
     block.data.foreach_set("co", out.ravel())
     model.data.update()
 
@@ -150,7 +162,7 @@ def deform(model, depsgraph):
 def update_all(depsgraph, cages=None):
     """Deforms every bound model, or those bound to the cages named in cages."""
     for model in bpy.data.objects:
-        if model.type != "MESH" or model.mbi.cage is None:
+        if model.type != "MESH" or model.mbi.cage is None or model.mbi.baked:
             continue
         if cages is not None and model.mbi.cage.name_full not in cages:
             continue

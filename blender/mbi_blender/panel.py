@@ -15,6 +15,9 @@ class MBI_PT_panel(bpy.types.Panel):
         layout.operator("mbi.cage")
         layout.operator("mbi.bind")
         layout.operator("mbi.unbind")
+        row = layout.row()
+        row.operator("mbi.bake")
+        row.operator("mbi.unbake")
         obj = context.active_object
         if obj is None:
             return
@@ -23,6 +26,8 @@ class MBI_PT_panel(bpy.types.Panel):
             layout.prop(obj.mbi, "interior")
         elif obj.mbi.cage is not None:
             layout.label(text="Bound to %s (%s)" % (obj.mbi.cage.name, obj.mbi.method))
+            if obj.mbi.baked and live.CACHE_MODIFIER in obj.modifiers:
+                layout.label(text="Baked: %s" % obj.modifiers[live.CACHE_MODIFIER].filepath)
             if obj.name in live.errors:
                 layout.label(text=live.errors[obj.name], icon="ERROR")
 

@@ -19,6 +19,8 @@ class MbiObjectSettings(bpy.types.PropertyGroup):
     method: bpy.props.EnumProperty(name="Method", items=METHODS, default="modified-bi")
     alpha: bpy.props.FloatProperty(name="Alpha", default=0.0, min=0.0,
                                    description="Weight of modified-BI's E_vibr (0: the default, 0.1)")
+    baked: bpy.props.BoolProperty(name="Baked", default=False,
+                                  description="Played by its Mesh Cache modifier, not the live path")
     # the model's matrix in the cage's space at bind time (4x4, row-major): the bind is in cage space
     bind_matrix: bpy.props.FloatVectorProperty(size=16)
 
