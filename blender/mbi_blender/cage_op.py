@@ -24,15 +24,20 @@ def make_cage(context, mbi, objects, vertices, mesher):
         raise ValueError("%s has no faces: mbi needs a closed surface to cage"
                          % ", ".join(o.name for o in objects))
     cage = mbi.cage(V, F, vertices=vertices, mesher=mesher)
-    mesh = bpy.data.meshes.new(objects[0].name + " cage")
-    storage.fill_cage_mesh(mesh, cage.U, cage.T, mbi.boundary_faces(cage.U, cage.T))
+    return new_cage_object(context, mbi, objects[0].name + " cage", cage.U, cage.T), cage
+
+
+def new_cage_object(context, mbi, name, U, T):
+    """A wire object holding the control mesh (U, T), linked, selected and active: ready to bind."""
+    mesh = bpy.data.meshes.new(name)
+    storage.fill_cage_mesh(mesh, U, T, mbi.boundary_faces(U, T))
     obj = bpy.data.objects.new(mesh.name, mesh)
     obj.mbi.is_cage = True
     obj.display_type = "WIRE"
     context.collection.objects.link(obj)
     obj.select_set(True)
-    context.view_layer.objects.active = obj  # the meshes selected, the cage active: ready to bind
-    return obj, cage
+    context.view_layer.objects.active = obj
+    return obj
 
 
 class MBI_OT_cage(bpy.types.Operator):

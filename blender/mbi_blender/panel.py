@@ -13,6 +13,7 @@ class MBI_PT_panel(bpy.types.Panel):
     def draw(self, context):
         layout = self.layout
         layout.operator("mbi.cage")
+        layout.operator("mbi.import_cage")
         layout.operator("mbi.bind")
         layout.operator("mbi.unbind")
         row = layout.row()
