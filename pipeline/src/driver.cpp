@@ -1,4 +1,5 @@
 #include <mbi/error.hpp>
+#include <mbi/pipeline/contact_setup.hpp>
 #include <mbi/pipeline/driver.hpp>
 
 namespace mbi::pipeline {
@@ -26,6 +27,12 @@ void SimulatorDriver::add_scripted_spring(int first, int last, int element,
   add_scripted({first, last, element, bary, false, target, stiffness, -1});
 }
 
+void SimulatorDriver::set_contact(std::shared_ptr<SurfaceContact> contact) {
+  sim_.set_potential(contact);
+  contact_ = std::move(contact);
+  touching_ = 0;
+}
+
 DriveResult SimulatorDriver::drive(int frame, Eigen::MatrixXd& X) {
   if (frame > 0) {
     // A scripted poke acts on the steps that produce frames first..last.
@@ -43,6 +50,10 @@ DriveResult SimulatorDriver::drive(int frame, Eigen::MatrixXd& X) {
     if (!last_.success) return {false, last_.message};
   }
   X = sim_.positions();
+  if (contact_) {
+    if (frame == 0) contact_->set_time(sim_.time());  // the initial pose: the colliders then
+    touching_ = pipeline::touching_points(*contact_, X);
+  }
   return {};
 }
 
@@ -54,6 +65,7 @@ void SimulatorDriver::reset() {
     }
   sim_.reset();
   last_ = {};
+  touching_ = 0;
 }
 
 // ------------------------------------------------------------------------------ HandleDriver

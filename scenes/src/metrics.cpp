@@ -27,6 +27,12 @@ std::string indented(const std::string& text, int spaces) {
   return out;
 }
 
+// The contact points of a surface contact: its points at the rest pose U (n x 3), counted.
+Eigen::Index contact_point_count(const pipeline::SurfaceContact& c, const Eigen::MatrixXd& U) {
+  const Eigen::MatrixXd Ut = U.transpose();
+  return c.points(Eigen::Map<const Eigen::VectorXd>(Ut.data(), Ut.size())).rows();
+}
+
 }  // namespace
 
 long resident_kb() {
@@ -66,6 +72,15 @@ RunMetrics::RunMetrics(const Scene& sc, const SceneModels& m, pipeline::FramePip
                          {"embed", embed_ms}, {"precompute", pipe.precompute_ms()}};
   if (pipe.method() == pipeline::Method::Phong)
     json_["timings_ms"]["phong_precompute"] = pipe.phong_precompute_ms();
+  if (sim_ && sim_->contact()) {  // contact = surface only: a control scene's keys stay as they were
+    const pipeline::SurfaceContact& c = *sim_->contact();
+    json_["contact"] = {{"mode", pipeline::kContactModeNames.name(pipeline::ContactMode::Surface)},
+                        {"points", contact_point_count(c, m.U)},
+                        {"colliders", c.colliders().size()},
+                        {"stiffness", c.stiffness()},
+                        {"newton_iterations", sim_->simulator().params().newton_iterations},
+                        {"newton_tolerance", sim_->simulator().params().newton_tolerance}};
+  }
 }
 
 nlohmann::json RunMetrics::start_frame(int f) const {
@@ -75,6 +90,10 @@ nlohmann::json RunMetrics::start_frame(int f) const {
     record["time"] = sim_->simulator().time();
     record["newton_iterations"] = f > 0 ? sim_->last_step().newton_iterations : 0;
     record["solver_iterations"] = f > 0 ? sim_->last_step().solver_iterations : 0;
+    if (sim_->contact()) {
+      record["contact_points"] = sim_->touching_points();
+      record["line_search_halvings"] = f > 0 ? sim_->last_step().line_search_halvings : 0;
+    }
   }
   return record;
 }

@@ -81,12 +81,55 @@ void add_pokes(const Scene& sc, const SceneModels& m, pipeline::SimulatorDriver&
   }
 }
 
+double diagonal(const Eigen::MatrixXd& V) {
+  return V.rows() == 0 ? 0.0 : (V.colwise().maxCoeff() - V.colwise().minCoeff()).norm();
+}
+
+// The dense vertices that touch: simulation.contact_select, or all (an empty list).
+std::vector<int> contact_points(const Scene& sc, const SceneModels& m) {
+  if (!sc.simulation.contact_select) return {};
+  try {
+    return select_nodes(*sc.simulation.contact_select, m.dense.V);
+  } catch (const Error& e) {  // select_nodes speaks of control nodes; this selects dense vertices
+    std::string what = e.what();
+    for (const auto& [from, to] : {std::pair<std::string, std::string>{": select", ": simulation.contact_select"},
+                                   {"control node", "dense vertex"}, {"control mesh", "dense model"}})
+      if (const auto at = what.find(from); at != std::string::npos) what.replace(at, from.size(), to);
+    throw Error(what);
+  }
+}
+
+// contact = surface: the dense surface's vertices touch the colliders, evaluated with the
+// scene's method, as the simulator's potential.
+void add_surface_contact(const Scene& sc, const SceneModels& m, pipeline::SimulatorDriver& driver) {
+  pipeline::PipelineOptions po;
+  po.method = sc.interpolation.method;
+  po.interp = sc.interpolation.options;
+  pipeline::SurfaceContactOptions o;
+  o.colliders = sc.colliders;
+  o.stiffness = sc.simulation.contact_stiffness;
+  o.points = contact_points(sc, m);
+  const sim::Simulator& s = driver.simulator();
+  driver.set_contact(pipeline::make_surface_contact(m.U, m.T, m.dense.V, po, o, s.masses().sum(), s.params().gravity));
+}
+
+sim::Parameters simulation_parameters(const Scene& sc, const SceneModels& m) {
+  sim::Parameters p = sc.simulation.parameters;
+  const bool surface = sc.simulation.contact == pipeline::ContactMode::Surface;
+  if (sc.simulation.newton_tolerance)
+    p.newton_tolerance = *sc.simulation.newton_tolerance;
+  else if (surface)
+    p.newton_tolerance = surface_newton_tolerance(diagonal(m.dense.V), p.dt / p.substeps);
+  return p;
+}
+
 std::unique_ptr<pipeline::Driver> simulation_driver(const Scene& sc, const SceneModels& m) {
   const sim::Material& mat = sc.material;
-  sim::Simulator simulator(m.U, m.T, mat, sc.simulation.parameters);
+  sim::Simulator simulator(m.U, m.T, mat, simulation_parameters(sc, m));
   add_constraints(sc, m.U, simulator);
   auto driver = std::make_unique<pipeline::SimulatorDriver>(std::move(simulator));
   add_pokes(sc, m, *driver);
+  if (sc.simulation.contact == pipeline::ContactMode::Surface) add_surface_contact(sc, m, *driver);
   return driver;
 }
 

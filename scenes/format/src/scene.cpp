@@ -416,22 +416,57 @@ void parse_material(Table t, sim::Material& m) {
   t.finish();
 }
 
-void parse_simulation(Table t, SimulationSpec& s) {
+// The height of the ground plane when it becomes a collider (contact = surface).
+std::optional<double> parse_simulation(Table t, SimulationSpec& s) {
   sim::Parameters& p = s.parameters;
+  s.contact = t.choice("contact", s.contact, pipeline::kContactModeNames);
+  const bool surface = s.contact == pipeline::ContactMode::Surface;
+  const std::string needs_surface = std::string("needs contact = \"") +
+                                    pipeline::kContactModeNames.name(pipeline::ContactMode::Surface) + "\"";
   p.dt = t.number("dt", p.dt, 0, 10, true);
   p.substeps = t.integer("substeps", p.substeps, 1, 1000);
   s.frames = t.integer("frames", s.frames, 1, 1000000);
-  p.newton_iterations = t.integer("newton_iterations", p.newton_iterations, 1, 100);
+  p.newton_iterations = t.integer("newton_iterations", surface ? kSurfaceNewtonIterations : p.newton_iterations, 1, 100);
+  if (t.has("newton_tolerance")) s.newton_tolerance = t.number("newton_tolerance", 0.0, 0, 1e30);
   p.gravity = t.vec("gravity", p.gravity);
   if (p.gravity.norm() > 1e6) t.fail("gravity", "magnitude above 1e6 m/s^2");
   p.mass_damping = t.number("damping_mass", p.mass_damping, 0, 1e6);
   p.stiffness_damping = t.number("damping_stiffness", p.stiffness_damping, 0, 1e3);
+  if (surface && p.stiffness_damping > 0)
+    t.fail("damping_stiffness", "must be 0 with contact = \"surface\" (the step with contact minimises a potential)");
+  if (t.has("contact_stiffness")) {
+    if (!surface) t.fail("contact_stiffness", needs_surface);
+    s.contact_stiffness = t.number("contact_stiffness", 0.0, 0, 1e15, true);
+  }
+  if (t.has("contact_select")) {
+    if (!surface) t.fail("contact_select", needs_surface);
+    s.contact_select = parse_selection(t.sub("contact_select"));
+  }
+  std::optional<double> ground;
   if (t.has("ground")) {  // the height of a ground plane, y up
-    p.ground = true;
-    p.ground_plane.normal = Eigen::Vector3d::UnitY();
-    p.ground_plane.offset = t.number("ground", 0.0);
+    if (surface) {
+      ground = t.number("ground", 0.0);
+    } else {
+      p.ground = true;
+      p.ground_plane.normal = Eigen::Vector3d::UnitY();
+      p.ground_plane.offset = t.number("ground", 0.0);
+    }
   }
   t.finish();
+  return ground;
+}
+
+// A rigid motion (kinematic constraints, colliders); the scene file's defaults: about z, no stop.
+void parse_motion(Table m, sim::RigidMotion& r) {
+  r.axis = m.vec("twist_axis", r.axis);
+  if (r.axis.norm() == 0) m.fail("twist_axis", "axis must be non-zero");
+  r.center = m.vec("twist_center", r.center);
+  r.angular_velocity = m.number("twist_rate", 0.0, -1e4, 1e4);
+  r.velocity = m.vec("velocity", r.velocity);
+  r.start = m.number("start", 0.0, 0, HUGE_VAL);
+  r.stop = m.number("stop", 1e30, 0, HUGE_VAL);
+  if (r.stop < r.start) m.fail("stop", "stop must be >= start");
+  m.finish();
 }
 
 ConstraintSpec parse_constraint(Table& t) {
@@ -442,17 +477,7 @@ ConstraintSpec parse_constraint(Table& t) {
   if (t.has("motion")) {
     if (c.kind != ConstraintSpec::Kind::Kinematic)
       t.fail("motion", "only kinematic constraints have a motion");
-    Table m = t.sub("motion");
-    sim::RigidMotion& r = c.motion;
-    r.axis = m.vec("twist_axis", r.axis);
-    if (r.axis.norm() == 0) m.fail("twist_axis", "axis must be non-zero");
-    r.center = m.vec("twist_center", r.center);
-    r.angular_velocity = m.number("twist_rate", 0.0, -1e4, 1e4);
-    r.velocity = m.vec("velocity", r.velocity);
-    r.start = m.number("start", 0.0, 0, HUGE_VAL);
-    r.stop = m.number("stop", 1e30, 0, HUGE_VAL);
-    if (r.stop < r.start) m.fail("stop", "stop must be >= start");
-    m.finish();
+    parse_motion(t.sub("motion"), c.motion);
   }
   t.finish();
   return c;
@@ -522,6 +547,68 @@ DragSpec parse_drag(Table& t) {
   return d;
 }
 
+// A key the shape needs: "<file>:<line>: colliders[i].<key>: missing" without it.
+void require(Table& t, const std::string& key) {
+  if (!t.has(key)) throw Error(t.where(t.value()) + ": " + t.key_name(key) + ": missing");
+}
+
+// A box's axes: [[x, y, z], [x, y, z], [x, y, z]], its three unit axes (the columns of axes).
+Eigen::Matrix3d parse_axes(Table& t) {
+  const toml_value& v = t.at("axes");
+  if (!v.is_array() || v.as_array().size() != 3) t.fail("axes", "expected three axes [[x, y, z], [x, y, z], [x, y, z]]");
+  Eigen::Matrix3d A;
+  for (int k = 0; k < 3; ++k) {
+    const toml_value& a = v.as_array()[static_cast<size_t>(k)];
+    if (!a.is_array() || a.as_array().size() != 3) t.fail("axes", "each axis is [x, y, z]");
+    for (int c = 0; c < 3; ++c) {
+      const toml_value& x = a.as_array()[static_cast<size_t>(c)];
+      if (!x.is_floating() && !x.is_integer()) t.fail("axes", "axis entries must be numbers");
+      A(c, k) = x.is_floating() ? x.as_floating() : static_cast<double>(x.as_integer());
+    }
+  }
+  if (!A.allFinite()) t.fail("axes", "must be finite");
+  return A;
+}
+
+pipeline::Collider parse_collider(Table& t, std::size_t index) {
+  using pipeline::ColliderShape;
+  require(t, "shape");
+  pipeline::Collider c;
+  c.shape = t.choice("shape", ColliderShape::Plane, kColliderShapeNames);
+  const double inf = HUGE_VAL;
+  if (c.shape == ColliderShape::Plane) {
+    c.point = t.vec("point", c.point);
+    c.normal = t.vec("normal", c.normal);
+  } else if (c.shape == ColliderShape::Capsule) {
+    require(t, "a");
+    require(t, "b");
+    c.point = t.vec("a", c.point);
+    c.end = t.vec("b", c.end);
+  } else {
+    require(t, "center");
+    c.point = t.vec("center", c.point);
+  }
+  if (c.shape == ColliderShape::Sphere || c.shape == ColliderShape::Capsule) {
+    require(t, "radius");
+    c.radius = t.number("radius", 0.0, 0, inf, true);
+  }
+  if (c.shape == ColliderShape::Box) {
+    require(t, "half_extents");
+    c.half_extents = t.vec("half_extents", c.half_extents);
+    if (t.has("axes")) c.axes = parse_axes(t);
+  }
+  c.friction = t.number("friction", 0.0, 0, inf);
+  c.motion = sim::RigidMotion{.axis = Eigen::Vector3d::UnitZ(), .stop = 1e30};
+  if (t.has("motion")) parse_motion(t.sub("motion"), c.motion);
+  t.finish();
+  try {
+    pipeline::check_collider(c, "colliders[" + std::to_string(index) + "]");
+  } catch (const mbi::Error& e) {
+    throw Error(t.where(t.value()) + ": " + e.what());
+  }
+  return c;
+}
+
 void parse_interpolation(Table t, InterpolationSpec& i) {
   i.method = t.choice("method", i.method, pipeline::kMethodNames);
   if (t.has("alpha")) {
@@ -584,13 +671,25 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& file) {
   if (!top.has("control")) throw Error(fname + ":1: control: missing table [control]");
   parse_control(top.sub("control"), sc.control);
   if (top.has("material")) parse_material(top.sub("material"), sc.material);
-  if (top.has("simulation")) parse_simulation(top.sub("simulation"), sc.simulation);
+  std::optional<double> ground;
+  if (top.has("simulation")) ground = parse_simulation(top.sub("simulation"), sc.simulation);
   for (Table& t : top.array_of_tables("constraints")) sc.constraints.push_back(parse_constraint(t));
   for (Table& t : top.array_of_tables("pokes")) sc.pokes.push_back(parse_poke(t));
   for (Table& t : top.array_of_tables("drags")) sc.drags.push_back(parse_drag(t));
+  std::vector<Table> colliders = top.array_of_tables("colliders");
+  const bool surface = sc.simulation.contact == pipeline::ContactMode::Surface;
+  if (!colliders.empty() && !surface)
+    top.fail("colliders", "[[colliders]] need simulation.contact = \"surface\" (contact at the dense surface)");
+  for (std::size_t k = 0; k < colliders.size(); ++k) sc.colliders.push_back(parse_collider(colliders[k], k));
+  if (ground) sc.colliders.push_back(pipeline::Collider::plane({0, *ground, 0}, {0, 1, 0}));
+  if (surface && sc.colliders.empty())
+    throw Error(fname + ":1: simulation.contact: \"surface\" needs [[colliders]] or simulation.ground (nothing to touch)");
   if (top.has("interpolation")) parse_interpolation(top.sub("interpolation"), sc.interpolation);
   if (top.has("output")) parse_output(top.sub("output"), sc.output);
   top.finish();
+  if (sc.mode == Mode::Drag && surface)
+    throw Error(fname + ":1: simulation.contact: only simulate scenes (mode = \"" + std::string(mode_name(Mode::Simulate)) +
+                "\") have contact");
   if (sc.mode == Mode::Drag && sc.drags.empty())
     throw Error(fname + ":1: drags: a drag scene needs at least one [[drags]] entry");
   if (sc.mode == Mode::Simulate && !sc.drags.empty())

@@ -7,6 +7,7 @@
 //                    an external simulator (what `mbi deform` uses)
 // Frame 0 is the initial pose: a simulator does not step for it.
 #include <mbi/interp/control.hpp>
+#include <mbi/pipeline/surface_contact.hpp>
 #include <mbi/sim/simulator.hpp>
 
 #include <functional>
@@ -38,7 +39,9 @@ class Driver {
 };
 
 /// Co-rotational FEM. Scripted pokes are active on frames [first, last] (first >= 0; a poke
-/// with first = 0 acts from the first step on).
+/// with first = 0 acts from the first step on). Contact at the dense surface (set_contact) is
+/// the simulator's potential; the ground plane of the simulator's parameters is the contact at
+/// the control nodes.
 class SimulatorDriver final : public Driver {
  public:
   explicit SimulatorDriver(sim::Simulator simulator);
@@ -49,6 +52,13 @@ class SimulatorDriver final : public Driver {
   /// Zero-length spring (N/m) pulling a material point toward `target` (m) on [first, last].
   void add_scripted_spring(int first, int last, int element, const Eigen::Vector4d& bary,
                            const Eigen::Vector3d& target, double stiffness);
+
+  /// Contact of embedded points with colliders (method.md fact 16), the simulator's potential
+  /// from the next step on; nullptr removes it. Throws as Simulator::set_potential.
+  void set_contact(std::shared_ptr<SurfaceContact> contact);
+  const std::shared_ptr<SurfaceContact>& contact() const { return contact_; }
+  /// Contact points inside a collider at the last frame driven (0 without contact).
+  int touching_points() const { return touching_; }
 
   DriveResult drive(int frame, Eigen::MatrixXd& X) override;
   void reset() override;
@@ -72,6 +82,8 @@ class SimulatorDriver final : public Driver {
   sim::Simulator sim_;
   std::vector<Scripted> scripted_;
   sim::StepResult last_;
+  std::shared_ptr<SurfaceContact> contact_;
+  int touching_ = 0;
 };
 
 /// Handles dragged without physics (Eq. 10 hard, Eq. 11 soft). Targets (handles x d) come from

@@ -7,6 +7,7 @@
 #include <mbi/error.hpp>
 #include <mbi/generate/cage.hpp>
 #include <mbi/interp/control.hpp>
+#include <mbi/pipeline/contact_setup.hpp>
 #include <mbi/pipeline/method.hpp>
 #include <mbi/sim/simulator.hpp>
 
@@ -57,6 +58,11 @@ inline constexpr auto kMeshFormatNames = name_table<MeshFormat>(
     {{MeshFormat::Obj, "obj"}, {MeshFormat::Ply, "ply"}, {MeshFormat::Glb, "glb"}, {MeshFormat::None, "none"}});
 inline constexpr auto kGpuUseNames =
     name_table<GpuUse>({{GpuUse::Auto, "auto"}, {GpuUse::On, "on"}, {GpuUse::Off, "off"}});
+inline constexpr auto kColliderShapeNames = name_table<pipeline::ColliderShape>(
+    {{pipeline::ColliderShape::Plane, "plane"},
+     {pipeline::ColliderShape::Sphere, "sphere"},
+     {pipeline::ColliderShape::Box, "box"},
+     {pipeline::ColliderShape::Capsule, "capsule"}});
 inline constexpr auto kHandleModeNames = name_table<interp::HandleMode>(
     {{interp::HandleMode::Hard, "hard"}, {interp::HandleMode::Soft, "soft"}});
 
@@ -96,14 +102,6 @@ inline sim::Parameters scene_parameters() {
   return p;
 }
 
-/// Time stepping: the simulator's parameters themselves, and the length of a run. The keys of
-/// [simulation] fill them: dt, substeps, newton_iterations, gravity; damping_mass and
-/// damping_stiffness are mass_damping and stiffness_damping; ground = h is a ground plane y = h.
-struct SimulationSpec {
-  sim::Parameters parameters = scene_parameters();
-  int frames = 120;
-};
-
 /// Node selection: an axis-aligned box, a half-space, or explicit indices (any combination is a
 /// union).
 struct Selection {
@@ -115,6 +113,30 @@ struct Selection {
   std::vector<int> indices;
   std::string where;  ///< "<file>:<line>" for error messages
 };
+
+/// Time stepping: the simulator's parameters themselves, and the length of a run. The keys of
+/// [simulation] fill them: dt, substeps, newton_iterations, gravity; damping_mass and
+/// damping_stiffness are mass_damping and stiffness_damping; ground = h is a ground plane y = h
+/// (contact = control: the simulator's, on the control nodes; contact = surface: a plane
+/// collider, the last of Scene::colliders).
+struct SimulationSpec {
+  sim::Parameters parameters = scene_parameters();
+  int frames = 120;
+  pipeline::ContactMode contact = pipeline::ContactMode::Control;
+  /// contact = surface: N/m per point (unset: pipeline::default_contact_stiffness), and the dense
+  /// vertices that touch (unset: all)
+  std::optional<double> contact_stiffness;
+  std::optional<Selection> contact_select;
+  /// m/s; unset: 0 (every Newton iteration runs) with contact = control, 1e-5 of the dense
+  /// model's diagonal per substep with contact = surface (surface_newton_tolerance)
+  std::optional<double> newton_tolerance;
+};
+
+/// newton_iterations when a surface-contact scene does not give it: Newton to its tolerance.
+inline constexpr int kSurfaceNewtonIterations = 20;
+/// The Newton tolerance (m/s) of a surface-contact scene that does not give one: the last update
+/// moves no node by more than 1e-5 of the dense model's diagonal (m) in a substep of h (s).
+inline double surface_newton_tolerance(double diagonal, double h) { return 1e-5 * diagonal / h; }
 
 struct ConstraintSpec {
   enum class Kind { Fixed, Kinematic } kind = Kind::Fixed;
@@ -185,6 +207,8 @@ struct Scene {
   std::vector<ConstraintSpec> constraints;
   std::vector<PokeSpec> pokes;
   std::vector<DragSpec> drags;
+  /// [[colliders]] (contact = surface), then the ground plane when simulation.ground is given
+  std::vector<pipeline::Collider> colliders;
   InterpolationSpec interpolation;
   OutputSpec output;
 };
