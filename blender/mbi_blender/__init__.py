@@ -15,9 +15,9 @@ bl_info = {
     "category": "Animation",
 }
 
-from . import bake, bind_op, cage_op, import_op, live, panel, preferences, settings  # noqa: E402
+from . import bake, bind_op, cage_op, import_op, live, panel, physics, preferences, settings  # noqa: E402
 
-_modules = (preferences, settings, cage_op, import_op, bind_op, bake, panel, live)
+_modules = (preferences, settings, cage_op, import_op, bind_op, bake, physics, panel, live)
 
 
 def register():

@@ -14,7 +14,7 @@ from . import jobs, live, pc2
 MODIFIER = live.CACHE_MODIFIER
 
 
-def _folder(directory):
+def cache_folder(directory):
     if directory.startswith("//") and not bpy.data.filepath:
         raise ValueError("the cache folder %s is relative to the .blend: save the .blend first, or give an "
                          "absolute folder" % directory)
@@ -32,12 +32,11 @@ def bake_job(scene, models, start, end, directory):
         raise ValueError("select meshes bound to an mbi cage")
     if end < start:
         raise ValueError("the frame range %d..%d is empty" % (start, end))
-    folder = _folder(directory)
-    paths = [os.path.join(folder, bpy.path.clean_name(m.name) + ".pc2") for m in models]
-    return _bake_steps(scene, models, start, end, paths)
+    folder = cache_folder(directory)
+    return bake_steps(scene, models, start, end, [cache_path(folder, m) for m in models])
 
 
-def _bake_steps(scene, models, start, end, paths):
+def bake_steps(scene, models, start, end, paths):
     samples = end - start + 1
     writers, committed, frame_before = [], False, scene.frame_current
     try:
@@ -63,7 +62,14 @@ def _bake_steps(scene, models, start, end, paths):
 
 
 def attach(model, filepath, start):
-    """The Mesh Cache modifier first in the stack, playing the cache from frame start; the live key muted."""
+    """The cache played first in the model's stack; its live key muted."""
+    attach_cache(model, filepath, start)
+    live.shape_key(model).mute = True
+    model.mbi.baked = True
+
+
+def attach_cache(model, filepath, start):
+    """The Mesh Cache modifier first in the stack, playing the PC2 file from frame start."""
     modifier = model.modifiers.get(MODIFIER) or model.modifiers.new(MODIFIER, "MESH_CACHE")
     modifier.cache_format = "PC2"
     modifier.filepath = filepath
@@ -77,15 +83,16 @@ def attach(model, filepath, start):
     if model.modifiers[0] != modifier:
         with bpy.context.temp_override(object=model):
             bpy.ops.object.modifier_move_to_index(modifier=MODIFIER, index=0)
-    live.shape_key(model).mute = True
-    model.mbi.baked = True
 
 
 def unbake(model, depsgraph):
-    """Back to the live path: the modifier removed, the shape key written again (the file stays)."""
+    """Back to the live path (a cage: to its own animation): the modifier removed (the file stays)."""
     modifier = model.modifiers.get(MODIFIER)
     if modifier is not None:
         model.modifiers.remove(modifier)
+    if model.mbi.is_cage:
+        live.update_all(depsgraph)
+        return
     model.mbi.baked = False
     live.shape_key(model).mute = False
     live.update_all(depsgraph)
@@ -93,6 +100,10 @@ def unbake(model, depsgraph):
 
 def _bound_selection(context):
     return [o for o in context.selected_objects if o.type == "MESH" and o.mbi.cage is not None]
+
+
+def cache_path(folder, obj):
+    return os.path.join(folder, bpy.path.clean_name(obj.name) + ".pc2")
 
 
 class MBI_OT_bake(jobs.ModalJob, bpy.types.Operator):
@@ -114,14 +125,14 @@ class MBI_OT_bake(jobs.ModalJob, bpy.types.Operator):
 
 
 class MBI_OT_unbake(bpy.types.Operator):
-    """Remove the selected meshes' point caches and follow the cage live again"""
+    """Remove the selected meshes' point caches and follow the cage live again (a cage: its simulation)"""
     bl_idname = "mbi.unbake"
     bl_label = "Un-bake mbi"
     bl_options = {"REGISTER", "UNDO"}
 
     def execute(self, context):
-        for model in _bound_selection(context):
-            if model.mbi.baked:
+        for model in context.selected_objects:
+            if model.mbi.baked or (model.mbi.is_cage and MODIFIER in model.modifiers):
                 unbake(model, context.evaluated_depsgraph_get())
         return {"FINISHED"}
 

@@ -25,6 +25,12 @@ class MBI_PT_panel(bpy.types.Panel):
         if obj.mbi.is_cage:
             layout.label(text="Cage: %d nodes" % len(obj.data.vertices))
             layout.prop(obj.mbi, "interior")
+            box = layout.box()
+            box.label(text="Physics (mbi FEM)")
+            for name in ("young", "poisson", "density", "mass_damping", "stiffness_damping", "substeps"):
+                box.prop(obj.mbi, name)
+            box.prop_search(obj.mbi, "pin_group", obj, "vertex_groups")
+            box.operator("mbi.simulate")
         elif obj.mbi.cage is not None:
             layout.label(text="Bound to %s (%s)" % (obj.mbi.cage.name, obj.mbi.method))
             if obj.mbi.baked and live.CACHE_MODIFIER in obj.modifiers:

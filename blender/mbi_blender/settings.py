@@ -14,6 +14,15 @@ class MbiObjectSettings(bpy.types.PropertyGroup):
     is_cage: bpy.props.BoolProperty(name="Is an mbi cage", default=False)
     interior: bpy.props.EnumProperty(name="Interior nodes", items=INTERIOR, default="auto",
                                      description="How a cage's interior nodes move (a cage's setting)")
+    # physics of a cage (mbi.Simulator, SI units: a Blender unit is a metre)
+    young: bpy.props.FloatProperty(name="Young's modulus (Pa)", default=1e5, min=1.0, max=1e13)
+    poisson: bpy.props.FloatProperty(name="Poisson ratio", default=0.45, min=-0.99, max=0.499)
+    density: bpy.props.FloatProperty(name="Density (kg/m^3)", default=1000.0, min=1e-3, max=1e5)
+    mass_damping: bpy.props.FloatProperty(name="Mass damping (1/s)", default=0.0, min=0.0)
+    stiffness_damping: bpy.props.FloatProperty(name="Stiffness damping (s)", default=0.0, min=0.0)
+    substeps: bpy.props.IntProperty(name="Substeps", default=1, min=1, max=1000)
+    pin_group: bpy.props.StringProperty(name="Pinned group",
+                                        description="Vertex group of the cage's nodes held in place (weight > 0)")
     cage: bpy.props.PointerProperty(name="Cage", type=bpy.types.Object,
                                     description="The mbi cage this mesh is bound to")
     method: bpy.props.EnumProperty(name="Method", items=METHODS, default="modified-bi")

@@ -1,0 +1,128 @@
+"""Inside `blender -b --factory-startup`: a cage simulated by the add-on (mbi's FEM: gravity, damping,
+nodes pinned by a vertex group, scene at 24 fps) and its bound model baked over frames 1..13; the
+baked model equals `mbi run` of a scene with the same data (dense.pc2), frame by frame; the cage's
+cache plays its motion; a cancelled simulation leaves no cache.
+
+    blender -b --factory-startup --python physics.py -- <work dir> <mbi executable>
+"""
+import os
+import subprocess
+import sys
+
+import addon_utils
+import bpy
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(__file__))
+from common import check, evaluated, positions, run_main, select_only, tets  # noqa: E402
+
+START, END, FPS = 1, 13, 24
+MATERIAL = dict(young=3e4, poisson=0.4, density=1000.0, mass_damping=0.5)
+
+
+def setup():
+    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=4, radius=1.0)
+    model = bpy.context.active_object
+    model.name = "model"
+    model.scale = (2.0, 0.5, 0.5)
+    bpy.ops.object.transform_apply(scale=True)  # world = local: the scene file takes the same numbers
+    bpy.ops.mbi.cage(vertices=200)
+    cage = bpy.context.active_object
+    U = positions(cage.data)
+    pins = np.flatnonzero(U[:, 0] < U[:, 0].min() + 0.15 * np.ptp(U[:, 0]))
+    group = cage.vertex_groups.new(name="pin")
+    group.add(pins.tolist(), 1.0, "REPLACE")
+    for name, value in MATERIAL.items():
+        setattr(cage.mbi, name, value)
+    cage.mbi.pin_group = "pin"
+    select_only([model, cage], cage)
+    bpy.ops.mbi.bind()
+    scene = bpy.context.scene
+    scene.render.fps, scene.frame_start, scene.frame_end = FPS, START, END
+    return model, cage, pins
+
+
+def mbi_run(mbi, exe, work, model, cage, pins):
+    """The same simulation as a scene for `mbi run`: its dense.pc2."""
+    base = os.path.join(work, "cage")
+    mbi.write_tetgen(base, positions(cage.data), tets(cage))
+    V = positions(model.data)
+    F = np.empty(len(model.data.polygons) * 3, dtype=np.int32)
+    model.data.polygons.foreach_get("vertices", F)
+    mbi.write_surface(os.path.join(work, "model.obj"), V, F.reshape(-1, 3))
+    g = tuple(bpy.context.scene.gravity)
+    scene = """name = "blender-physics"
+[dense]
+path = "model.obj"
+[control]
+path = "cage"
+[material]
+young = %r
+poisson = %r
+density = %r
+[simulation]
+dt = %r
+frames = %d
+gravity = [%r, %r, %r]
+damping_mass = %r
+[[constraints]]
+type = "fixed"
+select = { indices = %s }
+[interpolation]
+gpu = "off"
+[output]
+mesh_format = "none"
+control_vtk = false
+image = false
+metrics = false
+""" % (MATERIAL["young"], MATERIAL["poisson"], MATERIAL["density"], 1.0 / FPS, END - START, *g,
+       MATERIAL["mass_damping"], pins.tolist())
+    path = os.path.join(work, "scene.toml")
+    with open(path, "w") as f:
+        f.write(scene)
+    run = subprocess.run([exe, "run", path, "--out", os.path.join(work, "run"), "--force", "--quiet"],
+                         capture_output=True, text=True)
+    check(run.returncode == 0, "mbi run of the same scene: %s" % run.stderr.strip()[-500:])
+    return mbi.read_point_cache(os.path.join(work, "run", "dense.pc2")).frames
+
+
+def main(work, exe):
+    addon_utils.enable("mbi_blender", default_set=True)
+    from mbi_blender import module, physics
+    mbi = module.load()
+    model, cage, pins = setup()
+    rest = evaluated(model)
+    size = np.linalg.norm(np.ptp(rest, axis=0))
+    bpy.ops.wm.save_as_mainfile(filepath=os.path.join(work, "physics.blend"))
+
+    job = physics.simulate_job(bpy.context.scene, cage, START, END, "//mbi_cache")
+    for _ in range(3):
+        next(job)
+    job.close()
+    folder = os.path.join(work, "mbi_cache")
+    left = os.listdir(folder)
+    check(not left and "mbi cache" not in cage.modifiers and "mbi cache" not in model.modifiers,
+          "a simulation cancelled after 3 frames leaves no cache (folder holds %s)" % left)
+
+    select_only([cage], cage)
+    check(bpy.ops.mbi.simulate() == {"FINISHED"}, "the simulate operator ran frames %d..%d" % (START, END))
+    check("mbi cache" in cage.modifiers and model.mbi.baked, "the cage plays its cache, the model is baked")
+    expected = mbi_run(mbi, exe, work, model, cage, pins)
+    check(len(expected) == END - START + 1, "mbi run wrote %d frames" % len(expected))
+    baked = mbi.read_point_cache(bpy.path.abspath(model.modifiers["mbi cache"].filepath)).frames
+    error = np.abs(baked - expected).max() / size
+    check(error <= 1e-6, "the baked model equals mbi run's dense.pc2 at every frame (%.2e of its size)" % error)
+    sag = np.abs(baked[-1] - rest).max() / size
+    check(sag > 0.02, "the model moved under gravity (%.3f of its size)" % sag)
+    for frame in (START, 7, END):
+        P = evaluated(model, frame)
+        error = np.abs(P - expected[frame - START]).max() / size
+        check(error <= 1e-6, "frame %d: Blender plays the baked model (%.2e)" % (frame, error))
+    X = evaluated(cage, END)
+    check(np.array_equal(X[pins], positions(cage.data)[pins]) and np.abs(X - positions(cage.data)).max() > 0,
+          "the cage's cache moves it, its pinned nodes held")
+    print("PASS")
+
+
+if __name__ == "__main__":
+    run_main(main)
