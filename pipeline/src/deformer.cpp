@@ -5,8 +5,10 @@
 #include <mbi/pipeline/deformer.hpp>
 #include <mbi/pipeline/precompute.hpp>
 
+#include <mutex>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace mbi::pipeline {
 namespace {
@@ -14,6 +16,15 @@ namespace {
 std::string shape(Eigen::Index rows, Eigen::Index cols) {
   return std::to_string(rows) + " x " + std::to_string(cols);
 }
+
+// One call's temporaries of the mesh's size, kept for the next call (deform() and vjp() are const
+// and may run on several threads at once: each call takes a scratch of its own from a pool).
+struct Scratch {
+  Precompute::PoseScratch pose;  // deform(): M and the Bezier points
+  interp::BezierPoints GB;       // vjp(): dL/dB, dL/dX through B, dL/dM and dL/dX through M
+  Eigen::MatrixXd GX, GMX;
+  interp::VertexMatrices GM;
+};
 
 }  // namespace
 
@@ -23,6 +34,53 @@ struct Deformer::Impl {
   DeformerOptions options;
   Eigen::MatrixXd rest_normals;
   std::unique_ptr<interp::FastEvaluator> fast;  // deform_float(), built on its first call
+  mutable std::mutex pool_mutex;
+  mutable std::vector<std::unique_ptr<Scratch>> pool;  // scratches not in use
+
+  // A scratch for one call, given back to the pool when the lease ends.
+  class Lease {
+   public:
+    explicit Lease(const Impl& impl) : impl_(impl) {
+      std::lock_guard<std::mutex> lock(impl_.pool_mutex);
+      if (impl_.pool.empty()) {
+        scratch_ = std::make_unique<Scratch>();
+      } else {
+        scratch_ = std::move(impl_.pool.back());
+        impl_.pool.pop_back();
+      }
+    }
+    ~Lease() {
+      std::lock_guard<std::mutex> lock(impl_.pool_mutex);
+      impl_.pool.push_back(std::move(scratch_));
+    }
+    Lease(const Lease&) = delete;
+    Lease& operator=(const Lease&) = delete;
+    Scratch& operator*() const { return *scratch_; }
+
+   private:
+    const Impl& impl_;
+    std::unique_ptr<Scratch> scratch_;
+  };
+
+  const interp::BezierPoints& bezier(const Eigen::Ref<const Eigen::MatrixXd>& X, Scratch& s) const {
+    return pre.bezier(options.method, X, s.pose);
+  }
+
+  // dL/dX of one frame into s.GX.
+  void vjp(const interp::ConstPointsRef<double>& G, Scratch& s) const {
+    check_points("dL/dpositions", G.rows(), G.cols());
+    const Eigen::Index n = pre.rest_positions().rows(), d = pre.dim();
+    const int m = static_cast<int>(pre.elements().rows());
+    s.GB.resize(static_cast<Eigen::Index>(m) * ((d + 1) * (d + 2) / 2), d);
+    s.GX.resize(n, d);
+    s.GM.resize(n * d, d);
+    interp::evaluate_transpose(embedding, G, m, s.GB, options.threads);
+    interp::bezier_transpose(pre.rest_positions(), pre.elements(), s.GB, s.GX, s.GM);
+    if (options.method == Method::BI) return;  // M = 0
+    s.GMX.resize(n, d);
+    pre.M_transpose(options.method, s.GM, s.GMX);
+    s.GX += s.GMX;
+  }
 
   Impl(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
        const DeformerOptions& o)
@@ -120,8 +178,10 @@ interp::BezierPoints Deformer::bezier(const Eigen::Ref<const Eigen::MatrixXd>& X
 }
 
 void Deformer::deform(const Eigen::Ref<const Eigen::MatrixXd>& X, interp::PointsRef<double> positions) const {
-  impl_->check_points("positions", positions.rows(), positions.cols());
-  interp::evaluate<double>(bezier(X), impl_->embedding, positions, impl_->options.threads);
+  const Impl& I = *impl_;
+  I.check_points("positions", positions.rows(), positions.cols());
+  const Impl::Lease s(I);
+  interp::evaluate<double>(I.bezier(X, *s), I.embedding, positions, I.options.threads);
 }
 
 void Deformer::deform(const Eigen::Ref<const Eigen::MatrixXd>& X, interp::PointsRef<double> positions,
@@ -130,7 +190,8 @@ void Deformer::deform(const Eigen::Ref<const Eigen::MatrixXd>& X, interp::Points
   if (!has_rest_normals()) throw Error("normals asked for, but no rest normals were given");
   I.check_points("positions", positions.rows(), positions.cols());
   I.check_points("normals", normals.rows(), normals.cols());
-  interp::evaluate<double>(bezier(X), I.embedding, I.rest_normals, positions, normals, I.options.threads);
+  const Impl::Lease s(I);
+  interp::evaluate<double>(I.bezier(X, *s), I.embedding, I.rest_normals, positions, normals, I.options.threads);
 }
 
 Eigen::MatrixXd Deformer::deform(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
@@ -151,9 +212,10 @@ void Deformer::deform_batch(const interp::ConstPointsRef<double>& X, interp::Poi
 }
 
 void Deformer::deform_float(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::Ref<interp::RowMatrixXf> positions) {
-  impl_->check_packed("positions", positions);
-  const interp::BezierPoints B = bezier(X);
-  impl_->fast_evaluator().evaluate(B, positions.data(), nullptr);
+  Impl& I = *impl_;
+  I.check_packed("positions", positions);
+  const Impl::Lease s(I);
+  I.fast_evaluator().evaluate(I.bezier(X, *s), positions.data(), nullptr);
 }
 
 void Deformer::deform_float(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::Ref<interp::RowMatrixXf> positions,
@@ -162,17 +224,14 @@ void Deformer::deform_float(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::R
   if (!has_rest_normals()) throw Error("normals asked for, but no rest normals were given");
   I.check_packed("positions", positions);
   I.check_packed("normals", normals);
-  const interp::BezierPoints B = bezier(X);
-  I.fast_evaluator().evaluate(B, positions.data(), normals.data());
+  const Impl::Lease s(I);
+  I.fast_evaluator().evaluate(I.bezier(X, *s), positions.data(), normals.data());
 }
 
 Eigen::MatrixXd Deformer::vjp(const interp::ConstPointsRef<double>& G) const {
-  const Impl& I = *impl_;
-  I.check_points("dL/dpositions", G.rows(), G.cols());
-  const interp::BezierPoints GB = interp::evaluate_transpose(I.embedding, G, elements(), I.options.threads);
-  interp::BezierTranspose t = interp::bezier_transpose(I.pre.rest_positions(), I.pre.elements(), GB);
-  t.X += I.pre.M_transpose(method(), t.M);  // zero for BI
-  return std::move(t.X);
+  const Impl::Lease s(*impl_);
+  impl_->vjp(G, *s);
+  return (*s).GX;
 }
 
 void Deformer::vjp_batch(const interp::ConstPointsRef<double>& G, interp::PointsRef<double> out) const {
@@ -183,7 +242,11 @@ void Deformer::vjp_batch(const interp::ConstPointsRef<double>& G, interp::Points
   const Eigen::Index frames = p > 0 ? G.rows() / p : out.rows() / n;
   if (out.rows() != frames * n || out.cols() != d)
     throw Error("dL/dX must be " + shape(frames * n, d) + ", got " + shape(out.rows(), out.cols()));
-  for (Eigen::Index k = 0; k < frames; ++k) out.middleRows(k * n, n) = vjp(G.middleRows(k * p, p));
+  const Impl::Lease s(*impl_);
+  for (Eigen::Index k = 0; k < frames; ++k) {
+    impl_->vjp(G.middleRows(k * p, p), *s);
+    out.middleRows(k * n, n) = (*s).GX;
+  }
 }
 
 }  // namespace mbi::pipeline

@@ -61,17 +61,58 @@ interp::BezierPoints Precompute::bezier(Method method, const Eigen::Ref<const Ei
   return interp::bezier_bi(X, T_);
 }
 
-Eigen::MatrixXd Precompute::M_transpose(Method method, const interp::VertexMatrices& G) const {
+const interp::BezierPoints& Precompute::bezier(Method method, const Eigen::Ref<const Eigen::MatrixXd>& X,
+                                               PoseScratch& scratch) const {
+  const int d = dim();
+  scratch.B.resize(T_.rows() * ((d + 1) * (d + 2) / 2), d);
+  if (method == Method::BI) {
+    check_pose(X);
+    interp::bezier_bi(X, T_, scratch.B);
+    return scratch.B;
+  }
+  scratch.M.resize(U_.rows() * d, d);
+  M(method, X, scratch.M);
+  interp::bezier_points(U_, T_, X, scratch.M, scratch.B);
+  return scratch.B;
+}
+
+void Precompute::M(Method method, const Eigen::Ref<const Eigen::MatrixXd>& X,
+                   Eigen::Ref<interp::VertexMatrices> out) const {
+  check_pose(X);
   switch (method) {
     case Method::ModifiedBI:
       if (!solver_) throw Error("modified-BI's precompute was not built");
-      return solver_->solve_transpose(G);
+      return solver_->solve(X, out);
     case Method::Phong:
       if (!phong_) throw Error("Phong's vertex weights were not built");
-      return phong_->M_transpose(G);
+      return phong_->M(X, out);
     case Method::BI: break;
   }
-  return Eigen::MatrixXd::Zero(U_.rows(), U_.cols());
+  if (out.rows() != U_.rows() * U_.cols() || out.cols() != U_.cols())
+    throw Error("M must be " + std::to_string(U_.rows() * U_.cols()) + " x " + std::to_string(U_.cols()));
+  out.setZero();
+}
+
+Eigen::MatrixXd Precompute::M_transpose(Method method, const interp::VertexMatrices& G) const {
+  Eigen::MatrixXd out(U_.rows(), U_.cols());
+  M_transpose(method, G, out);
+  return out;
+}
+
+void Precompute::M_transpose(Method method, const Eigen::Ref<const interp::VertexMatrices>& G,
+                             Eigen::Ref<Eigen::MatrixXd> out) const {
+  switch (method) {
+    case Method::ModifiedBI:
+      if (!solver_) throw Error("modified-BI's precompute was not built");
+      return solver_->solve_transpose(G, out);
+    case Method::Phong:
+      if (!phong_) throw Error("Phong's vertex weights were not built");
+      return phong_->M_transpose(G, out);
+    case Method::BI: break;
+  }
+  if (out.rows() != U_.rows() || out.cols() != U_.cols())
+    throw Error("dL/dX must be " + std::to_string(U_.rows()) + " x " + std::to_string(U_.cols()));
+  out.setZero();
 }
 
 const interp::ModifiedBI& Precompute::solver() {

@@ -1,8 +1,7 @@
 """Page faults of a per-frame loop with out=, in a fresh process (python/tests/faults.py): after
 the first call, deform and vjp should touch no new page (the glibc allocator maps and unmaps the
 large blocks a call allocates, so every fresh temporary faults its pages in again). At 1,000
-points in 1,764 tetrahedra, as in the benchmarks. BI and Phong still allocate their Bezier points
-(and Phong its M) per call: xfail until the library writes them into kept scratch."""
+points in 1,764 tetrahedra, as in the benchmarks, for the three methods."""
 import os
 import subprocess
 import sys
@@ -10,7 +9,6 @@ import sys
 import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-STILL_ALLOCATES = pytest.mark.xfail(strict=True, reason="the Bezier points are a new array every call")
 
 
 def faults_per_call(method, call, env=None):
@@ -20,8 +18,7 @@ def faults_per_call(method, call, env=None):
     return float(result.stdout)
 
 
-@pytest.mark.parametrize("method", ["modified-bi", pytest.param("bi", marks=STILL_ALLOCATES),
-                                    pytest.param("phong", marks=STILL_ALLOCATES)])
+@pytest.mark.parametrize("method", ["bi", "phong", "modified-bi"])
 @pytest.mark.parametrize("call", ["deform", "vjp"])
 def test_a_loop_with_out_faults_no_page_after_the_first_call(method, call):
     assert faults_per_call(method, call) < 1

@@ -170,9 +170,10 @@ void run(const BezierPoints& B, const Embedding& emb, int d, const ConstPointsRe
     if (float_path<Scalar>(B, positions.innerStride(), normals_out != nullptr))
       return detail::evaluate_float3(B, emb, positions, threads);
   }
-  // control points as D x (m K) so that each element's points are contiguous
-  const MatX<Scalar> Prow = B.transpose().template cast<Scalar>();
-  MatX<Scalar> grads;
+  // control points as D x (m K) so that each element's points are contiguous; kept per thread,
+  // so that a frame loop allocates nothing
+  thread_local MatX<Scalar> Prow, grads;
+  Prow = B.transpose().template cast<Scalar>();
   if (normals_out) grads = emb.gradients.transpose().template cast<Scalar>();
   if (d == 3) kernel<3, Scalar>(Prow, emb, normals_out ? &grads : nullptr, normals_rest, positions, normals_out, threads);
   else kernel<2, Scalar>(Prow, emb, normals_out ? &grads : nullptr, normals_rest, positions, normals_out, threads);

@@ -45,9 +45,24 @@ long long first_non_finite(const ConstPointsRef<double>& G) {
   return -1;
 }
 
+void check_out(const char* what, Eigen::Index rows, Eigen::Index cols, Eigen::Index want_rows, Eigen::Index want_cols) {
+  if (rows != want_rows || cols != want_cols)
+    throw Error(std::string(what) + " must be " + std::to_string(want_rows) + " x " + std::to_string(want_cols) +
+                ", got " + std::to_string(rows) + " x " + std::to_string(cols));
+}
+
 }  // namespace
 
 BezierPoints evaluate_transpose(const Embedding& emb, const ConstPointsRef<double>& G, int elements, int threads) {
+  const int d = emb.dim();
+  if (d != 2 && d != 3) throw Error("the embedding must be 2D or 3D");
+  BezierPoints out(static_cast<Eigen::Index>(std::max(elements, 0)) * ((d + 1) * (d + 2) / 2), d);
+  evaluate_transpose(emb, G, elements, out, threads);
+  return out;
+}
+
+void evaluate_transpose(const Embedding& emb, const ConstPointsRef<double>& G, int elements,
+                        Eigen::Ref<BezierPoints> out, int threads) {
   const int d = emb.dim();
   if (d != 2 && d != 3) throw Error("the embedding must be 2D or 3D");
   if (G.rows() != emb.size() || G.cols() != d)
@@ -59,21 +74,24 @@ BezierPoints evaluate_transpose(const Embedding& emb, const ConstPointsRef<doubl
       throw Error("point " + std::to_string(p) + " refers to element " + std::to_string(emb.element(p)) +
                   " outside [0, " + std::to_string(elements) + ")");
   const int K = (d + 1) * (d + 2) / 2;
+  check_out("dL/dB", out.rows(), out.cols(), static_cast<Eigen::Index>(elements) * K, d);
   const long long block = static_cast<long long>(elements) * K * d;
-  // one accumulator a thread (no two threads add into the same memory), summed in thread order
+  // one accumulator a thread (no two threads add into the same memory), summed in thread order;
+  // kept per calling thread, so that a frame loop allocates nothing
   const long long np = emb.size();
   const int nt = detail::thread_count(np, 16384, threads);
-  std::vector<double> acc(static_cast<size_t>(nt * block), 0.0);
+  thread_local std::vector<double> acc;
+  acc.assign(static_cast<size_t>(nt * block), 0.0);
+  double* accp = acc.data();
   const long long chunk = (np + nt - 1) / nt;
   detail::parallel_blocks(nt, 1, nt, [&](long long t0, long long t1) {
     for (long long t = t0; t < t1; ++t) {
       const long long begin = t * chunk, end = std::min(np, begin + chunk);
       if (begin >= end) continue;
-      if (d == 3) scatter<3>(emb, G, begin, end, acc.data() + t * block);
-      else scatter<2>(emb, G, begin, end, acc.data() + t * block);
+      if (d == 3) scatter<3>(emb, G, begin, end, accp + t * block);
+      else scatter<2>(emb, G, begin, end, accp + t * block);
     }
   });
-  BezierPoints out(static_cast<Eigen::Index>(elements) * K, d);
   bool finite = true;
   for (Eigen::Index r = 0; r < out.rows(); ++r)
     for (int c = 0; c < d; ++c) {
@@ -88,11 +106,18 @@ BezierPoints evaluate_transpose(const Embedding& emb, const ConstPointsRef<doubl
     throw Error(p >= 0 ? "dL/dpositions row " + std::to_string(p) + " has a non-finite value"
                        : std::string("dL/dpositions is too large: its sums overflow"));
   }
-  return out;
 }
 
 BezierTranspose bezier_transpose(const Eigen::Ref<const Eigen::MatrixXd>& U,
                                  const Eigen::Ref<const Eigen::MatrixXi>& T, const BezierPoints& G) {
+  BezierTranspose out{Eigen::MatrixXd(U.rows(), U.cols()), VertexMatrices(U.rows() * U.cols(), U.cols())};
+  bezier_transpose(U, T, G, out.X, out.M);
+  return out;
+}
+
+void bezier_transpose(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
+                      const Eigen::Ref<const BezierPoints>& G, Eigen::Ref<Eigen::MatrixXd> X,
+                      Eigen::Ref<VertexMatrices> M) {
   detail::check_shapes(U, T);
   const int d = static_cast<int>(U.cols());
   const int n = static_cast<int>(U.rows());
@@ -100,26 +125,28 @@ BezierTranspose bezier_transpose(const Eigen::Ref<const Eigen::MatrixXd>& U,
   if (G.rows() != T.rows() * K || G.cols() != d)
     throw Error("dL/dB must be " + std::to_string(T.rows() * K) + " x " + std::to_string(d) + ", got " +
                 std::to_string(G.rows()) + " x " + std::to_string(G.cols()));
-  BezierTranspose out{Eigen::MatrixXd::Zero(n, d), VertexMatrices::Zero(static_cast<Eigen::Index>(n) * d, d)};
+  check_out("dL/dX", X.rows(), X.cols(), n, d);
+  check_out("dL/dM", M.rows(), M.cols(), static_cast<Eigen::Index>(n) * d, d);
+  X.setZero();
+  M.setZero();
   const auto& edges = bezier_edges(d);
   for (Eigen::Index e = 0; e < T.rows(); ++e) {
-    for (int k = 0; k <= d; ++k) out.X.row(T(e, k)) += G.row(e * K + k);
+    for (int k = 0; k <= d; ++k) X.row(T(e, k)) += G.row(e * K + k);
     for (size_t s = 0; s < edges.size(); ++s) {
       const int i = T(e, edges[s].first), j = T(e, edges[s].second);
       // P_ij = (x_i + x_j)/2 + (M_i - M_j)(u_j - u_i)/2  (fact 5)
       for (int c = 0; c < d; ++c) {
         const double g = 0.5 * G(e * K + d + 1 + static_cast<Eigen::Index>(s), c);
-        out.X(i, c) += g;
-        out.X(j, c) += g;
+        X(i, c) += g;
+        X(j, c) += g;
         for (int r = 0; r < d; ++r) {
           const double v = g * (U(j, r) - U(i, r));
-          out.M(i * d + c, r) += v;
-          out.M(j * d + c, r) -= v;
+          M(i * d + c, r) += v;
+          M(j * d + c, r) -= v;
         }
       }
     }
   }
-  return out;
 }
 
 }  // namespace mbi::interp

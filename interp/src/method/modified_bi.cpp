@@ -10,6 +10,8 @@
 #include <array>
 #include <cmath>
 #include <numeric>
+#include <string>
+#include <vector>
 
 namespace mbi::interp {
 
@@ -670,29 +672,47 @@ const SpMat& ModifiedBI::disc_hessian_xx() const { return impl_->H.disc_xx; }
 const Eigen::MatrixXd& ModifiedBI::rest_positions() const { return impl_->U; }
 const Eigen::MatrixXi& ModifiedBI::elements_matrix() const { return impl_->T; }
 
+namespace {
+void check_out(const char* what, Eigen::Index rows, Eigen::Index cols, Eigen::Index want_rows, Eigen::Index want_cols) {
+  if (rows != want_rows || cols != want_cols)
+    throw Error(std::string(what) + " must be " + std::to_string(want_rows) + " x " + std::to_string(want_cols) +
+                ", got " + std::to_string(rows) + " x " + std::to_string(cols));
+}
+}  // namespace
+
 VertexMatrices ModifiedBI::solve(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
+  VertexMatrices M(static_cast<Eigen::Index>(impl_->d) * impl_->n, impl_->d);
+  solve(X, M);
+  return M;
+}
+
+void ModifiedBI::solve(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::Ref<VertexMatrices> M) const {
   const Impl& I = *impl_;
   const int d = I.d, n = I.n;
   if (X.rows() != n || X.cols() != d)
     throw Error("X must be " + std::to_string(n) + " x " + std::to_string(d) +
                 ", got " + std::to_string(X.rows()) + " x " + std::to_string(X.cols()));
+  check_out("M", M.rows(), M.cols(), static_cast<Eigen::Index>(d) * n, d);
   detail::check_finite("control vertex", X);
-  VertexMatrices M = VertexMatrices::Zero(static_cast<Eigen::Index>(d) * n, d);
-  if (I.n_red == 0) return M;
-  std::vector<double> sol;  // n_red x d row-major: row a = reduced m of every component
+  M.setZero();
+  if (I.n_red == 0) return;
+  // n_red x d row-major: row a = reduced m of every component; kept per thread (no allocation per frame)
+  thread_local std::vector<double> sol, cols, s3;
   if (I.dense) {
-    std::vector<double> cols(static_cast<size_t>(n) * 3, 0.0), s3(static_cast<size_t>(I.n_red) * 3);
+    cols.assign(static_cast<size_t>(n) * 3, 0.0);
+    s3.resize(static_cast<size_t>(I.n_red) * 3);
     for (int c = 0; c < d; ++c)
       for (int j = 0; j < n; ++j) cols[static_cast<size_t>(c) * n + j] = X(j, c);
     const std::ptrdiff_t rows = I.n_red;
     const double* c0 = cols.data();
+    double* s3p = s3.data();
     // one block of an even number of rows a thread (the kernel takes rows two at a time): the
     // caller, which takes the first, then reads the same part of K every frame and finds it in
     // its cache
     const int nt = detail::thread_count(rows * n, 1 << 17);
     const std::ptrdiff_t block = std::max<std::ptrdiff_t>(2, ((rows + nt - 1) / nt + 1) & ~std::ptrdiff_t(1));
     detail::parallel_blocks(rows, block, nt, [&](long long a, long long b) {
-      dense_rows(I.K.data(), n, c0, c0 + n, c0 + 2 * static_cast<std::ptrdiff_t>(n), s3.data(), a, b);
+      dense_rows(I.K.data(), n, c0, c0 + n, c0 + 2 * static_cast<std::ptrdiff_t>(n), s3p, a, b);
     });
     sol.resize(static_cast<size_t>(I.n_red) * d);
     for (int a = 0; a < I.n_red; ++a)
@@ -706,20 +726,27 @@ VertexMatrices ModifiedBI::solve(const Eigen::Ref<const Eigen::MatrixXd>& X) con
       if (a < 0) continue;
       for (int c = 0; c < d; ++c) M(i * d + c, r) = sol[static_cast<size_t>(a) * d + c];
     }
-  return M;
 }
 
 Eigen::MatrixXd ModifiedBI::solve_transpose(const VertexMatrices& G) const {
+  Eigen::MatrixXd GX(impl_->n, impl_->d);
+  solve_transpose(G, GX);
+  return GX;
+}
+
+void ModifiedBI::solve_transpose(const Eigen::Ref<const Eigen::MatrixXd>& G, Eigen::Ref<Eigen::MatrixXd> GX) const {
   const Impl& I = *impl_;
   const int d = I.d, n = I.n;
   if (G.rows() != static_cast<Eigen::Index>(n) * d || G.cols() != d)
     throw Error("dL/dM must be " + std::to_string(n * d) + " x " + std::to_string(d) + ", got " +
                 std::to_string(G.rows()) + " x " + std::to_string(G.cols()));
+  check_out("dL/dX", GX.rows(), GX.cols(), n, d);
   detail::check_finite("dL/dM row", G);
-  Eigen::MatrixXd GX = Eigen::MatrixXd::Zero(n, d);
-  if (I.n_red == 0) return GX;
+  GX.setZero();
+  if (I.n_red == 0) return;
   // solve() writes M(i d + c, r) = sol(a, c), a = reduced[i d + r]: gather G the same way
-  std::vector<double> y(static_cast<size_t>(I.n_red) * d, 0.0);
+  thread_local std::vector<double> y;
+  y.assign(static_cast<size_t>(I.n_red) * d, 0.0);
   for (int i = 0; i < n; ++i)
     for (int r = 0; r < d; ++r) {
       const int a = I.reduced[i * d + r];
@@ -731,7 +758,6 @@ Eigen::MatrixXd ModifiedBI::solve_transpose(const VertexMatrices& G) const {
   for (int j = 0; j < n; ++j)
     for (SpMat::InnerIterator it(I.Hmx_red, j); it; ++it)
       for (int c = 0; c < d; ++c) GX(j, c) -= I.beta * it.value() * y[static_cast<size_t>(it.row()) * d + c];
-  return GX;
 }
 
 BezierPoints ModifiedBI::bezier(const Eigen::Ref<const Eigen::MatrixXd>& X, const VertexMatrices& M) const {
@@ -740,47 +766,64 @@ BezierPoints ModifiedBI::bezier(const Eigen::Ref<const Eigen::MatrixXd>& X, cons
 
 namespace {
 void check_xm(int n, int d, const Eigen::Ref<const Eigen::MatrixXd>& X,
-              const VertexMatrices* M) {
+              const Eigen::Ref<const VertexMatrices>& M) {
   if (X.rows() != n || X.cols() != d)
     throw Error("X must be " + std::to_string(n) + " x " + std::to_string(d) +
                 ", got " + std::to_string(X.rows()) + " x " + std::to_string(X.cols()));
-  if (M && (M->rows() != static_cast<Eigen::Index>(n) * d || M->cols() != d))
+  if (M.rows() != static_cast<Eigen::Index>(n) * d || M.cols() != d)
     throw Error("M must be " + std::to_string(n * d) + " x " + std::to_string(d) +
-                ", got " + std::to_string(M->rows()) + " x " + std::to_string(M->cols()));
+                ", got " + std::to_string(M.rows()) + " x " + std::to_string(M.cols()));
 }
 }  // namespace
 
 BezierPoints bezier_bi(const Eigen::Ref<const Eigen::MatrixXd>& X,
                        const Eigen::Ref<const Eigen::MatrixXi>& T) {
+  if ((X.cols() != 2 && X.cols() != 3) || T.cols() != X.cols() + 1)
+    throw Error("X must be n x d (d = 2, 3) and T m x (d+1)");
+  BezierPoints B(T.rows() * ((X.cols() + 1) * (X.cols() + 2) / 2), X.cols());
+  bezier_bi(X, T, B);
+  return B;
+}
+
+void bezier_bi(const Eigen::Ref<const Eigen::MatrixXd>& X, const Eigen::Ref<const Eigen::MatrixXi>& T,
+               Eigen::Ref<BezierPoints> B) {
   const int d = static_cast<int>(X.cols());
   if ((d != 2 && d != 3) || T.cols() != d + 1)
     throw Error("X must be n x d (d = 2, 3) and T m x (d+1)");
   const auto& edges = bezier_edges(d);
   const int K = (d + 1) * (d + 2) / 2;
-  BezierPoints B(T.rows() * K, d);
-  for (Eigen::Index e = 0; e < T.rows(); ++e) {
-    for (int k = 0; k <= d; ++k) {
+  check_out("the Bezier points", B.rows(), B.cols(), T.rows() * K, d);
+  for (Eigen::Index e = 0; e < T.rows(); ++e)
+    for (int k = 0; k <= d; ++k)
       if (T(e, k) < 0 || T(e, k) >= X.rows())
         throw Error("element " + std::to_string(e) + " has vertex index " +
                     std::to_string(T(e, k)) + " outside [0, " + std::to_string(X.rows()) + ")");
-      B.row(e * K + k) = X.row(T(e, k));
-    }
+  for (Eigen::Index e = 0; e < T.rows(); ++e) {
+    for (int k = 0; k <= d; ++k) B.row(e * K + k) = X.row(T(e, k));
     for (size_t s = 0; s < edges.size(); ++s)
       B.row(e * K + d + 1 + s) = 0.5 * (X.row(T(e, edges[s].first)) + X.row(T(e, edges[s].second)));
   }
-  return B;
 }
 
 BezierPoints bezier_points(const Eigen::Ref<const Eigen::MatrixXd>& U,
                            const Eigen::Ref<const Eigen::MatrixXi>& T,
                            const Eigen::Ref<const Eigen::MatrixXd>& X, const VertexMatrices& M) {
   detail::check_shapes(U, T);
+  BezierPoints B(T.rows() * ((U.cols() + 1) * (U.cols() + 2) / 2), U.cols());
+  bezier_points(U, T, X, M, B);
+  return B;
+}
+
+void bezier_points(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
+                   const Eigen::Ref<const Eigen::MatrixXd>& X, const Eigen::Ref<const VertexMatrices>& M,
+                   Eigen::Ref<BezierPoints> B) {
+  detail::check_shapes(U, T);
   const int d = static_cast<int>(U.cols());
   const int n = static_cast<int>(U.rows());
-  check_xm(n, d, X, &M);
+  check_xm(n, d, X, M);
   const auto& edges = bezier_edges(d);
   const int K = (d + 1) * (d + 2) / 2;
-  BezierPoints B(T.rows() * K, d);
+  check_out("the Bezier points", B.rows(), B.cols(), T.rows() * K, d);
   for (Eigen::Index e = 0; e < T.rows(); ++e) {
     for (int k = 0; k <= d; ++k) B.row(e * K + k) = X.row(T(e, k));
     for (size_t s = 0; s < edges.size(); ++s) {
@@ -793,7 +836,6 @@ BezierPoints bezier_points(const Eigen::Ref<const Eigen::MatrixXd>& U,
       }
     }
   }
-  return B;
 }
 
 Eigen::VectorXd evaluate_reference(const Eigen::Ref<const Eigen::MatrixXd>& U,
@@ -802,7 +844,7 @@ Eigen::VectorXd evaluate_reference(const Eigen::Ref<const Eigen::MatrixXd>& U,
                                    const VertexMatrices& M, int e,
                                    const Eigen::Ref<const Eigen::VectorXd>& u) {
   const int d = static_cast<int>(U.cols());
-  check_xm(static_cast<int>(U.rows()), d, X, &M);
+  check_xm(static_cast<int>(U.rows()), d, X, M);
   if (u.size() != d) throw Error("u must have " + std::to_string(d) + " entries");
   const Eigen::MatrixXd A = basis_gradients(U, T, e);  // checks e
   const Eigen::VectorXd r = u - U.row(T(e, 0)).transpose();

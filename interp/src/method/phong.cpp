@@ -63,26 +63,45 @@ Phong::Phong(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const 
   }
 }
 
+namespace {
+void check_size(const char* what, const Eigen::Ref<const Eigen::MatrixXd>& A, Eigen::Index rows, Eigen::Index cols) {
+  if (A.rows() != rows || A.cols() != cols)
+    throw Error(std::string(what) + " must be " + std::to_string(rows) + " x " + std::to_string(cols) + ", got " +
+                std::to_string(A.rows()) + " x " + std::to_string(A.cols()));
+}
+}  // namespace
+
 Eigen::MatrixXd Phong::element_gradients(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
+  Eigen::MatrixXd F;
+  element_gradients(X, F);
+  return F;
+}
+
+// F is resized to (m d) x d (no allocation when it has that size already).
+void Phong::element_gradients(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::MatrixXd& F) const {
   const int d = dim(), m = elements();
-  if (X.rows() != U_.rows() || X.cols() != d)
-    throw Error("X must be " + std::to_string(U_.rows()) + " x " + std::to_string(d) +
-                ", got " + std::to_string(X.rows()) + " x " + std::to_string(X.cols()));
+  check_size("X", X, U_.rows(), d);
   detail::check_finite("deformed vertex", X);
-  Eigen::MatrixXd F(static_cast<Eigen::Index>(m) * d, d);
+  F.resize(static_cast<Eigen::Index>(m) * d, d);
   Eigen::MatrixXd Ds(d, d);
   for (int e = 0; e < m; ++e) {
     for (int k = 0; k < d; ++k) Ds.col(k) = (X.row(T_(e, k + 1)) - X.row(T_(e, 0))).transpose();
     F.middleRows(static_cast<Eigen::Index>(e) * d, d).noalias() =
         Ds * Dm_inv_.middleRows(static_cast<Eigen::Index>(e) * d, d);
   }
-  return F;
 }
 
 Eigen::MatrixXd Phong::vertex_gradients(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
+  Eigen::MatrixXd Fe;
+  element_gradients(X, Fe);
+  Eigen::MatrixXd F(static_cast<Eigen::Index>(vertices()) * dim(), dim());
+  vertex_gradients(Fe, F);
+  return F;
+}
+
+void Phong::vertex_gradients(const Eigen::MatrixXd& Fe, Eigen::Ref<Eigen::MatrixXd> F) const {
   const int d = dim(), n = vertices();
-  const Eigen::MatrixXd Fe = element_gradients(X);
-  Eigen::MatrixXd F = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n) * d, d);
+  F.setZero();
   for (int i = 0; i < n; ++i) {
     const std::vector<int>& es = elements_of_[static_cast<size_t>(i)];
     const std::vector<double>& w = weights_[static_cast<size_t>(i)];
@@ -90,21 +109,36 @@ Eigen::MatrixXd Phong::vertex_gradients(const Eigen::Ref<const Eigen::MatrixXd>&
       F.middleRows(static_cast<Eigen::Index>(i) * d, d) +=
           w[a] * Fe.middleRows(static_cast<Eigen::Index>(es[a]) * d, d);
   }
-  return F;
 }
 
 VertexMatrices Phong::M(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
-  return 0.5 * vertex_gradients(X);
+  VertexMatrices out(static_cast<Eigen::Index>(vertices()) * dim(), dim());
+  M(X, out);
+  return out;
+}
+
+void Phong::M(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::Ref<VertexMatrices> out) const {
+  check_size("M", out, static_cast<Eigen::Index>(vertices()) * dim(), dim());
+  thread_local Eigen::MatrixXd Fe;  // the element gradients, kept per thread (no allocation per frame)
+  element_gradients(X, Fe);
+  vertex_gradients(Fe, out);
+  out *= 0.5;
 }
 
 Eigen::MatrixXd Phong::M_transpose(const VertexMatrices& G) const {
+  Eigen::MatrixXd GX(vertices(), dim());
+  M_transpose(G, GX);
+  return GX;
+}
+
+void Phong::M_transpose(const Eigen::Ref<const VertexMatrices>& G, Eigen::Ref<Eigen::MatrixXd> GX) const {
   const int d = dim(), n = vertices(), m = elements();
-  if (G.rows() != static_cast<Eigen::Index>(n) * d || G.cols() != d)
-    throw Error("dL/dM must be " + std::to_string(n * d) + " x " + std::to_string(d) + ", got " +
-                std::to_string(G.rows()) + " x " + std::to_string(G.cols()));
+  check_size("dL/dM", G, static_cast<Eigen::Index>(n) * d, d);
+  check_size("dL/dX", GX, n, d);
   detail::check_finite("dL/dM row", G);
   // M_i = sum_e w_e F_e / 2: dL/dF_e gathers w_e dL/dM_i / 2 from every vertex i of e
-  Eigen::MatrixXd GF = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(m) * d, d);
+  thread_local Eigen::MatrixXd GF;  // kept per thread
+  GF.setZero(static_cast<Eigen::Index>(m) * d, d);
   for (int i = 0; i < n; ++i) {
     const std::vector<int>& es = elements_of_[static_cast<size_t>(i)];
     const std::vector<double>& w = weights_[static_cast<size_t>(i)];
@@ -113,7 +147,7 @@ Eigen::MatrixXd Phong::M_transpose(const VertexMatrices& G) const {
           0.5 * w[a] * G.middleRows(static_cast<Eigen::Index>(i) * d, d);
   }
   // F_e = D_s D_m^-1 with D_s's column k = x_{k+1} - x_0: dL/dD_s = dL/dF_e D_m^-T
-  Eigen::MatrixXd GX = Eigen::MatrixXd::Zero(n, d);
+  GX.setZero();
   Eigen::MatrixXd GDs(d, d);
   for (int e = 0; e < m; ++e) {
     GDs.noalias() = GF.middleRows(static_cast<Eigen::Index>(e) * d, d) *
@@ -123,7 +157,6 @@ Eigen::MatrixXd Phong::M_transpose(const VertexMatrices& G) const {
       GX.row(T_(e, 0)) -= GDs.col(k).transpose();
     }
   }
-  return GX;
 }
 
 }  // namespace mbi::interp

@@ -25,6 +25,10 @@ namespace mbi::interp {
 /// outside [0, m), or a non-finite G (named by its row).
 BezierPoints evaluate_transpose(const Embedding& emb, const ConstPointsRef<double>& G, int elements,
                                 int threads = 0);
+/// The same into caller memory out ((m K) x d already, Error otherwise); its per-thread sums are
+/// kept per calling thread, so after the first call on a thread it allocates nothing.
+void evaluate_transpose(const Embedding& emb, const ConstPointsRef<double>& G, int elements,
+                        Eigen::Ref<BezierPoints> out, int threads = 0);
 
 /// The two parts of the transpose of bezier_points(U, T, X, M).
 struct BezierTranspose {
@@ -36,5 +40,9 @@ struct BezierTranspose {
 /// G = dL/dB ((m K) x d). Throws Error on mismatched sizes.
 BezierTranspose bezier_transpose(const Eigen::Ref<const Eigen::MatrixXd>& U,
                                  const Eigen::Ref<const Eigen::MatrixXi>& T, const BezierPoints& G);
+/// The same into caller memory: X (n x d) and M ((n d) x d), of those sizes already.
+void bezier_transpose(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
+                      const Eigen::Ref<const BezierPoints>& G, Eigen::Ref<Eigen::MatrixXd> X,
+                      Eigen::Ref<VertexMatrices> M);
 
 }  // namespace mbi::interp

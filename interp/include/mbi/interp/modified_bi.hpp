@@ -110,11 +110,16 @@ class ModifiedBI {
 
   /// M for deformed control positions X (n x d). Throws Error on a size mismatch or NaN.
   VertexMatrices solve(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
+  /// The same into caller memory M ((n d) x d already, Error otherwise). Its temporaries are kept
+  /// per thread: after the first call on a thread it allocates nothing.
+  void solve(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::Ref<VertexMatrices> M) const;
 
   /// The transpose of solve(), which is linear in X (fact 11): dL/dX (n x d) from
   /// G = dL/dM ((n d) x d). One solve with the cached factor (the system is symmetric) and one
   /// product with H_mx^T. Throws Error on a size mismatch or NaN.
   Eigen::MatrixXd solve_transpose(const VertexMatrices& G) const;
+  /// The same into caller memory GX (n x d already); no allocation after the first call on a thread.
+  void solve_transpose(const Eigen::Ref<const Eigen::MatrixXd>& G, Eigen::Ref<Eigen::MatrixXd> GX) const;
 
   /// Bezier control points for positions X and matrices M (M = 0 gives BI).
   BezierPoints bezier(const Eigen::Ref<const Eigen::MatrixXd>& X, const VertexMatrices& M) const;
@@ -139,11 +144,18 @@ class ModifiedBI {
 /// Bezier control points of plain BI (M = 0) without any precompute.
 BezierPoints bezier_bi(const Eigen::Ref<const Eigen::MatrixXd>& X,
                        const Eigen::Ref<const Eigen::MatrixXi>& T);
+/// The same into caller memory B ((m K) x d already, Error otherwise).
+void bezier_bi(const Eigen::Ref<const Eigen::MatrixXd>& X, const Eigen::Ref<const Eigen::MatrixXi>& T,
+               Eigen::Ref<BezierPoints> B);
 
 /// Bezier control points from any M (method.md fact 5); needs rest positions U.
 BezierPoints bezier_points(const Eigen::Ref<const Eigen::MatrixXd>& U,
                            const Eigen::Ref<const Eigen::MatrixXi>& T,
                            const Eigen::Ref<const Eigen::MatrixXd>& X, const VertexMatrices& M);
+/// The same into caller memory B ((m K) x d already, Error otherwise).
+void bezier_points(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
+                   const Eigen::Ref<const Eigen::MatrixXd>& X, const Eigen::Ref<const VertexMatrices>& M,
+                   Eigen::Ref<BezierPoints> B);
 
 /// The defining formula x(u) = sum_i phi_i (x_i + M_i (u - u_i)) at rest point u in element e
 /// (slow; for tests and reference).

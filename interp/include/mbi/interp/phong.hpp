@@ -43,10 +43,15 @@ class Phong {
   Eigen::MatrixXd vertex_gradients(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
   /// Phong's M: M_i = F_i / 2, (n d) x d as in ModifiedBI::solve().
   VertexMatrices M(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
+  /// The same into caller memory M ((n d) x d already, Error otherwise); its temporaries are
+  /// kept per thread, so after the first call on a thread it allocates nothing of the mesh's size.
+  void M(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::Ref<VertexMatrices> M) const;
 
   /// The transpose of M(), which is linear in X: dL/dX (n x d) from G = dL/dM ((n d) x d).
   /// Throws Error on a size mismatch or NaN.
   Eigen::MatrixXd M_transpose(const VertexMatrices& G) const;
+  /// The same into caller memory GX (n x d already).
+  void M_transpose(const Eigen::Ref<const VertexMatrices>& G, Eigen::Ref<Eigen::MatrixXd> GX) const;
 
   /// Weight w_e of element e at vertex i, for the incidences of vertex i in order:
   /// incident_elements(i)[k] has weight weights(i)[k]. The weights of a vertex sum to 1.
@@ -62,6 +67,8 @@ class Phong {
   const Eigen::MatrixXi& elements_matrix() const { return T_; }
 
  private:
+  void element_gradients(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::MatrixXd& F) const;
+  void vertex_gradients(const Eigen::MatrixXd& Fe, Eigen::Ref<Eigen::MatrixXd> F) const;
   Eigen::MatrixXd U_;
   Eigen::MatrixXi T_;
   Eigen::MatrixXd Dm_inv_;  // (m d) x d, rows [e d, e d + d) hold D_m^-1 of element e

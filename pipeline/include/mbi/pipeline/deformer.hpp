@@ -20,8 +20,10 @@
 // evaluation, the transpose of the Bezier points and, for modified-BI, one solve with the cached
 // factor (mbi/interp/adjoint.hpp).
 //
-// One Deformer is not for several threads at once (deform_float() keeps per-call state);
-// separate Deformers may run at the same time.
+// deform() and vjp() are const and may run on several threads at once: each call takes the
+// temporaries of the mesh's size (M, the Bezier points, their transposes) from a pool the Deformer
+// keeps, so after the first call on a thread they allocate nothing of the mesh's or the points'
+// size. deform_float() and set_alpha() change state: not for several threads at once.
 #include <mbi/interp/adjoint.hpp>
 #include <mbi/interp/fast_evaluate.hpp>
 #include <mbi/interp/phong.hpp>

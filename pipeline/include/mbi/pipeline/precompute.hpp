@@ -47,9 +47,22 @@ class Precompute {
                               const interp::VertexMatrices& M) const;
   /// M and the Bezier points at X in one call, for a method already built (BI forms no M).
   interp::BezierPoints bezier(Method method, const Eigen::Ref<const Eigen::MatrixXd>& X) const;
+  /// A pose's M and Bezier points, sized on their first use and reused by the next poses.
+  struct PoseScratch {
+    interp::VertexMatrices M;
+    interp::BezierPoints B;
+  };
+  /// The same into scratch (its B, returned); after the first pose nothing is allocated.
+  const interp::BezierPoints& bezier(Method method, const Eigen::Ref<const Eigen::MatrixXd>& X,
+                                     PoseScratch& scratch) const;
+  /// M into caller memory ((n d) x d already), for a method already built; zero for BI.
+  void M(Method method, const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::Ref<interp::VertexMatrices> out) const;
   /// The transpose of M(method, X), which is linear in X: dL/dX (n x d) from G = dL/dM ((n d) x d),
   /// for a method already built; zero for BI.
   Eigen::MatrixXd M_transpose(Method method, const interp::VertexMatrices& G) const;
+  /// The same into caller memory (n x d already).
+  void M_transpose(Method method, const Eigen::Ref<const interp::VertexMatrices>& G,
+                   Eigen::Ref<Eigen::MatrixXd> out) const;
 
   /// Modified-BI's factorisation, built on first use (timed: precompute_ms()).
   const interp::ModifiedBI& solver();
