@@ -1,0 +1,98 @@
+// Contact at the dense surface on the `large` scene (252,152 points): a frame with contact against
+// the same frame without, both pipelines stepped side by side in one run, so that their ratio is
+// measured under the same load. The scene is scenes/large.toml changed where contact needs it:
+// damping_stiffness 0 (refused with contact), no poke, the top tenth of the control nodes fixed.
+// The contact variant has contact = "surface" and a plane that starts at the model's lowest
+// point and rises 0.1 m in the first 0.2 s, pressing into the ball (a cap of 0.1 m is 5% of a
+// sphere's surface); its frames are measured from frame 8 on. The plain variant has no contact
+// and no ground. Counters: ms of each frame, their ratio, Newton iterations per frame of each,
+// the contact points inside the plane and their fraction of the surface.
+//
+//   build/release/mbi-bench --benchmark_filter=ContactFrame
+#include "bench_common.hpp"
+
+#include <mbi/base/timer.hpp>
+#include <mbi/scenes/models.hpp>
+
+#include <benchmark/benchmark.h>
+
+#include <filesystem>
+#include <memory>
+
+namespace {
+
+using mbi::pipeline::FramePipeline;
+using mbi::pipeline::SimulatorDriver;
+
+mbi::scenes::Scene large_scene(bool contact, double lowest) {
+  mbi::scenes::Scene sc = mbi::scenes::load_scene(std::filesystem::path(MBI_SOURCE_DIR) / "scenes" / "large.toml");
+  mbi::sim::Parameters& p = sc.simulation.parameters;
+  p.stiffness_damping = 0.0;
+  p.ground = false;
+  sc.pokes.clear();
+  sc.constraints.resize(1);
+  sc.constraints[0].select.box_relative = std::make_pair(Eigen::Vector3d(0, 0.9, 0), Eigen::Vector3d(1, 1, 1));
+  if (contact) {
+    sc.simulation.contact = mbi::pipeline::ContactMode::Surface;
+    p.newton_iterations = mbi::scenes::kSurfaceNewtonIterations;
+    mbi::pipeline::Collider plane = mbi::pipeline::Collider::plane({0, lowest, 0}, {0, 1, 0});
+    plane.motion.velocity = {0, 0.5, 0};
+    plane.motion.stop = 0.2;
+    sc.colliders.push_back(plane);
+  }
+  return sc;
+}
+
+struct Side {
+  mbi::scenes::Scene scene;
+  std::unique_ptr<FramePipeline> pipe;
+  double ms = 0;
+  long newton = 0;
+  const SimulatorDriver& driver() { return dynamic_cast<const SimulatorDriver&>(pipe->driver()); }
+  bool step() {
+    const auto t0 = mbi::Clock::now();
+    const bool ok = pipe->step().ok;
+    ms += mbi::ms_since(t0);
+    newton += driver().last_step().newton_iterations;
+    return ok;
+  }
+};
+
+void BM_ContactFrame(benchmark::State& st) {
+  const mbi::scenes::Scene plain_scene = large_scene(false, 0.0);
+  const mbi::scenes::SceneModels m = mbi::scenes::load_models(plain_scene);
+  const double lowest = m.dense.V.col(1).minCoeff();
+  Side with{large_scene(true, lowest), nullptr}, without{plain_scene, nullptr};
+  for (Side* s : {&with, &without})
+    s->pipe = std::make_unique<FramePipeline>(
+        mbi::scenes::make_pipeline(s->scene, m, mbi::interp::embed(m.U, m.T, m.dense.V)));
+  for (int f = 0; f < 8; ++f)  // the plane rises into the ball in frames 1..6
+    if (!with.pipe->step().ok || !without.pipe->step().ok) return st.SkipWithError("a step failed while warming up");
+  with.ms = without.ms = 0;
+  with.newton = without.newton = 0;
+  long touching = 0;
+  for (auto _ : st) {
+    const double before = with.ms;
+    if (!with.step() || !without.step()) return st.SkipWithError("a simulation step failed");
+    st.SetIterationTime((with.ms - before) * 1e-3);
+    touching += with.driver().touching_points();
+  }
+  const double n = static_cast<double>(st.iterations());
+  st.counters["contact_ms"] = with.ms / n;
+  st.counters["plain_ms"] = without.ms / n;
+  st.counters["ratio"] = with.ms / without.ms;
+  st.counters["newton_contact"] = static_cast<double>(with.newton) / n;
+  st.counters["newton_plain"] = static_cast<double>(without.newton) / n;
+  st.counters["touching"] = static_cast<double>(touching) / n;
+  st.counters["touching_fraction"] = static_cast<double>(touching) / n / static_cast<double>(m.dense.V.rows());
+}
+
+// Not in quick mode (CI): the large scene's contact frames take seconds each.
+[[maybe_unused]] const bool registered = [] {
+  if (!mbi::bench::quick())
+    benchmark::RegisterBenchmark("BM_ContactFrame/large", BM_ContactFrame)
+        ->Unit(benchmark::kMillisecond)->UseManualTime()->Iterations(4);
+  return true;
+}();
+
+}  // namespace
