@@ -15,9 +15,9 @@ bl_info = {
     "category": "Animation",
 }
 
-from . import bake, bind_op, cage_op, import_op, live, panel, physics, preferences, settings  # noqa: E402
+from . import bake, bind_op, cage_op, import_op, live, panel, physics, preferences, settings, table_op  # noqa: E402
 
-_modules = (preferences, settings, cage_op, import_op, bind_op, bake, physics, panel, live)
+_modules = (preferences, settings, cage_op, import_op, bind_op, bake, physics, table_op, panel, live)
 
 
 def register():

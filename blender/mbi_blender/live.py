@@ -4,67 +4,18 @@ On each frame change, and when a cage is edited in place, a handler reads the ca
 evaluated it (armature, shape keys, hooks, lattice), runs the bound Deformer (float32 kernel, no
 allocation) and writes the positions into the model's shape key "mbi" (value 1, relative to the
 basis), so the mesh data's basis stays the rest shape. The Deformers are not saved: they are
-rebuilt from the .blend's data on first use after a file load, an undo or a change of the bind
-(docs/blender.md).
+rebuilt from the .blend's data when stale (binding.py, docs/blender.md).
 """
 import bpy
 import numpy as np
 from bpy.app.handlers import persistent
 
-from . import harmonic, module, storage
+from . import binding, harmonic, module, storage
 
 SHAPE_KEY = "mbi"
 CACHE_MODIFIER = "mbi cache"  # the Mesh Cache modifier of a baked model
-OUTSIDE_TOLERANCE = 1e-4  # of the model's size: points farther outside the cage are refused (mbi's check)
-_bound = {}   # model.name_full -> _Binding
 errors = {}   # model name -> last message of the live path (shown in the panel)
 _extensions = {}  # cage.name_full -> (rest key, harmonic.Extension)
-
-
-class _Binding:
-    def __init__(self, key, deformer, inverse):
-        self.key = key
-        self.deformer = deformer
-        self.inverse = inverse  # cage space to the model's space, None when the identity
-        self.out = np.empty((deformer.points, 3), dtype=np.float32)
-
-
-def _key(model, cage, tets):
-    s = model.mbi
-    return (cage.name_full, len(cage.data.vertices), len(tets), len(model.data.vertices), s.method, s.alpha,
-            tuple(s.bind_matrix))
-
-
-def _matrix(flat):
-    return np.array(flat, dtype=np.float64).reshape(4, 4)
-
-
-def _build(model, cage):
-    mbi = module.load()
-    tets = storage.tets(cage.data)
-    if tets is None:
-        raise ValueError("%s holds no tetrahedra (not an mbi cage)" % cage.name)
-    s = model.mbi
-    B = _matrix(s.bind_matrix)
-    P = storage.positions(model.data).astype(np.float64) @ B[:3, :3].T + B[:3, 3]
-    U = storage.positions(cage.data).astype(np.float64)
-    alpha = s.alpha if s.alpha > 0 else None
-    try:
-        deformer = mbi.Deformer(U, tets, P, method=s.method, alpha=alpha, max_outside=OUTSIDE_TOLERANCE)
-    except mbi.Error as error:
-        raise ValueError("%s does not fit in the cage %s: %s" % (model.name, cage.name, error)) from error
-    inverse = None if np.allclose(B, np.eye(4), rtol=0, atol=0) else np.linalg.inv(B)
-    return _Binding(_key(model, cage, tets), deformer, inverse)
-
-
-def _binding(model):
-    """The model's Deformer, rebuilt when missing or when its cage, mesh or options changed."""
-    cage = model.mbi.cage
-    entry = _bound.get(model.name_full)
-    tets_count = len(cage.data.get(storage.TETS_KEY, [])) // 4
-    if entry is None or entry.key != _key(model, cage, range(tets_count)):
-        entry = _bound[model.name_full] = _build(model, cage)
-    return entry
 
 
 def _extension(cage, tets_count):
@@ -105,24 +56,9 @@ def shape_key(model):
 
 
 def bind(model, cage, method, alpha):
-    """Binds the model to the cage now; returns the seconds the embedding and precompute took.
-
-    A refused bind (the cage does not enclose the model, mbi refused the data) leaves the model's
-    earlier binding as it was."""
-    import time
-    s = model.mbi
-    earlier = (s.cage, s.method, s.alpha, tuple(s.bind_matrix))
-    B = np.array(cage.matrix_world.inverted() @ model.matrix_world)
-    s.cage, s.method, s.alpha, s.bind_matrix = cage, method, alpha, B.ravel().tolist()
-    start = time.perf_counter()
-    _bound.pop(model.name_full, None)
-    try:
-        _binding(model)
-    except (RuntimeError, ValueError):
-        _bound.pop(model.name_full, None)
-        s.cage, s.method, s.alpha, s.bind_matrix = earlier
-        raise
-    seconds = time.perf_counter() - start
+    """Binds the model to the cage now; returns the seconds of the embedding and precompute."""
+    matrix = np.array(cage.matrix_world.inverted() @ model.matrix_world).ravel().tolist()
+    seconds = binding.bind(model, cage, method, alpha, matrix)
     shape_key(model)
     return seconds
 
@@ -136,7 +72,7 @@ def shape_positions(model):
 
 
 def unbind(model):
-    _bound.pop(model.name_full, None)
+    binding.forget(model)
     if CACHE_MODIFIER in model.modifiers:
         model.modifiers.remove(model.modifiers[CACHE_MODIFIER])
     model.mbi.baked = False
@@ -148,7 +84,7 @@ def unbind(model):
 
 def deform(model, depsgraph):
     """Writes the model's positions for the cage as evaluated in depsgraph into its shape key."""
-    entry = _binding(model)
+    entry = binding.get(model)
     X = cage_nodes(model.mbi.cage, depsgraph)
     out = entry.deformer.deform(X, out=entry.out)
     if entry.inverse is not None:
@@ -159,12 +95,14 @@ def deform(model, depsgraph):
     model.data.update()
 
 
-def update_all(depsgraph, cages=None):
-    """Deforms every bound model, or those bound to the cages named in cages."""
-    for model in bpy.data.objects:
-        if model.type != "MESH" or model.mbi.cage is None or model.mbi.baked:
-            continue
-        if cages is not None and model.mbi.cage.name_full not in cages:
+def bound_models():
+    return [o for o in bpy.data.objects if o.type == "MESH" and o.mbi.cage is not None and not o.mbi.baked]
+
+
+def update_all(depsgraph, cages=None, models=()):
+    """Deforms every bound model, or those bound to the cages named in cages and those named in models."""
+    for model in bound_models():
+        if cages is not None and model.mbi.cage.name_full not in cages and model.name_full not in models:
             continue
         errors.pop(model.name, None)
         try:
@@ -181,16 +119,25 @@ def _on_frame(scene, depsgraph=None):
 
 @persistent
 def _on_depsgraph(scene, depsgraph):
-    """A cage edited without a frame change (edit mode, a posed armature, a key's value)."""
-    cages = {u.id.original.name_full for u in depsgraph.updates
-             if isinstance(u.id, bpy.types.Object) and u.is_updated_geometry and u.id.mbi.is_cage}
-    if cages:  # the models written here are no cages: no second round
-        update_all(depsgraph, cages)
+    """A cage edited without a frame change (edit mode, a posed armature, a key's value), or a bound
+    model's mesh edited: its rest content is checked (a hash; frame changes do not come here)."""
+    cages, models = set(), set()
+    for update in depsgraph.updates:
+        obj = update.id.original if isinstance(update.id, bpy.types.Object) else None
+        if obj is None or not update.is_updated_geometry:
+            continue
+        if obj.mbi.is_cage:
+            cages.add(obj.name_full)
+        elif obj.type == "MESH" and obj.mbi.cage is not None:
+            binding.check_content(obj)
+            models.add(obj.name_full)
+    if cages or models:
+        update_all(depsgraph, cages, models)
 
 
 @persistent
 def _on_load(*_):
-    _bound.clear()
+    binding.clear()
     _extensions.clear()
     errors.clear()
     update_all(bpy.context.evaluated_depsgraph_get())
@@ -198,6 +145,8 @@ def _on_load(*_):
 
 @persistent
 def _on_undo(*_):
+    for model in bound_models():
+        binding.check_content(model)
     update_all(bpy.context.evaluated_depsgraph_get())
 
 
@@ -216,5 +165,5 @@ def unregister():
     for handlers, function in _HANDLERS:
         if function in handlers:
             handlers.remove(function)
-    _bound.clear()
+    binding.clear()
     _extensions.clear()

@@ -1,7 +1,7 @@
 """The sidebar panel: cage, bind, and the state of the selected object."""
 import bpy
 
-from . import live
+from . import binding, live, table_op
 
 
 class MBI_PT_panel(bpy.types.Panel):
@@ -33,10 +33,31 @@ class MBI_PT_panel(bpy.types.Panel):
             box.operator("mbi.simulate")
         elif obj.mbi.cage is not None:
             layout.label(text="Bound to %s (%s)" % (obj.mbi.cage.name, obj.mbi.method))
+            layout.label(text="Bind: %.3f s (embedding and precompute), %d points"
+                         % (obj.mbi.bind_seconds, len(obj.data.vertices)))
+            if obj.name in binding.notes:
+                layout.label(text=binding.notes[obj.name], icon="INFO")
+            _table(layout, obj)
             if obj.mbi.baked and live.CACHE_MODIFIER in obj.modifiers:
                 layout.label(text="Baked: %s" % obj.modifiers[live.CACHE_MODIFIER].filepath)
             if obj.name in live.errors:
                 layout.label(text=live.errors[obj.name], icon="ERROR")
+
+
+def _table(layout, model):
+    layout.operator("mbi.discontinuity")
+    if model.name not in table_op.tables:
+        return
+    frame, rows, faces, seconds = table_op.tables[model.name]
+    box = layout.box()
+    box.label(text="Frame %d, %d interior faces (%.3f s)" % (frame, faces, seconds))
+    grid = box.grid_flow(columns=4, even_columns=False, row_major=True)
+    for cell in ("", "mean", "std", "max"):
+        grid.label(text=cell)
+    for label, mean, std, largest in rows:
+        grid.label(text=label)
+        for value in (mean, std, largest):
+            grid.label(text="%.3g" % value)
 
 
 def register():

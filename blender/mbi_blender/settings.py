@@ -30,6 +30,8 @@ class MbiObjectSettings(bpy.types.PropertyGroup):
                                    description="Weight of modified-BI's E_vibr (0: the default, 0.1)")
     baked: bpy.props.BoolProperty(name="Baked", default=False,
                                   description="Played by its Mesh Cache modifier, not the live path")
+    rest_hash: bpy.props.StringProperty(description="Hash of the rest content the bind was made from")
+    bind_seconds: bpy.props.FloatProperty(description="Seconds of the last embedding and precompute")
     # the model's matrix in the cage's space at bind time (4x4, row-major): the bind is in cage space
     bind_matrix: bpy.props.FloatVectorProperty(size=16)
 
