@@ -4,8 +4,6 @@
 
 #include <mbi/pipeline/deformer.hpp>
 
-#include <mbi/interp/outside.hpp>
-
 #include <cmath>
 #include <cstdio>
 
@@ -14,21 +12,6 @@ namespace {
 
 using pipeline::Deformer;
 using Bound = Guarded<Deformer>;
-
-py::handle outside_warning;  // mbi.OutsideWarning, made in bind_deformer (lives as long as the module)
-
-// Points outside the control mesh, as `mbi deform` reports them: refused beyond max_outside x the
-// model size (the command's --max-outside check), else an mbi.OutsideWarning.
-void report_outside(const interp::Embedding& emb, const Input& p, std::optional<double> max_outside) {
-  if (max_outside) {
-    const interp::FarPoints far = interp::far_points(emb, p.map, *max_outside);
-    if (far.count > 0) throw Error("P: " + interp::far_points_message(far, "max_outside=", "(U, T)"));
-  }
-  if (emb.outside.empty()) return;
-  // stack level 2: past the wrapper of mbi/_errors.py around every method, to the caller's line
-  if (PyErr_WarnEx(outside_warning.ptr(), interp::outside_message(emb).c_str(), 2) < 0)
-    throw py::error_already_set();  // warnings as errors
-}
 
 std::unique_ptr<Bound> make_deformer(const py::object& U, const py::object& T, const py::object& P,
                                      const std::string& method, std::optional<double> alpha, double beta, bool pin_boundary,
@@ -124,12 +107,6 @@ py::object vjp(Bound& b, const py::object& G, const py::object& out) {
 
 void bind_deformer(py::module_& m) {
   using namespace pybind11::literals;
-  outside_warning = PyErr_NewExceptionWithDoc("mbi._mbi.OutsideWarning",
-                                              "Dense points outside the control mesh, extrapolated from the nearest "
-                                              "element (Deformer's max_outside= refuses those too far out).",
-                                              PyExc_UserWarning, nullptr);
-  if (!outside_warning) throw py::error_already_set();
-  m.attr("OutsideWarning") = outside_warning;
   py::class_<Bound>(m, "Deformer",
                     "Bind once, deform many: the dense points P embedded in a rest control mesh (U, T) and the "
                     "method's precompute, made once; deform() maps poses X (n, d) to positions (p, d).")

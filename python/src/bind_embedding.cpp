@@ -61,14 +61,18 @@ void bind_embedding(py::module_& m) {
 
   m.def(
       "embed",
-      [](const py::object& U, const py::object& T, const py::object& P) {
+      [](const py::object& U, const py::object& T, const py::object& P, std::optional<double> max_outside) {
         const Mesh c = control_mesh(U, T);
         const Input p = float_matrix(P, "P", {-1, c.U.map.cols()});
-        return without_gil([&] { return interp::embed(c.U.map, c.T, p.map); });
+        interp::Embedding e = without_gil([&] { return interp::embed(c.U.map, c.T, p.map); });
+        report_outside(e, p, max_outside);
+        return e;
       },
-      "U"_a, "T"_a, "P"_a,
+      "U"_a, "T"_a, "P"_a, py::kw_only(), "max_outside"_a = py::none(),
       "Locates the dense rest points P (p, d) in the control mesh: U (n, d) rest vertices, T (m, d+1) "
-      "elements (0-based). Returns an Embedding. Points outside are attached to the nearest element.");
+      "elements (0-based). Returns an Embedding. Points outside are attached to the nearest element and "
+      "warn (mbi.OutsideWarning); max_outside refuses those farther out than max_outside x the model size "
+      "(the diagonal of P's bounding box), as mbi deform --max-outside.");
 
   m.def(
       "embedded_positions",

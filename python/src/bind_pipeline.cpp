@@ -84,7 +84,8 @@ using Object = Guarded<FramePipeline>;
 
 std::unique_ptr<Object> make_pipeline(const py::object& U, const py::object& T, const py::object& P,
                                       const py::object& driver, const std::string& method, std::optional<double> alpha, double beta,
-                                      bool pin_boundary, const py::object& rest_normals) {
+                                      bool pin_boundary, const py::object& rest_normals,
+                                      std::optional<double> max_outside) {
   const Mesh c = control_mesh(U, T);
   const Input p = float_matrix(P, "P", {-1, c.U.map.cols()});
   pipeline::PipelineOptions o;
@@ -96,8 +97,9 @@ std::unique_ptr<Object> make_pipeline(const py::object& U, const py::object& T, 
     o.normals = true;
   }
   std::unique_ptr<Driver> d = driver_of(driver, c.U.map);
+  interp::Embedding e = without_gil([&] { return interp::embed(c.U.map, c.T, p.map); });
+  report_outside(e, p, max_outside);
   return without_gil([&] {
-    interp::Embedding e = interp::embed(c.U.map, c.T, p.map);
     return std::make_unique<Object>(c.U.map, c.T, std::move(e), std::move(d), o, nullptr, normals);
   });
 }
@@ -185,7 +187,13 @@ void bind_frame_pipeline(py::module_& m) {
       "Per frame: drive the control mesh, solve M, Bezier points, dense points (CPU, float64).")
       .def(py::init(&make_pipeline), py::arg("U"), py::arg("T"), py::arg("P"), py::arg("driver") = py::none(),
            py::kw_only(), py::arg("method") = "modified-bi", py::arg("alpha") = py::none(), py::arg("beta") = 0.0,
-           py::arg("pin_boundary") = false, py::arg("rest_normals") = py::none())
+           py::arg("pin_boundary") = false, py::arg("rest_normals") = py::none(), py::arg("max_outside") = py::none(),
+           "Points of P outside the control mesh warn (mbi.OutsideWarning); max_outside refuses those farther "
+           "out than max_outside x the model size (the diagonal of P's bounding box), as mbi deform --max-outside.")
+      .def_property_readonly("outside_points", [](Object& b) { return b.object.embedding().outside.size(); },
+                             "points outside the control mesh")
+      .def_property_readonly("max_outside_distance", [](Object& b) { return b.object.embedding().max_outside_distance; },
+                             "the farthest outside point's distance to the mesh (units of P)")
       .def("step", [](Object& b, bool evaluate) { return b.run([&](FramePipeline& x) { return x.step(evaluate); }); },
            py::arg("evaluate") = true, "Computes the next frame (the first call gives frame 0, the initial pose).")
       .def("run", &run_frames, py::arg("frames"), "step() `frames` times: the positions (frames, p, d)")

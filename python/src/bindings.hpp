@@ -3,14 +3,17 @@
 #include "arrays.hpp"
 
 #include <mbi/base/timer.hpp>
+#include <mbi/interp/embed.hpp>
 
 #include <pybind11/stl.h>  // std::vector and std::string arguments and results
 
 #include <mutex>
+#include <optional>
 #include <utility>
 
 namespace mbi::python {
 
+void bind_outside(py::module_& m);     // outside.cpp: OutsideWarning
 void bind_embedding(py::module_& m);   // bind_embedding.cpp: Embedding, embed, mesh helpers
 void bind_methods(py::module_& m);     // bind_methods.cpp: ModifiedBI, Phong, Bezier points, metrics
 void bind_evaluate(py::module_& m);    // bind_evaluate.cpp: evaluate, FastEvaluator, transposes
@@ -18,9 +21,15 @@ void bind_deformer(py::module_& m);    // bind_deformer.cpp: Deformer
 void bind_timing(py::module_& m);      // timing.cpp: C++ baselines of the overhead benchmark (MBI_PYTHON_TIMING)
 void bind_sim(py::module_& m);         // bind_sim.cpp: Simulator
 void bind_pipeline(py::module_& m);    // bind_pipeline.cpp: FramePipeline and its drivers
+void bind_contact(py::module_& m);     // bind_contact.cpp: Collider, FramePipeline with contact (after bind_pipeline)
 void bind_io(py::module_& m);          // bind_io.cpp: file readers and writers
 void bind_cage(py::module_& m);        // bind_cage.cpp: cage
 void bind_scene(py::module_& m);       // bind_scene.cpp: run_scene
+
+/// Points of P outside the control mesh (emb.outside), as `mbi deform` reports them: Error for
+/// those farther out than max_outside x the model size, else an mbi.OutsideWarning at the
+/// caller's line. Needs the GIL.
+void report_outside(const interp::Embedding& emb, const Input& p, std::optional<double> max_outside);
 
 #ifdef MBI_PYTHON_TIMING
 /// Seconds the calling thread last spent in a section without the GIL: the C++ part of its last

@@ -33,6 +33,7 @@ PYBIND11_MODULE(_mbi, m) {
   // every error of the libraries, and every refused argument: a ValueError carrying the message
   auto& error = py::register_exception<mbi::Error>(m, "Error", PyExc_ValueError);
   register_file_error(m, error);
+  mbi::python::bind_outside(m);
   mbi::python::bind_embedding(m);
   mbi::python::bind_methods(m);
   mbi::python::bind_evaluate(m);
@@ -44,6 +45,7 @@ PYBIND11_MODULE(_mbi, m) {
 #endif
   mbi::python::bind_sim(m);
   mbi::python::bind_pipeline(m);
+  mbi::python::bind_contact(m);
   mbi::python::bind_io(m);
   mbi::python::bind_cage(m);
   mbi::python::bind_scene(m);

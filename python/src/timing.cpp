@@ -6,6 +6,7 @@
 #include <mbi/base/timer.hpp>
 #include <mbi/interp/fast_evaluate.hpp>
 #include <mbi/interp/modified_bi.hpp>
+#include <mbi/pipeline/deformer.hpp>
 
 #include <vector>
 
@@ -62,6 +63,28 @@ void bind_timing(py::module_& m) {
       },
       "evaluator"_a, "B"_a, "out"_a, "calls"_a,
       "Seconds of each of `calls` calls of FastEvaluator::evaluate(B, positions) in C++ into out.");
+  t.def(
+      "deform",
+      [](Guarded<pipeline::Deformer>& d, const py::object& X, const py::object& out, int calls) {
+        const Eigen::MatrixXd x = float_matrix(X, "X", {d.object.vertices(), d.object.dim()}).map;
+        Output o = float_output(out, "out", d.object.points(), d.object.dim());
+        const auto seconds = time_calls(d, calls, [&] { d.object.deform(x, o.map); });
+        o.finish();
+        return seconds;
+      },
+      "deformer"_a, "X"_a, "out"_a, "calls"_a,
+      "Seconds of each of `calls` calls of Deformer::deform(X, positions) in C++ into out.");
+  t.def(
+      "vjp",
+      [](Guarded<pipeline::Deformer>& d, const py::object& G, const py::object& out, int calls) {
+        const Eigen::MatrixXd g = float_matrix(G, "G", {d.object.points(), d.object.dim()}).map;
+        Output o = float_output(out, "out", d.object.vertices(), d.object.dim());
+        const auto seconds = time_calls(d, calls, [&] { d.object.vjp_batch(g, o.map); });
+        o.finish();
+        return seconds;
+      },
+      "deformer"_a, "G"_a, "out"_a, "calls"_a,
+      "Seconds of each of `calls` calls of Deformer::vjp_batch(G, out) in C++ into out.");
 }
 
 }  // namespace mbi::python

@@ -74,3 +74,33 @@ def test_max_outside_must_be_finite_and_not_negative(far_points, bad):
     U, T, P = far_points
     with pytest.raises(mbi.Error, match="max_outside must be a finite number >= 0"):
         mbi.Deformer(U, T, P, max_outside=bad)
+
+
+def test_embed_warns_counts_and_refuses_as_the_deformer_does(far_points):
+    U, T, P = far_points
+    with pytest.warns(mbi.OutsideWarning) as record:
+        emb = mbi.embed(U, T, P)
+    assert len(record) == 1 and record[0].filename == __file__
+    assert str(record[0].message).startswith("100 of 600 points lie outside the control mesh (farthest 17.")
+    assert len(emb.outside) == 100 and 17.7 < emb.max_outside_distance < 17.9
+    with pytest.raises(mbi.Error, match=r"^P: 100 of 600 points lie farther outside the control mesh \(U, T\) "
+                                        r"than max_outside=0.1 x the model size"):
+        mbi.embed(U, T, P, max_outside=0.1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        mbi.embed(U, T, P[:500], max_outside=0)  # inside: no warning, nothing refused
+
+
+def test_frame_pipeline_warns_counts_and_refuses_as_the_deformer_does(far_points):
+    U, T, P = far_points
+    with pytest.warns(mbi.OutsideWarning) as record:
+        pipe = mbi.FramePipeline(U, T, P)
+    assert len(record) == 1 and record[0].filename == __file__
+    assert pipe.outside_points == 100 and 17.7 < pipe.max_outside_distance < 17.9
+    with pytest.raises(mbi.Error, match=r"^P: 100 of 600 points lie farther outside"):
+        mbi.FramePipeline(U, T, P, max_outside=0.1)
+    with pytest.raises(mbi.Error, match="max_outside must be a finite number >= 0"):
+        mbi.FramePipeline(U, T, P, max_outside=-1.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert mbi.FramePipeline(U, T, P[:500], max_outside=0).outside_points == 0
