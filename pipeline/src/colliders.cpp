@@ -169,4 +169,10 @@ Eigen::Vector3d collider_velocity(const Collider& c, const Eigen::Vector3d& p, d
   return v;
 }
 
+Eigen::Vector3d collider_displacement(const Collider& c, const Eigen::Vector3d& p, double from, double to) {
+  const Pose a = pose(c.motion, from), b = pose(c.motion, to);
+  const Eigen::Vector3d local = a.rot.transpose() * (p - a.shift);  // relative to the centre
+  return b.shift + b.rot * local - p;
+}
+
 }  // namespace mbi::pipeline

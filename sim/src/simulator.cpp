@@ -212,8 +212,10 @@ struct Simulator::Impl {
   double incremental(const Eigen::VectorXd& vk, double h, Eigen::VectorXd& xs) const;
   // Adds c times the potential's Hessian blocks at xe to the system; empty or why not.
   std::string add_potential_hessian(const Eigen::VectorXd& xe, double c);
-  // Moves vk along delta by the largest of 1, 1/2, 1/4, ... that satisfies Armijo's rule on
-  // the incremental potential phi (updated); false when none does (no descent left).
+  // The potential's admissible fraction of moving the velocity from vk by dv (max_step).
+  double admissible(const Eigen::VectorXd& vk, const Eigen::VectorXd& dv, double h);
+  // Moves vk along delta by the largest of s, s/2, s/4, ... (s the admissible fraction) that
+  // satisfies Armijo's rule on the incremental potential phi (updated); false when none does.
   bool line_search(Eigen::VectorXd& vk, double h, double& phi);
   void check_nodes(const std::vector<int>& nodes) const;
 
@@ -456,10 +458,17 @@ std::string Simulator::Impl::add_potential_hessian(const Eigen::VectorXd& xe, do
   return {};
 }
 
+double Simulator::Impl::admissible(const Eigen::VectorXd& vk, const Eigen::VectorXd& dv, double h) {
+  x_trial = x + h * vk;
+  const double s = potential->max_step(x_trial, h * dv);
+  return s > 0 ? std::min(s, 1.0) : 0.0;  // NaN too: no admissible step
+}
+
 bool Simulator::Impl::line_search(Eigen::VectorXd& vk, double h, double& phi) {
   const double slope = -r.dot(delta);  // d phi / ds at s = 0 (r = -grad phi on free dofs)
   if (!(slope < 0)) return false;
-  double step = 1.0;
+  double step = admissible(vk, delta, h);
+  if (step == 0.0) return false;
   for (int k = 0; k < 40; ++k, step *= 0.5) {
     trial = vk + step * delta;
     const double value = incremental(trial, h, x_trial);
@@ -653,13 +662,19 @@ std::string Simulator::Impl::substep(double h, int& newton, int& iters, double& 
   const double ps1 = be ? 0.0 : 0.5, ps2 = be ? 1.0 : 0.5;
   const double a = params.mass_damping, b = params.stiffness_damping;
   external_forces();
-  if (potential) potential->begin_substep(t + h, x, v);
+  if (potential) potential->begin_substep_at(t, t + h, x, v);
   Eigen::VectorXd vk = v;
   Eigen::VectorXd target = x;
   prescribed(t + h, target);
   if (constraints_dirty) update_constraints();
   for (int d = 0; d < 3 * n; ++d)
     if (constrained_dof[d]) vk(d) = ((target(d) - x(d)) / h - ps1 * v(d)) / ps2;
+  if (potential) {  // a first guess the potential does not admit starts from rest instead
+    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(3 * n);
+    if (admissible(zero, vk, h) < 1.0)
+      for (int d = 0; d < 3 * n; ++d)
+        if (!constrained_dof[d]) vk(d) = 0.0;
+  }
   Eigen::VectorXd xe(3 * n), vd(3 * n);
   for (int it = 0; it < params.newton_iterations; ++it) {
     auto t0 = Clock::now();
@@ -696,6 +711,8 @@ std::string Simulator::Impl::substep(double h, int& newton, int& iters, double& 
     t_solve += ms_since(t0);
     ++newton;
     if (!ok) return why;
+    double dmax = 0.0;  // of the full Newton update: a shortened step is not convergence
+    for (int i = 0; i < n; ++i) dmax = std::max(dmax, delta.segment<3>(3 * i).norm());
     if (!potential) {
       vk += delta;
     } else {
@@ -707,11 +724,7 @@ std::string Simulator::Impl::substep(double h, int& newton, int& iters, double& 
       if (!line_search(vk, h, phi)) break;  // no descent left: converged to round-off
       phi_history.push_back(phi);
     }
-    if (params.newton_tolerance > 0) {
-      double dmax = 0.0;
-      for (int i = 0; i < n; ++i) dmax = std::max(dmax, delta.segment<3>(3 * i).norm());
-      if (dmax <= params.newton_tolerance) break;
-    }
+    if (params.newton_tolerance > 0 && dmax <= params.newton_tolerance) break;
   }
   const Eigen::VectorXd x_old = x;
   x += h * (ps1 * v + ps2 * vk);

@@ -1,4 +1,5 @@
-// Contact at embedded points through the embedding's transpose (method.md fact 16).
+// Contact at embedded points through the embedding's transpose (method.md facts 16 and 17).
+#include <mbi/pipeline/contact_laws.hpp>
 #include <mbi/pipeline/surface_contact.hpp>
 
 #include <catch2/catch.hpp>
@@ -10,6 +11,9 @@
 using namespace mbi::pipeline;
 
 namespace {
+
+// The pose is the rest box moved by kShift into the colliders (which stay clear of the rest box).
+const Eigen::Vector3d kShift(0, -10, 0);
 
 struct Setup {
   mbi::test::Mesh mesh;
@@ -27,12 +31,36 @@ Setup setup() {
   const Eigen::Index n = s.mesh.U.rows();
   s.x.resize(3 * n);
   for (Eigen::Index i = 0; i < n; ++i)
-    for (int c = 0; c < 3; ++c) s.x(3 * i + c) = s.mesh.U(i, c) + w(rng);
+    for (int c = 0; c < 3; ++c) s.x(3 * i + c) = s.mesh.U(i, c) + kShift(c) + w(rng);
   return s;
 }
 
 std::vector<Collider> colliders() {
-  return {Collider::plane({0, 0.3, 0}, {0.1, 1.0, 0.05}, 0.5), Collider::sphere({1.5, 1.0, 0.5}, 0.45)};
+  return {Collider::plane(Eigen::Vector3d(0, 0.3, 0) + kShift, {0.1, 1.0, 0.05}, 0.5),
+          Collider::sphere(Eigen::Vector3d(1.5, 1.0, 0.5) + kShift, 0.45, 0.3)};
+}
+
+/// The same contact with lagged friction: guards and slips from the pose x0 over a substep of
+/// h = 0.01 s, the plane sliding by (3, 0, 1) mm in it, some points deeper than max_depth 0.2.
+void start_friction(SurfaceContact& c, const Eigen::VectorXd& x0) {
+  c.set_max_depth(0.2);
+  c.set_friction_velocity(0.3);  // eps = 3 mm, about the slips' size: both regimes of f0
+  c.begin_substep_at(0.0, 0.01, x0, Eigen::VectorXd::Zero(x0.size()));
+}
+
+std::vector<Collider> sliding_colliders() {
+  auto c = colliders();
+  c[0].motion.velocity = Eigen::Vector3d(0.3, 0, 0.1);
+  return c;
+}
+
+/// x0 moved by a random 1 mm.
+Eigen::VectorXd nudged(const Eigen::VectorXd& x0) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> w(-1e-3, 1e-3);
+  Eigen::VectorXd x = x0;
+  for (Eigen::Index k = 0; k < x.size(); ++k) x(k) += w(rng);
+  return x;
 }
 
 Eigen::VectorXd gradient(const SurfaceContact& c, const Eigen::VectorXd& x) {
@@ -50,19 +78,24 @@ TEST_CASE("surface contact: force = finite differences of the energy through the
     DeformerOptions opt;
     opt.method = m;
     auto deformer = std::make_shared<Deformer>(s.mesh.U, s.mesh.T, s.points, opt);
-    SurfaceContact contact(deformer, colliders(), 1e4);
-    const Eigen::VectorXd g = gradient(contact, s.x);
-    REQUIRE(contact.energy(s.x) > 0);
-    Eigen::VectorXd fd(s.x.size());
-    const double eps = 1e-6;
-    for (Eigen::Index k = 0; k < s.x.size(); ++k) {
-      Eigen::VectorXd xp = s.x, xm = s.x;
-      xp(k) += eps;
-      xm(k) -= eps;
-      fd(k) = (contact.energy(xp) - contact.energy(xm)) / (2 * eps);
+    SurfaceContact plain(deformer, colliders(), 1e4), lagged(deformer, sliding_colliders(), 1e4);
+    start_friction(lagged, s.x);
+    REQUIRE(lagged.friction_pairs() > 20);
+    const Eigen::VectorXd x1 = nudged(s.x);
+    for (const auto& [contact, x] : {std::pair<SurfaceContact*, Eigen::VectorXd>{&plain, s.x}, {&lagged, x1}}) {
+      const Eigen::VectorXd g = gradient(*contact, x);
+      REQUIRE(contact->energy(x) > 0);
+      Eigen::VectorXd fd(x.size());
+      const double eps = 1e-6;
+      for (Eigen::Index k = 0; k < x.size(); ++k) {
+        Eigen::VectorXd xp = x, xm = x;
+        xp(k) += eps;
+        xm(k) -= eps;
+        fd(k) = (contact->energy(xp) - contact->energy(xm)) / (2 * eps);
+      }
+      INFO("method " << static_cast<int>(m) << (contact == &lagged ? ", guarded, friction" : ", plain"));
+      CHECK((fd - g).norm() <= 1e-6 * g.norm());
     }
-    INFO("method " << static_cast<int>(m));
-    CHECK((fd - g).norm() <= 1e-6 * g.norm());
   }
 }
 
@@ -79,7 +112,7 @@ TEST_CASE("surface contact: for BI the force is the per-element assembly of the 
   int touching = 0;
   for (Eigen::Index p = 0; p < P.rows(); ++p)
     for (const Collider& c : contact.colliders()) {
-      const Distance d = signed_distance(c, P.row(p).transpose(), 0.0);
+      const Distance d = signed_distance(c, P.row(p).transpose(), 0.0);  // a plain penalty
       if (d.value >= 0) continue;
       ++touching;
       for (int a = 0; a < 4; ++a)
@@ -87,6 +120,38 @@ TEST_CASE("surface contact: for BI the force is the per-element assembly of the 
     }
   CHECK(touching > 20);
   CHECK((gradient(contact, s.x) - expect).norm() <= 1e-12 * expect.norm());
+
+  // Guarded law and lagged friction, from the laws alone: g_p = e'(d) n + mu lambda f1(y) / y
+  // (I - n0 n0^T)(p - anchor), lambda = -e'(d0) at the start pose, the anchor moved with the plane.
+  SurfaceContact lagged(deformer, sliding_colliders(), 1e4);
+  start_friction(lagged, s.x);
+  const Eigen::VectorXd x1 = nudged(s.x);
+  const Eigen::MatrixXd P0 = lagged.points(s.x), P1 = lagged.points(x1);
+  const double eps = 0.3 * 0.01;
+  expect.setZero();
+  int guarded = 0, slipping = 0, sticking = 0;
+  for (Eigen::Index p = 0; p < P1.rows(); ++p)
+    for (const Collider& c : lagged.colliders()) {
+      const Eigen::Vector3d q0 = P0.row(p).transpose(), q1 = P1.row(p).transpose();
+      const Distance d0 = signed_distance(c, q0, 0.01), d1 = signed_distance(c, q1, 0.01);
+      const double depth = d0.value > -0.2 ? 0.2 : std::numeric_limits<double>::infinity();
+      Eigen::Vector3d g = Eigen::Vector3d::Zero();
+      if (d1.value < 0) g += mbi::pipeline::contact::normal_energy(d1.value, 1e4, depth).slope * d1.normal;
+      if (d0.value < 0) {
+        guarded += depth == 0.2;
+        const double weight = -c.friction * mbi::pipeline::contact::normal_energy(d0.value, 1e4, depth).slope;
+        const Eigen::Vector3d anchor = q0 + c.motion.velocity * 0.01;
+        const Eigen::Vector3d u = (Eigen::Matrix3d::Identity() - d0.normal * d0.normal.transpose()) * (q1 - anchor);
+        const double y = u.norm();
+        (y < eps ? sticking : slipping) += 1;
+        g += weight * (y < eps ? 2 / eps - y / (eps * eps) : 1 / y) * u;
+      }
+      for (int a = 0; a < 4; ++a) expect.segment<3>(3 * s.mesh.T(emb.element(p), a)) += emb.bary(p, a) * g;
+    }
+  CHECK(guarded > 10);
+  CHECK(sticking > 5);
+  CHECK(slipping > 5);
+  CHECK((gradient(lagged, x1) - expect).norm() <= 1e-12 * expect.norm());
 }
 
 TEST_CASE("surface contact: the Hessian surrogate is PSD, inside the element pattern, and equals "
@@ -96,9 +161,10 @@ TEST_CASE("surface contact: the Hessian surrogate is PSD, inside the element pat
     DeformerOptions opt;
     opt.method = m;
     auto deformer = std::make_shared<Deformer>(s.mesh.U, s.mesh.T, s.points, opt);
-    SurfaceContact contact(deformer, colliders(), 1e4);
+    SurfaceContact contact(deformer, sliding_colliders(), 1e4);
+    start_friction(contact, s.x);
     std::vector<mbi::sim::NodeBlock> blocks;
-    contact.hessian_blocks(s.x, blocks);
+    contact.hessian_blocks(nudged(s.x), blocks);
     REQUIRE(!blocks.empty());
     mbi::sim::Simulator sim(s.mesh.U, s.mesh.T, mbi::sim::Material{});
     const Eigen::Index N = s.x.size();
@@ -147,6 +213,69 @@ TEST_CASE("surface contact: bad input is an Error naming what is wrong", "[pipel
   SurfaceContact ok(deformer, colliders(), 1e4);
   CHECK_THROWS_WITH(ok.energy(Eigen::VectorXd::Zero(5)), Catch::Contains("node positions must have"));
   CHECK_THROWS_WITH(ok.set_time(nan), Catch::Contains("time must be finite"));
+  CHECK_THROWS_WITH(ok.begin_substep_at(nan, 1.0, s.x, s.x), Catch::Contains("time must be finite"));
+  bad = colliders();
+  bad[0].friction = -0.1;
+  CHECK_THROWS_WITH(SurfaceContact(deformer, bad, 1e4), Catch::StartsWith("collider 0: friction must be finite and >= 0"));
+  for (double v : {nan, 0.0, -1.0}) {
+    CHECK_THROWS_WITH(ok.set_max_depth(v), Catch::Contains("max_depth must be > 0"));
+    CHECK_THROWS_WITH(ok.set_friction_velocity(v), Catch::Contains("friction velocity must be finite and > 0"));
+  }
+  CHECK_THROWS_WITH(ok.set_friction_velocity(std::numeric_limits<double>::infinity()),
+                    Catch::Contains("friction velocity"));
+  ok.set_max_depth(std::numeric_limits<double>::infinity());  // the plain penalty
+  CHECK(ok.max_step(s.x, s.x) == 1.0);
+  // A collider through the rest pose: the plane y = 0.3 cuts the box [0, 1.5] x [0, 1] x [0, 1].
+  bad = {Collider::sphere({5, 5, 5}, 1.0), Collider::plane({0, 0.3, 0}, {0, 1, 0})};
+  CHECK_THROWS_WITH(SurfaceContact(deformer, bad, 1e4),
+                    Catch::StartsWith("collider 1 overlaps the model at rest: contact point") &&
+                        Catch::Contains("m inside (at most"));
+  bad[1].point.y() = -1e-4;  // touching within max_depth is contact, not overlap
+  CHECK_NOTHROW(SurfaceContact(deformer, bad, 1e4));
+}
+
+TEST_CASE("surface contact: a moving collider that jumps into the model (its motion started "
+          "before the contact was attached) pushes it out; steps stay finite",
+          "[pipeline][contact][sim][errors]") {
+  const auto cage = mbi::test::box_tet_mesh(2, 2, 2);
+  Eigen::MatrixXd P(50, 3);
+  for (int i = 0; i < 5; ++i)
+    for (int k = 0; k < 5; ++k)
+      for (int top = 0; top < 2; ++top)
+        P.row(10 * i + 2 * k + top) = Eigen::RowVector3d(0.1 + 0.2 * i, top ? 0.9 : 0.1, 0.1 + 0.2 * k);
+  auto deformer = std::make_shared<Deformer>(cage.U, cage.T, P);
+  // The floor rises at 1 m/s (and slides at 2 m/s) from t = 0 to 0.35 s, from y = 0.
+  Collider floor = Collider::plane({0, 0, 0}, {0, 1, 0}, 0.5);
+  floor.motion.velocity = Eigen::Vector3d(2, 1, 0);
+  floor.motion.stop = 0.35;
+  auto contact = std::make_shared<SurfaceContact>(deformer, std::vector<Collider>{floor}, 1e7);
+  mbi::sim::Parameters prm;
+  prm.newton_iterations = 40;
+  prm.newton_tolerance = 1e-7;
+  prm.gravity.setZero();
+  mbi::sim::Simulator sim(cage.U, cage.T, mbi::sim::Material{1e7, 0.3, 1000}, prm);
+  for (int k = 0; k < 18; ++k) REQUIRE(sim.step().success);  // t = 0.3 s: the floor is 0.2 m into the model
+  sim.set_potential(contact);
+  prm.gravity = Eigen::Vector3d(0, -9.81, 0);
+  sim.set_params(prm);
+  double lowest = 1e300;
+  for (int k = 0; k < 60; ++k) {
+    const auto r = sim.step();
+    INFO("step " << k << ": " << r.message);
+    REQUIRE(r.success);
+    REQUIRE(sim.positions().allFinite());
+    REQUIRE(sim.velocities().allFinite());
+    if (k > 0) lowest = std::min(lowest, contact->points(Eigen::Map<const Eigen::VectorXd>(
+                                                         Eigen::MatrixXd(sim.positions().transpose()).data(), 81))
+                                              .col(1)
+                                              .minCoeff());
+  }
+  // Out after the first step (the plain penalty, no approach-side guarantee in it), then guarded.
+  CHECK(lowest >= 0.35 - contact->max_depth());
+  // Time jumps back (reset): the floor is at y = 0 again, below the model at rest.
+  sim.reset();
+  for (int k = 0; k < 5; ++k) REQUIRE(sim.step().success);
+  CHECK(sim.positions().allFinite());
 }
 
 TEST_CASE("surface contact: a cage dropped on a plane rests on its dense surface, not on the cage",

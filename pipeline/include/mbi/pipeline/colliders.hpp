@@ -63,4 +63,9 @@ Distance signed_distance(const Collider& collider, const Eigen::Vector3d& p, dou
 /// Velocity (m/s) at time t of the collider's material point that is at p then.
 Eigen::Vector3d collider_velocity(const Collider& collider, const Eigen::Vector3d& p, double time);
 
+/// Displacement (m) from time `from` to time `to` (s) of the collider's material point that is
+/// at p at time `from`: its rigid motion's map of `to` after the inverse map of `from`.
+Eigen::Vector3d collider_displacement(const Collider& collider, const Eigen::Vector3d& p, double from,
+                                      double to);
+
 }  // namespace mbi::pipeline

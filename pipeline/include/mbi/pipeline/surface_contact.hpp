@@ -1,21 +1,24 @@
 #pragma once
 // Contact of embedded points (the dense surface's vertices, or any subset) with analytic
-// colliders, as a potential of the control nodes for sim::Simulator (method.md fact 16).
+// colliders, as a potential of the control nodes for sim::Simulator (method.md facts 16, 17).
 //
 //   auto deformer = std::make_shared<pipeline::Deformer>(U, T, contact_points, options);
 //   auto contact = std::make_shared<pipeline::SurfaceContact>(deformer, colliders, 1e4);
 //   sim.set_potential(contact);
-//   per step: sim.step();   // the simulator poses the colliders at each substep's end
+//   per step: sim.step();   // the simulator poses the colliders and lags friction per substep
 //
 // The dense positions are p = W x (W the deformer's linear map, method.md facts 1 and 11), so
-// the energy E(x) = sum_points sum_colliders k/2 min(d(p), 0)^2 (a quadratic penalty on the
-// signed distance d, fact 15) has the exact gradient W^T g, g_p = k min(d, 0) n: one
-// Deformer::vjp. Its Hessian W^T K W is dense for modified-BI; the step gets the surrogate
-// k (b (x) n)(b (x) n)^T per penetrating point and collider, with b the point's BI weights in
-// its own element: positive semi-definite and inside the FEM's element pattern.
+// the energy E(x) = sum_points sum_colliders e(d(p)) + friction (d the collider's signed
+// distance, fact 15) has the exact gradient W^T g, g_p = e'(d) n + friction: one
+// Deformer::vjp. e is a penalty k d^2 / 2 to second order that grows without bound at the
+// depth max_depth() for points that start a substep above it (contact_laws.hpp), and each
+// Newton step is capped so that no such point passes that depth (max_step). Friction is IPC's
+// lagged, smoothed Coulomb friction. Its Hessian W^T K W is dense for modified-BI; the step gets
+// the surrogate (b b^T) (x) K_p per touching point, with b the point's BI weights in its own
+// element and K_p the point's 3x3 Hessian: positive semi-definite and inside the FEM's pattern.
 //
-// Units: stiffness k in N/m per point; positions in m; energy in J. One SurfaceContact is not
-// for several threads at once (it keeps scratch positions).
+// Units: stiffness k in N/m per point; positions and depths in m; friction velocity in m/s;
+// energy in J. One SurfaceContact is not for several threads at once (it keeps scratch).
 #include <mbi/pipeline/colliders.hpp>
 #include <mbi/pipeline/deformer.hpp>
 #include <mbi/sim/potential.hpp>
@@ -28,18 +31,40 @@ namespace mbi::pipeline {
 class SurfaceContact : public sim::Potential {
  public:
   /// deformer: 3D, its points are the contact points. colliders: checked (Error naming
-  /// "collider i" and the field). stiffness: N/m, finite and > 0.
+  /// "collider i" and the field). stiffness: N/m, finite and > 0. A collider that holds a
+  /// contact point of the rest pose (the deformer's control positions, colliders at time 0)
+  /// deeper than the default max_depth() is refused: Error "collider i overlaps the model at
+  /// rest: contact point j is D m inside".
   SurfaceContact(std::shared_ptr<const Deformer> deformer, std::vector<Collider> colliders,
                  double stiffness);
 
   /// Time (s) at which the colliders are posed; the simulator sets the end of each substep
-  /// (begin_substep).
+  /// (begin_substep_at).
   void set_time(double time);
+  /// begin_substep_at(time(), end_time, x, v).
   void begin_substep(double end_time, const Eigen::Ref<const Eigen::VectorXd>& x,
                      const Eigen::Ref<const Eigen::VectorXd>& v) override;
+  /// Poses the colliders at end_time and, from the start positions x (3 n): which point and
+  /// collider pairs are guarded (signed distance > -max_depth()), and per touching pair with
+  /// friction the lagged normal force, tangent basis and anchor (method.md fact 17). With
+  /// end_time <= start_time there is no friction in the substep.
+  void begin_substep_at(double start_time, double end_time, const Eigen::Ref<const Eigen::VectorXd>& x,
+                        const Eigen::Ref<const Eigen::VectorXd>& v) override;
   double time() const { return time_; }
   const std::vector<Collider>& colliders() const { return colliders_; }
   double stiffness() const { return stiffness_; }
+
+  /// Depth (m, > 0) that guarded points never pass: their energy grows without bound there and
+  /// max_step keeps them above it. Infinity: the plain penalty k d^2 / 2 and no cap. Default:
+  /// 1e-3 of the control mesh's rest bounding-box diagonal. Takes effect at the next substep.
+  void set_max_depth(double depth);
+  double max_depth() const { return max_depth_; }
+  /// IPC's eps_v (m/s, > 0): tangential speeds below it are smoothed (static friction is a
+  /// creep at about this speed). Default: 1e-4 control-mesh diagonals per second.
+  void set_friction_velocity(double velocity);
+  double friction_velocity() const { return friction_velocity_; }
+  /// Number of point and collider pairs that carry lagged friction in the current substep.
+  int friction_pairs() const { return static_cast<int>(slips_.size()); }
 
   /// The contact points' positions (p x 3) at node positions x (3 n stacked, as the simulator's).
   Eigen::MatrixXd points(const Eigen::Ref<const Eigen::VectorXd>& x) const;
@@ -49,15 +74,42 @@ class SurfaceContact : public sim::Potential {
                     Eigen::Ref<Eigen::VectorXd> gradient) const override;
   void hessian_blocks(const Eigen::Ref<const Eigen::VectorXd>& x,
                       std::vector<sim::NodeBlock>& blocks) const override;
+  /// The largest fraction (0, 1] of the move x -> x + dx that keeps every guarded point above
+  /// -max_depth() on its straight path (p is linear in x), by contact::advance.
+  double max_step(const Eigen::Ref<const Eigen::VectorXd>& x,
+                  const Eigen::Ref<const Eigen::VectorXd>& dx) const override;
 
  private:
+  /// Lagged friction of one point against one collider in the current substep.
+  struct Slip {
+    int point = 0;
+    double weight = 0.0;                    ///< mu lambda, N
+    Eigen::Matrix<double, 3, 2> tangent;    ///< orthonormal basis of the tangent plane
+    Eigen::Vector3d anchor;                 ///< start position moved with the collider, m
+  };
   void deform(const Eigen::Ref<const Eigen::VectorXd>& x) const;  // into positions_
+  double depth(Eigen::Index point, size_t collider) const;        // guarded depth or infinity
+  /// One point's energy (J), gradient (N) and Hessian or PSD surrogate (N/m) at positions_,
+  /// all colliders and its slips; `slip` walks slips_ (start at 0, points in increasing order).
+  struct Term {
+    double energy = 0.0;
+    Eigen::Vector3d gradient = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d hessian = Eigen::Matrix3d::Zero();
+    bool active = false;
+  };
+  Term term(Eigen::Index point, size_t& slip) const;
 
   std::shared_ptr<const Deformer> deformer_;
   std::vector<Collider> colliders_;
   double stiffness_ = 0.0;
   double time_ = 0.0;
-  mutable Eigen::MatrixXd X_, positions_, dE_dp_;
+  double diagonal_ = 0.0;  // control mesh, rest
+  double max_depth_ = 0.0;
+  double friction_velocity_ = 0.0;
+  double smoothing_ = 0.0;        // eps_v h of the current substep, m
+  std::vector<char> guarded_;     // point-major, per collider; empty before the first substep
+  std::vector<Slip> slips_;       // by increasing point
+  mutable Eigen::MatrixXd X_, positions_, dE_dp_, moved_;
 };
 
 }  // namespace mbi::pipeline

@@ -29,6 +29,20 @@ class Potential {
   /// and velocities at its start (3 n), e.g. to pose moving colliders or lag friction.
   virtual void begin_substep(double /*end_time*/, const Eigen::Ref<const Eigen::VectorXd>& /*x*/,
                              const Eigen::Ref<const Eigen::VectorXd>& /*v*/) {}
+  /// The same with the substep's start time (s) too; the simulator calls this one. The default
+  /// forwards to begin_substep(end_time, x, v).
+  virtual void begin_substep_at(double /*start_time*/, double end_time,
+                                const Eigen::Ref<const Eigen::VectorXd>& x,
+                                const Eigen::Ref<const Eigen::VectorXd>& v) {
+    begin_substep(end_time, x, v);
+  }
+  /// The largest fraction s in (0, 1] of a move of the nodes from x to x + dx (3 n, m) that
+  /// the potential admits (e.g. no contact point crossing a collider on the way); the step's
+  /// line search starts from it. Default 1: every move is admissible.
+  virtual double max_step(const Eigen::Ref<const Eigen::VectorXd>& /*x*/,
+                          const Eigen::Ref<const Eigen::VectorXd>& /*dx*/) const {
+    return 1.0;
+  }
   /// E(x), J. Must be finite wherever the step evaluates it (or the step fails).
   virtual double energy(const Eigen::Ref<const Eigen::VectorXd>& x) const = 0;
   /// Adds dE/dx (3 n, N) to `gradient`.
