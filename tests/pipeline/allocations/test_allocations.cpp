@@ -7,6 +7,8 @@
 
 #include <mbi/interp.hpp>
 #include <mbi/pipeline/deformer.hpp>
+#include <mbi/pipeline/driver.hpp>
+#include <mbi/pipeline/frame_pipeline.hpp>
 
 #include "common/grid_meshes.hpp"
 
@@ -204,5 +206,39 @@ TEST_CASE("allocations: one Deformer on several threads at once gives each call 
       });
     for (std::thread& t : threads) t.join();
     for (size_t k = 0; k < 4; ++k) CHECK(same_bits(got[k], expected[k]));
+  }
+}
+
+namespace {
+
+// Allocations above kLarge bytes of `steps` steps (after 3) of a simulated pipeline over p points.
+long pipeline_step_allocations(const Setup& s, Method method, long long p, int steps) {
+  sim::Simulator simulator(s.mesh.U, s.mesh.T, sim::Material{1e5, 0.3, 1000}, sim::Parameters{});
+  std::vector<int> left;
+  for (int i = 0; i < s.mesh.U.rows(); ++i)
+    if (s.mesh.U(i, 0) < 1e-9) left.push_back(i);
+  simulator.fix(left);
+  const Eigen::MatrixXd P = random(p, 3, 5, 0.05, 0.95);
+  pipeline::PipelineOptions options;
+  options.method = method;
+  pipeline::FramePipeline pipe(s.mesh.U, s.mesh.T, interp::embed(s.mesh.U, s.mesh.T, P),
+                               std::make_unique<pipeline::SimulatorDriver>(std::move(simulator)), options);
+  for (int k = 0; k < 3; ++k) REQUIRE(pipe.step().ok);
+  return count(steps, [&] { REQUIRE(pipe.step().ok); }).allocations;
+}
+
+}  // namespace
+
+TEST_CASE("allocations: a pipeline's step allocates no more for 100 times the dense points", "[allocations]") {
+  if (!MBI_COUNT_ALLOCATIONS) {
+    WARN("not counted: the sanitizer replaces malloc");
+    return;
+  }
+  const Setup s;
+  for (Method method : kMethods) {
+    CAPTURE(pipeline::method_name(method));
+    const long few = pipeline_step_allocations(s, method, 1000, 5);
+    const long many = pipeline_step_allocations(s, method, 100000, 5);
+    CHECK(many == few);
   }
 }
