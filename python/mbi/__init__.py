@@ -34,6 +34,7 @@ from ._mbi import (  # noqa: E402
     INTEGRATORS,
     SOLVERS,
     Cage,
+    Collider,
     ControlMesh,
     Deformer,
     DiscontinuityTable,
@@ -95,11 +96,11 @@ Method = Literal["bi", "modified-bi", "phong"]
 METHODS: Tuple[Method, ...] = ("bi", "modified-bi", "phong")
 
 __all__ = [
-    "Cage", "ControlMesh", "Deformer", "DiscontinuityTable", "Embedding", "Error", "FastEvaluator", "FileError",
-    "FramePipeline", "FrameResult", "GivenDriver", "HandleDriver", "INTEGRATORS", "METHODS", "ModifiedBI",
-    "OutsideWarning", "Phong", "PointCache", "SOLVERS", "Simulator", "StaticResult", "StepResult", "Summary",
-    "Surface", "batch", "bezier_bi", "bezier_points", "bezier_transpose", "boundary_faces", "box_mesh", "cage",
-    "cholmod_available", "default_alpha", "discontinuity_table", "embed", "embedded_positions", "evaluate",
+    "Cage", "Collider", "ControlMesh", "Deformer", "DiscontinuityTable", "Embedding", "Error", "FastEvaluator",
+    "FileError", "FramePipeline", "FrameResult", "GivenDriver", "HandleDriver", "INTEGRATORS", "METHODS",
+    "ModifiedBI", "OutsideWarning", "Phong", "PointCache", "SOLVERS", "Simulator", "StaticResult", "StepResult",
+    "Summary", "Surface", "batch", "bezier_bi", "bezier_points", "bezier_transpose", "boundary_faces", "box_mesh",
+    "cage", "cholmod_available", "default_alpha", "discontinuity_table", "embed", "embedded_positions", "evaluate",
     "evaluate_transpose", "face_discontinuity", "interior_faces", "read_control_mesh", "read_point_cache",
     "read_points", "read_positions", "read_pvd", "read_surface", "read_trajectory", "run_scene", "set_threads",
     "threads", "threads_available", "validate_mesh", "write_point_cache", "write_points", "write_surface",

@@ -100,6 +100,12 @@ def simulation(tmp: str) -> None:
     handles = mbi.HandleDriver(U, T, [0, 1], mode="soft")
     handles.set_targets(U[:2] + 0.1)
     assert mbi.FramePipeline(U, T, P, handles).run(2).shape[0] == 2
+    floor = mbi.Collider.plane((0, 0, -0.1), (0, 0, 1), friction=0.5).moving(velocity=(0, 0, 0.1))
+    free = mbi.Simulator(U, T, youngs_modulus=1e5, dt=0.01, newton_iterations=5)
+    touching = mbi.FramePipeline.with_contact(U, T, P, free, [floor, mbi.Collider.sphere((0, 0, 3), 0.2)], method="bi")
+    assert touching.run(2).shape[0] == 2 and touching.contact is not None
+    depth, normal = floor.distance((0, 0, 0), time=2.0)
+    assert depth < 0 and normal.shape == (3,)
     assert mbi.batch.material_grid([1e5], [0.3])[0]["youngs_modulus"] == 1e5
     assert mbi.batch.run_batch(mbi.batch.simulate_material, mbi.batch.material_grid([2e5], [0.3]), frames=1,
                                cells=(1, 1, 2), points=10)[0]["tip_sag"] >= 0
