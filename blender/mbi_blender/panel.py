@@ -17,8 +17,8 @@ class MBI_PT_panel(bpy.types.Panel):
         layout.operator("mbi.bind")
         layout.operator("mbi.unbind")
         row = layout.row()
-        row.operator("mbi.bake")
-        row.operator("mbi.unbake")
+        row.operator("mbi.bake", text="Bake")
+        row.operator("mbi.unbake", text="Un-bake")
         obj = context.active_object
         if obj is None:
             return
@@ -32,9 +32,9 @@ class MBI_PT_panel(bpy.types.Panel):
             box.prop_search(obj.mbi, "pin_group", obj, "vertex_groups")
             box.operator("mbi.simulate")
         elif obj.mbi.cage is not None:
-            layout.label(text="Bound to %s (%s)" % (obj.mbi.cage.name, obj.mbi.method))
-            layout.label(text="Bind: %.3f s (embedding and precompute), %d points"
-                         % (obj.mbi.bind_seconds, len(obj.data.vertices)))
+            layout.label(text="Bound to %s" % obj.mbi.cage.name)
+            layout.label(text="Method: %s" % obj.mbi.method)
+            layout.label(text="Bind: %.3f s for %d points" % (obj.mbi.bind_seconds, len(obj.data.vertices)))
             if obj.name in binding.notes:
                 layout.label(text=binding.notes[obj.name], icon="INFO")
             _table(layout, obj)
@@ -50,14 +50,10 @@ def _table(layout, model):
         return
     frame, rows, faces, seconds = table_op.tables[model.name]
     box = layout.box()
-    box.label(text="Frame %d, %d interior faces (%.3f s)" % (frame, faces, seconds))
-    grid = box.grid_flow(columns=4, even_columns=False, row_major=True)
-    for cell in ("", "mean", "std", "max"):
-        grid.label(text=cell)
+    box.label(text="Frame %d, %d faces, %.3f s" % (frame, faces, seconds))
+    box.label(text="jump: mean / std / max")
     for label, mean, std, largest in rows:
-        grid.label(text=label)
-        for value in (mean, std, largest):
-            grid.label(text="%.3g" % value)
+        box.label(text="%s: %.2g / %.2g / %.2g" % (label, mean, std, largest))
 
 
 def register():

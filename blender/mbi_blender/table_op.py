@@ -20,8 +20,8 @@ def discontinuity(model, depsgraph, frame):
     solver = mbi.ModifiedBI(U, T, alpha=model.mbi.alpha if model.mbi.alpha > 0 else None)
     table = mbi.discontinuity_table(solver, X, solver.solve(X), mbi.Phong(U, T).M(X))
     rows = [(label, s.mean, s.std, s.max) for label, s in
-            (("BI", table.bi), ("modified-BI", table.modified_bi), ("Phong", table.phong),
-             ("BI / modified-BI", table.ratio), ("BI / Phong", table.phong_ratio)) if s is not None]
+            (("BI", table.bi), ("mod-BI", table.modified_bi), ("Phong", table.phong),
+             ("BI/mod-BI", table.ratio), ("BI/Phong", table.phong_ratio)) if s is not None]
     tables[model.name] = (frame, rows, table.faces, time.perf_counter() - start)
     return tables[model.name]
 

@@ -1,0 +1,219 @@
+"""Side by side inside Blender: the mbi add-on's live path against Mesh Deform (precision 5) and
+Surface Deform on the same model and cage; bind time, time per frame, memory added.
+
+    MBI_PYTHON_DIR=build/release/python MBI_MODELS_DIR=../shared/models \\
+    blender -b --factory-startup --python bench/blender/side_by_side.py -- \\
+        [--model stanford-bunny] [--subdivide 0 2] [--vertices 1000] [--frames 30] [--runs 3]
+
+The cage is `mbi.cage` of about --vertices nodes around the model; Mesh Deform and Surface Deform
+get its boundary (a closed triangle mesh). Every node of the cage is animated by a keyframed shape
+key (a bend growing over the frames; the boundary cage gets the same motion of its nodes). Each
+(model, subdivision, method) runs in a fresh Blender process (--one), so memory is that method's:
+  floor          Blender's own cost: the model's mesh re-evaluated each frame, no deformation
+  mbi            the add-on: bind operator (embedding, precompute, first write), live shape key
+  meshdeform     Mesh Deform modifier, precision 5, bind operator plus its evaluation
+  surfacedeform  Surface Deform modifier, bind operator plus its evaluation
+Per frame: wall time of scene.frame_set (the cage's key, the deformation, the model's
+re-evaluation), median and min over --runs passes of --frames frames. Memory: resident set size
+after the frames minus before the bind. A method that takes over --limit s (default 300) is
+reported as skipped. Subdivision: Catmull-Clark (Blender's Subdivision Surface, applied).
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+import bpy
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+METHODS = ("floor", "mbi", "meshdeform", "surfacedeform")
+
+
+def rss_mb():
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) / 1024.0
+    return float("nan")
+
+
+def load_mbi():
+    sys.path.insert(0, os.path.join(HERE, "..", "..", "blender"))
+    import mbi_blender
+    mbi_blender.register()
+    from mbi_blender import module
+    return module.load()
+
+
+def model_object(mbi, path, subdivide):
+    V, F = mbi.read_surface(path)
+    mesh = bpy.data.meshes.new("model")
+    mesh.from_pydata(V.tolist(), [], F.tolist())
+    obj = bpy.data.objects.new("model", mesh)
+    bpy.context.collection.objects.link(obj)
+    if subdivide:
+        modifier = obj.modifiers.new("subdivide", "SUBSURF")
+        modifier.levels = modifier.render_levels = subdivide
+        with bpy.context.temp_override(object=obj, active_object=obj):
+            bpy.ops.object.modifier_apply(modifier="subdivide")
+    return obj
+
+
+def bend(U, amount):
+    """Nodes bent about y over their x extent by amount x 90 degrees (amount 0: rest)."""
+    if amount == 0:
+        return U.copy()
+    c, length = U.mean(axis=0), np.ptp(U[:, 0])
+    radius = length / (amount * np.pi / 2)
+    theta = (U[:, 0] - c[0]) / radius
+    r = radius - (U[:, 2] - c[2])
+    X = U.copy()
+    X[:, 0] = c[0] + r * np.sin(theta)
+    X[:, 2] = c[2] + radius - r * np.cos(theta)
+    return X
+
+
+def cage_object(name, U, faces, frames):
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata(U.tolist(), [], faces.tolist())
+    obj = bpy.data.objects.new(name, mesh)
+    bpy.context.collection.objects.link(obj)
+    obj.shape_key_add(name="Basis", from_mix=False)
+    key = obj.shape_key_add(name="bend", from_mix=False)
+    key.data.foreach_set("co", bend(U, 1.0).astype(np.float32).ravel())
+    for frame, value in ((1, 0.0), (frames, 1.0)):
+        key.value = value
+        key.keyframe_insert("value", frame=frame)
+    return obj
+
+
+def bind(method, mbi, model, U, T, frames):
+    """Binds by the method; returns the seconds."""
+    ctx = dict(object=model, active_object=model, selected_objects=[model])
+    if method == "floor":
+        bpy.app.handlers.frame_change_pre.append(lambda *_: model.data.update_tag())
+        return 0.0
+    if method == "mbi":
+        cage = cage_object("cage", U, mbi.boundary_faces(U, T), frames)
+        cage.data["mbi_tets"] = T.astype(np.int32).ravel().tolist()
+        cage.mbi.is_cage = True
+        start = time.perf_counter()
+        with bpy.context.temp_override(active_object=cage, selected_objects=[model, cage]):
+            bpy.ops.mbi.bind()
+        return time.perf_counter() - start
+    faces = mbi.boundary_faces(U, T)
+    used = np.unique(faces)
+    index = np.full(len(U), -1)
+    index[used] = np.arange(len(used))
+    cage = cage_object("cage", U[used], index[faces], frames)
+    kind = "MESH_DEFORM" if method == "meshdeform" else "SURFACE_DEFORM"
+    modifier = model.modifiers.new("deform", kind)
+    if method == "meshdeform":
+        modifier.object, modifier.precision = cage, 5
+    else:
+        modifier.target = cage
+    bpy.context.view_layer.update()
+    start = time.perf_counter()
+    with bpy.context.temp_override(**ctx):
+        if method == "meshdeform":
+            bpy.ops.object.meshdeform_bind(modifier="deform")
+        else:
+            bpy.ops.object.surfacedeform_bind(modifier="deform")
+    model.evaluated_get(bpy.context.evaluated_depsgraph_get())  # the bind runs in the evaluation
+    seconds = time.perf_counter() - start
+    if not modifier.is_bound:
+        raise RuntimeError("%s did not bind (the cage's boundary has %d edges shared by more than two "
+                           "triangles)" % (kind, crowded_edges(index[faces])))
+    return seconds
+
+
+def crowded_edges(faces):
+    edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    return int(np.sum(counts > 2))
+
+
+def one(args):
+    mbi = load_mbi()
+    model = model_object(mbi, args.model_path, args.subdivide)
+    c = mbi.read_control_mesh(args.cage)
+    bpy.context.scene.frame_set(1)
+    before = rss_mb()
+    seconds = bind(args.method, mbi, model, c.U, c.T, args.frames)
+    times = []
+    for _ in range(args.runs):
+        for frame in range(1, args.frames + 1):
+            start = time.perf_counter()
+            bpy.context.scene.frame_set(frame)
+            times.append(time.perf_counter() - start)
+    result = dict(method=args.method, vertices=len(model.data.vertices), cage=len(c.U), bind_s=seconds,
+                  frame_ms_median=1e3 * float(np.median(times)), frame_ms_min=1e3 * float(np.min(times)),
+                  memory_mb=rss_mb() - before)
+    print("RESULT " + json.dumps(result))
+
+
+def run_one(args, method, subdivide, cage):
+    command = [bpy.app.binary_path, "-b", "--factory-startup", "--python", os.path.abspath(__file__), "--",
+               "--one", method, "--model-path", args.model_path, "--subdivide", str(subdivide), "--cage", cage,
+               "--frames", str(args.frames), "--runs", str(args.runs)]
+    try:
+        run = subprocess.run(command, capture_output=True, text=True, timeout=args.limit)
+    except subprocess.TimeoutExpired:
+        return dict(method=method, skipped="over %d s" % args.limit)
+    for line in run.stdout.splitlines():
+        if line.startswith("RESULT "):
+            return json.loads(line[7:])
+    errors = [line for line in (run.stdout + run.stderr).splitlines() if "Error" in line]
+    return dict(method=method, skipped="failed: " + (errors[-1] if errors else (run.stdout + run.stderr)[-300:]))
+
+
+def main(argv):
+    parser = argparse.ArgumentParser(prog="side_by_side.py")
+    parser.add_argument("--model", default="stanford-bunny")
+    parser.add_argument("--model-path", default="")
+    parser.add_argument("--subdivide", type=int, nargs="+", default=[0, 2])
+    parser.add_argument("--vertices", type=int, default=1000)
+    parser.add_argument("--frames", type=int, default=30)
+    parser.add_argument("--runs", type=int, default=3)
+    parser.add_argument("--limit", type=int, default=300)
+    parser.add_argument("--methods", nargs="+", default=list(METHODS))
+    parser.add_argument("--one", choices=METHODS)
+    parser.add_argument("--cage", default="")
+    args = parser.parse_args(argv)
+    if not args.model_path:
+        args.model_path = os.path.join(os.environ.get("MBI_MODELS_DIR", "."), args.model + ".obj")
+    if args.one:
+        args.method = args.one
+        args.subdivide = args.subdivide[0]
+        return one(args)
+    mbi = load_mbi()
+    V, F = mbi.read_surface(args.model_path)
+    cage = mbi.cage(V, F, vertices=args.vertices)
+    folder = tempfile.mkdtemp(prefix="mbi-side-by-side-")
+    base = os.path.join(folder, "cage")
+    mbi.write_tetgen(base, cage.U, cage.T)
+    rows = []
+    for subdivide in args.subdivide:
+        for method in args.methods:
+            result = run_one(args, method, subdivide, base)
+            result.update(model=args.model, subdivide=subdivide)
+            print(json.dumps(result), flush=True)
+            rows.append(result)
+    print("\n| model | vertices | method | bind (s) | per frame median / min (ms) | memory added (MB) |")
+    print("|---|---|---|---|---|---|")
+    for r in rows:
+        if "skipped" in r:
+            print("| %s x%d | | %s | skipped: %s | | |" % (r["model"], r["subdivide"], r["method"], r["skipped"][:80]))
+        else:
+            print("| %s x%d | %d | %s | %.3f | %.2f / %.2f | %.0f |" % (
+                r["model"], r["subdivide"], r["vertices"], r["method"], r["bind_s"], r["frame_ms_median"],
+                r["frame_ms_min"], r["memory_mb"]))
+
+
+if __name__ == "__main__":
+    main(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else [])
+    sys.exit(0)
