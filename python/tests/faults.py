@@ -1,5 +1,6 @@
 """Minor page faults per call of a 100-call loop (after a first call), in this fresh process:
-faults.py METHOD deform|vjp|fresh prints the mean (fresh: deform without out=, a new array each call)."""
+faults.py METHOD deform|vjp|evaluate|fresh prints the mean (evaluate: mbi.evaluate of the method's Bezier
+points; fresh: deform without out=, a new array each call)."""
 import resource
 import sys
 
@@ -12,7 +13,9 @@ U, T = mbi.box_mesh(7, 7, 6)  # 1,764 tetrahedra
 P = np.random.default_rng(0).uniform(0.05, 0.95, (1000 if call != "fresh" else 70_000, 3))
 deformer = mbi.Deformer(U, T, P, method=method, threads=1)
 X, out, dX = U * 1.01, np.empty_like(P), np.empty_like(U)
+B = deformer.bezier(X)
 run = {"deform": lambda: deformer.deform(X, out=out), "vjp": lambda: deformer.vjp(out, out=dX),
+       "evaluate": lambda: mbi.evaluate(B, deformer.embedding, out=out, threads=1),
        "fresh": lambda: deformer.deform(X)}[call]
 run()
 before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt

@@ -1,0 +1,198 @@
+"""A frame loop from Python with out=: per call against the same C++ call, what 100 calls
+allocate and fault, and a first 600 MB batch against the same frames looped.
+
+    cmake --preset release -DMBI_PYTHON_TIMING=ON && cmake --build --preset release --target mbi_python
+    PYTHONPATH=build/release/python python3 python/bench/frame_loop.py [--calls N] [--batch-mb MB]
+
+The module needs the benchmark's clocks (CMake MBI_PYTHON_TIMING=ON; the shipped one has none).
+Sizes as in python/tests/faults.py: 1,000 random points in a 7 x 7 x 6-cell box (1,764 tetrahedra).
+
+1. Deformer.deform(X, out=) and Deformer.vjp(G, out=) for BI, Phong and modified-BI: median of
+   each Python call and of the same C++ call in a C++ loop (mbi._mbi._timing), in alternating
+   blocks of 100; "fresh" is a new process's first 100 + 100 calls after construction and one call,
+   "warm" N calls (default 10,000) of a process that ran many before.
+2. 100 calls with out= (and mbi.evaluate of the method's Bezier points): the peak of the memory
+   tracemalloc traces (numpy's arrays and Python's objects) and minor page faults per call.
+3. deform of a batch of frames into a new array (mbi allocates it) of about 600 MB, in a new
+   process, per frame, against the same frames one at a time into one out= array; three processes
+   one after the other. Beside it, the machine's own cost of a first touch: a new process filling
+   a new numpy array of the same size, once after --idle seconds without work (a virtual
+   machine's host may have taken back the memory freed before) and once right after.
+"""
+import argparse
+import json
+import resource
+import subprocess
+import sys
+import time
+import tracemalloc
+
+import numpy as np
+
+import mbi
+from mbi import _mbi
+
+METHODS = ("bi", "phong", "modified-bi")
+
+
+def setup(method, points=1000):
+    U, T = mbi.box_mesh(7, 7, 6)
+    rng = np.random.default_rng(0)
+    P = rng.uniform(0.05, 0.95, (points, 3))
+    deformer = mbi.Deformer(U, T, P, method=method)
+    X = U + 0.02 * rng.standard_normal(U.shape)
+    return deformer, X, rng.standard_normal((points, 3)), np.empty((points, 3)), np.empty_like(U)
+
+
+def calls(deformer, X, G, out, dX):
+    """(name, Python call, C++ loop of n calls) for deform and vjp."""
+    return [("deform", lambda: deformer.deform(X, out=out), lambda n: _mbi._timing.deform(deformer, X, out, n)),
+            ("vjp", lambda: deformer.vjp(G, out=dX), lambda n: _mbi._timing.vjp(deformer, G, dX, n))]
+
+
+def python_times(call, n):
+    seconds, clock = np.empty(n), time.perf_counter_ns
+    for k in range(n):
+        t0 = clock()
+        call()
+        seconds[k] = (clock() - t0) * 1e-9
+    return seconds
+
+
+def compare(py_call, cpp_times, n, block=100):
+    """Medians (us) of n Python calls and n C++ calls, in alternating blocks."""
+    py, cpp = [], []
+    for _ in range(max(1, n // block)):
+        py.append(python_times(py_call, block))
+        cpp.append(cpp_times(block))
+    return float(np.median(np.concatenate(py))) * 1e6, float(np.median(np.concatenate(cpp))) * 1e6
+
+
+def per_call(method, n, fresh):
+    deformer, X, G, out, dX = setup(method)
+    result = {}
+    for name, py_call, cpp_times in calls(deformer, X, G, out, dX):
+        py_call()
+        if not fresh:
+            compare(py_call, cpp_times, 2000)  # warm-up
+        result[name] = compare(py_call, cpp_times, 100 if fresh else n)
+    return result
+
+
+def loop_costs(method):
+    """numpy bytes at the peak of 100 calls, and minor faults a call, after one call."""
+    deformer, X, G, out, dX = setup(method)
+    B = deformer.bezier(X)
+    result = {}
+    runs = [(name, py_call) for name, py_call, _ in calls(deformer, X, G, out, dX)]
+    for name, py_call in runs + [("evaluate", lambda: mbi.evaluate(B, deformer.embedding, out=out))]:
+        py_call()
+        tracemalloc.start()
+        faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+        for _ in range(100):
+            py_call()
+        faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt - faults
+        _, peak = tracemalloc.get_traced_memory()
+        tracemalloc.stop()
+        result[name] = (peak, faults / 100)
+    return result
+
+
+def batch(megabytes, points=100_000):
+    """ms a frame: a first batch into a new array, and the same frames looped into one out=."""
+    U, T = mbi.box_mesh(7, 7, 6)
+    rng = np.random.default_rng(0)
+    deformer = mbi.Deformer(U, T, rng.uniform(0.05, 0.95, (points, 3)))
+    frames = max(1, int(megabytes * 1e6 / (points * 3 * 8)))
+    X = U + 0.01 * rng.standard_normal((frames,) + U.shape)
+    t0 = time.perf_counter()
+    first = deformer.deform(X)
+    first_ms = (time.perf_counter() - t0) / frames * 1e3
+    one = np.empty((points, 3))
+    deformer.deform(X[0], out=one)
+    t0 = time.perf_counter()
+    for k in range(frames):
+        deformer.deform(X[k], out=one)
+    looped_ms = (time.perf_counter() - t0) / frames * 1e3
+    assert np.array_equal(one, first[-1])
+    return {"frames": frames, "megabytes": first.nbytes / 1e6, "first": first_ms, "looped": looped_ms}
+
+
+def first_fill(megabytes):
+    """Seconds of the first and of a second fill of a new array of that size."""
+    a = np.empty(int(megabytes * 1e6 / 8))
+    t0 = time.perf_counter()
+    a.fill(0)
+    t1 = time.perf_counter()
+    a.fill(1)
+    return {"first": t1 - t0, "again": time.perf_counter() - t1}
+
+
+def child(args):
+    """Runs one measurement in this (new) process and prints it as JSON."""
+    kind = args.child
+    if kind == "fresh":
+        print(json.dumps(per_call(args.method, 100, True)))
+    elif kind == "loop":
+        print(json.dumps(loop_costs(args.method)))
+    elif kind == "fill":
+        print(json.dumps(first_fill(args.batch_mb)))
+    else:
+        print(json.dumps(batch(args.batch_mb)))
+
+
+def in_new_process(*argv):
+    result = subprocess.run([sys.executable, __file__, *argv], capture_output=True, text=True, check=True)
+    return json.loads(result.stdout)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--calls", type=int, default=10_000)
+    parser.add_argument("--batch-mb", type=float, default=600)
+    parser.add_argument("--idle", type=float, default=20)
+    parser.add_argument("--child", choices=("fresh", "loop", "batch", "fill"), help=argparse.SUPPRESS)
+    parser.add_argument("--method", default="modified-bi", help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if getattr(_mbi, "_timing", None) is None:
+        parser.exit(2, "frame_loop.py: this module has no clocks: build it with "
+                       "cmake --preset release -DMBI_PYTHON_TIMING=ON\n")
+    if args.child:
+        return child(args)
+
+    print(f"1,000 points, 1,764 tetrahedra; {mbi.threads()} threads")
+    print()
+    print("| method | call | process | from Python (us) | C++ alone (us) | difference (us) |")
+    print("|---|---|---|---|---|---|")
+    for method in METHODS:
+        fresh = in_new_process("--child", "fresh", "--method", method)
+        warm = per_call(method, args.calls, False)
+        for name in ("deform", "vjp"):
+            for process, (py, cpp) in (("fresh", fresh[name]), ("warm", warm[name])):
+                print(f"| {method} | {name}(out=) | {process} | {py:.2f} | {cpp:.2f} | {py - cpp:+.2f} |")
+    print()
+    print("| method | call | numpy bytes at the peak of 100 calls | minor page faults a call |")
+    print("|---|---|---|---|")
+    for method in METHODS:
+        loop = in_new_process("--child", "loop", "--method", method)
+        for name in ("deform", "vjp", "evaluate"):
+            peak, faults = loop[name]
+            call = "mbi.evaluate(B, embedding, out=)" if name == "evaluate" else f"Deformer.{name}(out=)"
+            print(f"| {method} | {call} | {peak} | {faults:.2f} |")
+    print()
+    print("| first batch deform, new process | ms a frame | looped into one out=, ms a frame | ratio |")
+    print("|---|---|---|---|")
+    for run in range(3):
+        b = in_new_process("--child", "batch", "--batch-mb", str(args.batch_mb))
+        print(f"| run {run + 1}: modified-bi, 100,000 points, {b['frames']} frames, {b['megabytes']:.0f} MB | "
+              f"{b['first']:.2f} | {b['looped']:.2f} | {b['first'] / b['looped']:.2f}x |")
+    print()
+    time.sleep(args.idle)
+    cold = in_new_process("--child", "fill", "--batch-mb", str(args.batch_mb))
+    warm = in_new_process("--child", "fill", "--batch-mb", str(args.batch_mb))
+    print(f"numpy fill of a new {args.batch_mb:.0f} MB array in a new process: after {args.idle:.0f} s idle "
+          f"{cold['first']:.3f} s, right after {warm['first']:.3f} s; a second fill {warm['again']:.3f} s")
+
+
+if __name__ == "__main__":
+    main()
