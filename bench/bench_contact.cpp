@@ -5,8 +5,10 @@
 // The contact variant has contact = "surface" and a plane that starts at the model's lowest
 // point and rises 0.1 m in the first 0.2 s, pressing into the ball (a cap of 0.1 m is 5% of a
 // sphere's surface); its frames are measured from frame 8 on. The plain variant has no contact
-// and no ground. Counters: ms of each frame, their ratio, Newton iterations per frame of each,
-// the contact points inside the plane and their fraction of the surface.
+// and no ground. Both with the scene's method (modified-BI) and with BI, whose contact Hessian
+// surrogate is exact against a plane. Counters: ms of each frame, their ratio, Newton
+// iterations per frame of each, the contact frame's line-search halvings, the contact points
+// inside the plane and their fraction of the surface.
 //
 //   build/release/mbi-bench --benchmark_filter=ContactFrame
 #include "bench_common.hpp"
@@ -18,14 +20,16 @@
 
 #include <filesystem>
 #include <memory>
+#include <string>
 
 namespace {
 
 using mbi::pipeline::FramePipeline;
 using mbi::pipeline::SimulatorDriver;
 
-mbi::scenes::Scene large_scene(bool contact, double lowest) {
+mbi::scenes::Scene large_scene(mbi::pipeline::Method method, bool contact, double lowest) {
   mbi::scenes::Scene sc = mbi::scenes::load_scene(std::filesystem::path(MBI_SOURCE_DIR) / "scenes" / "large.toml");
+  sc.interpolation.method = method;
   mbi::sim::Parameters& p = sc.simulation.parameters;
   p.stiffness_damping = 0.0;
   p.ground = false;
@@ -47,29 +51,30 @@ struct Side {
   mbi::scenes::Scene scene;
   std::unique_ptr<FramePipeline> pipe;
   double ms = 0;
-  long newton = 0;
+  long newton = 0, halvings = 0;
   const SimulatorDriver& driver() { return dynamic_cast<const SimulatorDriver&>(pipe->driver()); }
   bool step() {
     const auto t0 = mbi::Clock::now();
     const bool ok = pipe->step().ok;
     ms += mbi::ms_since(t0);
     newton += driver().last_step().newton_iterations;
+    halvings += driver().last_step().line_search_halvings;
     return ok;
   }
 };
 
-void BM_ContactFrame(benchmark::State& st) {
-  const mbi::scenes::Scene plain_scene = large_scene(false, 0.0);
+void BM_ContactFrame(benchmark::State& st, mbi::pipeline::Method method) {
+  const mbi::scenes::Scene plain_scene = large_scene(method, false, 0.0);
   const mbi::scenes::SceneModels m = mbi::scenes::load_models(plain_scene);
   const double lowest = m.dense.V.col(1).minCoeff();
-  Side with{large_scene(true, lowest), nullptr}, without{plain_scene, nullptr};
+  Side with{large_scene(method, true, lowest), nullptr}, without{plain_scene, nullptr};
   for (Side* s : {&with, &without})
     s->pipe = std::make_unique<FramePipeline>(
         mbi::scenes::make_pipeline(s->scene, m, mbi::interp::embed(m.U, m.T, m.dense.V)));
   for (int f = 0; f < 8; ++f)  // the plane rises into the ball in frames 1..6
     if (!with.pipe->step().ok || !without.pipe->step().ok) return st.SkipWithError("a step failed while warming up");
   with.ms = without.ms = 0;
-  with.newton = without.newton = 0;
+  with.newton = without.newton = with.halvings = 0;
   long touching = 0;
   for (auto _ : st) {
     const double before = with.ms;
@@ -83,14 +88,17 @@ void BM_ContactFrame(benchmark::State& st) {
   st.counters["ratio"] = with.ms / without.ms;
   st.counters["newton_contact"] = static_cast<double>(with.newton) / n;
   st.counters["newton_plain"] = static_cast<double>(without.newton) / n;
+  st.counters["halvings_contact"] = static_cast<double>(with.halvings) / n;
   st.counters["touching"] = static_cast<double>(touching) / n;
   st.counters["touching_fraction"] = static_cast<double>(touching) / n / static_cast<double>(m.dense.V.rows());
 }
 
 // Not in quick mode (CI): the large scene's contact frames take seconds each.
 [[maybe_unused]] const bool registered = [] {
-  if (!mbi::bench::quick())
-    benchmark::RegisterBenchmark("BM_ContactFrame/large", BM_ContactFrame)
+  if (mbi::bench::quick()) return true;
+  for (mbi::pipeline::Method method : {mbi::pipeline::Method::ModifiedBI, mbi::pipeline::Method::BI})
+    benchmark::RegisterBenchmark((std::string("BM_ContactFrame/large/") + mbi::pipeline::method_name(method)).c_str(),
+                                 BM_ContactFrame, method)
         ->Unit(benchmark::kMillisecond)->UseManualTime()->Iterations(4);
   return true;
 }();

@@ -16,6 +16,7 @@
 
 #include <chrono>
 #include <csignal>
+#include <functional>
 #include <optional>
 
 namespace mbi::scenes {
@@ -79,6 +80,14 @@ void finish_run(const Scene& sc, pipeline::FramePipeline& pipe,
   res.roundoff = metrics.roundoff();
 }
 
+// contact = surface: the last frame's figures (every frame's are in metrics.json).
+void log_contact(pipeline::FramePipeline& pipe, const std::function<void(const std::string&)>& log) {
+  const auto* sim = dynamic_cast<const pipeline::SimulatorDriver*>(&pipe.driver());
+  if (!sim || !sim->contact() || pipe.frame() < 0) return;
+  log("contact at the dense surface: " + std::to_string(sim->touching_points()) + " vertices inside a collider, " +
+      std::to_string(sim->last_step().newton_iterations) + " Newton iterations at the last frame");
+}
+
 }  // namespace
 
 RunResult run_scene(const Scene& scene, const RunOptions& opt) {
@@ -132,6 +141,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& opt) {
   Outputs out(sc, m, folder.path());
   FrameLoop(sc, pipe, pinned ? &*pinned : nullptr, out, pictures, metrics).run(res, opt.progress, opt.stop);
   finish_run(sc, pipe, out, pictures, metrics, res);
+  log_contact(pipe, log);
   return res;
 }
 

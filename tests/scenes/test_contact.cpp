@@ -154,6 +154,20 @@ TEST_CASE("contact = surface: contact_select names the dense vertices that touch
   CHECK(below < m.dense.V.rows());
 }
 
+TEST_CASE("contact = surface: a collider overlapping the model at rest is an error naming it", "[scenes][contact]") {
+  std::string text = bar_scene("surface", "bi", 5) + "[[colliders]]\nshape = \"sphere\"\ncenter = [0, 3, 0]\nradius = 0.1\n";
+  text.replace(text.find("ground = -0.8"), 13, "ground = -0.3");  // the bar's bottom is at y = -0.5
+  const Scene sc = parse_scene(text, "bar.toml");
+  const SceneModels m = load_models(sc);
+  try {
+    make_driver(sc, m);
+    FAIL("no error");
+  } catch (const Error& e) {
+    CHECK_THAT(e.what(), Catch::Matchers::Contains("bar.toml: simulation.contact: collider 1 overlaps the model at rest") &&
+                             Catch::Matchers::Contains("then the ground"));
+  }
+}
+
 TEST_CASE("contact keys and [[colliders]]: bad input is an error naming the key and the collider", "[scenes][contact]") {
   const std::string base = bar_scene("surface", "bi", 5);
   auto error = [&](const std::string& text) {

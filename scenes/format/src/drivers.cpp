@@ -110,7 +110,12 @@ void add_surface_contact(const Scene& sc, const SceneModels& m, pipeline::Simula
   o.stiffness = sc.simulation.contact_stiffness;
   o.points = contact_points(sc, m);
   const sim::Simulator& s = driver.simulator();
-  driver.set_contact(pipeline::make_surface_contact(m.U, m.T, m.dense.V, po, o, s.masses().sum(), s.params().gravity));
+  try {
+    driver.set_contact(pipeline::make_surface_contact(m.U, m.T, m.dense.V, po, o, s.masses().sum(), s.params().gravity));
+  } catch (const mbi::Error& e) {  // a collider overlapping the model at rest, named by its index
+    throw Error(sc.file.string() + ": simulation.contact: " + e.what() +
+                " (colliders are numbered as the [[colliders]] entries, then the ground)");
+  }
 }
 
 sim::Parameters simulation_parameters(const Scene& sc, const SceneModels& m) {
