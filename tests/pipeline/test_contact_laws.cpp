@@ -83,7 +83,7 @@ TEST_CASE("contact laws: conservative advancement never lets a point pass the de
   const double depth = 0.01, time = 0.3;
   int capped = 0;
   for (const Collider& c : shapes)
-    for (int trial = 0; trial < 300; ++trial) {
+    for (int trial = 0; trial < 100; ++trial) {
       const Eigen::Vector3d p(u(rng), u(rng), u(rng)), dp = 1.5 * Eigen::Vector3d(u(rng), u(rng), u(rng));
       const double room0 = signed_distance(c, p, time).value + depth;
       if (room0 <= 0) {
@@ -98,9 +98,9 @@ TEST_CASE("contact laws: conservative advancement never lets a point pass the de
         CHECK(s > 0);
       }
       double worst = std::numeric_limits<double>::infinity();
-      for (int j = 0; j <= 400; ++j)
-        worst = std::min(worst, signed_distance(c, p + (s * j / 400.0) * dp, time).value + depth);
+      for (int j = 0; j <= 200; ++j)
+        worst = std::min(worst, signed_distance(c, p + (s * j / 200.0) * dp, time).value + depth);
       CHECK(worst >= 0.1 * room0 - 1e-12);
     }
-  CHECK(capped > 100);
+  CHECK(capped > 25);
 }

@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 #include "common/grid_meshes.hpp"
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <limits>
 #include <random>
 
@@ -243,7 +244,9 @@ TEST_CASE("surface contact: a moving collider that jumps into the model (its mot
     for (int k = 0; k < 5; ++k)
       for (int top = 0; top < 2; ++top)
         P.row(10 * i + 2 * k + top) = Eigen::RowVector3d(0.1 + 0.2 * i, top ? 0.9 : 0.1, 0.1 + 0.2 * k);
-  auto deformer = std::make_shared<Deformer>(cage.U, cage.T, P);
+  DeformerOptions opt;
+  opt.method = Method::BI;
+  auto deformer = std::make_shared<Deformer>(cage.U, cage.T, P, opt);
   // The floor rises at 1 m/s (and slides at 2 m/s) from t = 0 to 0.35 s, from y = 0.
   Collider floor = Collider::plane({0, 0, 0}, {0, 1, 0}, 0.5);
   floor.motion.velocity = Eigen::Vector3d(2, 1, 0);
@@ -258,20 +261,21 @@ TEST_CASE("surface contact: a moving collider that jumps into the model (its mot
   sim.set_potential(contact);
   prm.gravity = Eigen::Vector3d(0, -9.81, 0);
   sim.set_params(prm);
-  double lowest = 1e300;
-  for (int k = 0; k < 60; ++k) {
+  double lowest = 1e300;  // gap to the floor after the first step
+  for (int k = 0; k < 20; ++k) {
     const auto r = sim.step();
     INFO("step " << k << ": " << r.message);
     REQUIRE(r.success);
     REQUIRE(sim.positions().allFinite());
     REQUIRE(sim.velocities().allFinite());
-    if (k > 0) lowest = std::min(lowest, contact->points(Eigen::Map<const Eigen::VectorXd>(
-                                                         Eigen::MatrixXd(sim.positions().transpose()).data(), 81))
-                                              .col(1)
-                                              .minCoeff());
+    Eigen::VectorXd x(3 * sim.nodes());
+    for (int i = 0; i < sim.nodes(); ++i) x.segment<3>(3 * i) = sim.positions().row(i).transpose();
+    // While the floor rises 1.7 cm a step (more than max_depth) it overtakes points (documented);
+    // once it has stopped at 0.35 m every point is guarded again.
+    if (sim.time() > 0.35 + 1e-9) lowest = std::min(lowest, contact->points(x).col(1).minCoeff() - 0.35);
   }
-  // Out after the first step (the plain penalty, no approach-side guarantee in it), then guarded.
-  CHECK(lowest >= 0.35 - contact->max_depth());
+  CHECK(lowest >= -contact->max_depth());
+  CHECK(lowest < 1e299);
   // Time jumps back (reset): the floor is at y = 0 again, below the model at rest.
   sim.reset();
   for (int k = 0; k < 5; ++k) REQUIRE(sim.step().success);
@@ -279,7 +283,7 @@ TEST_CASE("surface contact: a moving collider that jumps into the model (its mot
 }
 
 TEST_CASE("surface contact: a cage dropped on a plane rests on its dense surface, not on the cage",
-          "[pipeline][contact][sim]") {
+          "[pipeline][contact][sim][long]") {
   // Cage [0, 1]^3; contact points: a grid on the plane y = 0.1 inside it (the model's bottom).
   const auto cage = mbi::test::box_tet_mesh(2, 2, 2);
   Eigen::MatrixXd P(25, 3);
