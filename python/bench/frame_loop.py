@@ -2,7 +2,8 @@
 allocate and fault, and a first 600 MB batch against the same frames looped.
 
     cmake --preset release -DMBI_PYTHON_TIMING=ON && cmake --build --preset release --target mbi_python
-    PYTHONPATH=build/release/python python3 python/bench/frame_loop.py [--calls N] [--batch-mb MB]
+    PYTHONPATH=build/release/python python3 python/bench/frame_loop.py [--calls N] [--threads T]
+        [--batch-mb MB] [--skip-batch]
 
 The module needs the benchmark's clocks (CMake MBI_PYTHON_TIMING=ON; the shipped one has none).
 Sizes as in python/tests/faults.py: 1,000 random points in a 7 x 7 x 6-cell box (1,764 tetrahedra).
@@ -35,11 +36,11 @@ from mbi import _mbi
 METHODS = ("bi", "phong", "modified-bi")
 
 
-def setup(method, points=1000):
+def setup(method, threads, points=1000):
     U, T = mbi.box_mesh(7, 7, 6)
     rng = np.random.default_rng(0)
     P = rng.uniform(0.05, 0.95, (points, 3))
-    deformer = mbi.Deformer(U, T, P, method=method)
+    deformer = mbi.Deformer(U, T, P, method=method, threads=threads)
     X = U + 0.02 * rng.standard_normal(U.shape)
     return deformer, X, rng.standard_normal((points, 3)), np.empty((points, 3)), np.empty_like(U)
 
@@ -68,8 +69,8 @@ def compare(py_call, cpp_times, n, block=100):
     return float(np.median(np.concatenate(py))) * 1e6, float(np.median(np.concatenate(cpp))) * 1e6
 
 
-def per_call(method, n, fresh):
-    deformer, X, G, out, dX = setup(method)
+def per_call(method, threads, n, fresh):
+    deformer, X, G, out, dX = setup(method, threads)
     result = {}
     for name, py_call, cpp_times in calls(deformer, X, G, out, dX):
         py_call()
@@ -79,9 +80,9 @@ def per_call(method, n, fresh):
     return result
 
 
-def loop_costs(method):
+def loop_costs(method, threads):
     """numpy bytes at the peak of 100 calls, and minor faults a call, after one call."""
-    deformer, X, G, out, dX = setup(method)
+    deformer, X, G, out, dX = setup(method, threads)
     B = deformer.bezier(X)
     result = {}
     runs = [(name, py_call) for name, py_call, _ in calls(deformer, X, G, out, dX)]
@@ -132,9 +133,9 @@ def child(args):
     """Runs one measurement in this (new) process and prints it as JSON."""
     kind = args.child
     if kind == "fresh":
-        print(json.dumps(per_call(args.method, 100, True)))
+        print(json.dumps(per_call(args.method, args.threads, 100, True)))
     elif kind == "loop":
-        print(json.dumps(loop_costs(args.method)))
+        print(json.dumps(loop_costs(args.method, args.threads)))
     elif kind == "fill":
         print(json.dumps(first_fill(args.batch_mb)))
     else:
@@ -150,6 +151,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--calls", type=int, default=10_000)
     parser.add_argument("--batch-mb", type=float, default=600)
+    parser.add_argument("--threads", type=int, default=0, help="the Deformer's threads (0: all cores)")
+    parser.add_argument("--skip-batch", action="store_true")
     parser.add_argument("--idle", type=float, default=20)
     parser.add_argument("--child", choices=("fresh", "loop", "batch", "fill"), help=argparse.SUPPRESS)
     parser.add_argument("--method", default="modified-bi", help=argparse.SUPPRESS)
@@ -160,13 +163,13 @@ def main():
     if args.child:
         return child(args)
 
-    print(f"1,000 points, 1,764 tetrahedra; {mbi.threads()} threads")
+    print(f"1,000 points, 1,764 tetrahedra; Deformer threads={args.threads} ({mbi.threads()} cores)")
     print()
     print("| method | call | process | from Python (us) | C++ alone (us) | difference (us) |")
     print("|---|---|---|---|---|---|")
     for method in METHODS:
-        fresh = in_new_process("--child", "fresh", "--method", method)
-        warm = per_call(method, args.calls, False)
+        fresh = in_new_process("--child", "fresh", "--method", method, "--threads", str(args.threads))
+        warm = per_call(method, args.threads, args.calls, False)
         for name in ("deform", "vjp"):
             for process, (py, cpp) in (("fresh", fresh[name]), ("warm", warm[name])):
                 print(f"| {method} | {name}(out=) | {process} | {py:.2f} | {cpp:.2f} | {py - cpp:+.2f} |")
@@ -174,12 +177,14 @@ def main():
     print("| method | call | numpy bytes at the peak of 100 calls | minor page faults a call |")
     print("|---|---|---|---|")
     for method in METHODS:
-        loop = in_new_process("--child", "loop", "--method", method)
+        loop = in_new_process("--child", "loop", "--method", method, "--threads", str(args.threads))
         for name in ("deform", "vjp", "evaluate"):
             peak, faults = loop[name]
             call = "mbi.evaluate(B, embedding, out=)" if name == "evaluate" else f"Deformer.{name}(out=)"
             print(f"| {method} | {call} | {peak} | {faults:.2f} |")
     print()
+    if args.skip_batch:
+        return
     print("| first batch deform, new process | ms a frame | looped into one out=, ms a frame | ratio |")
     print("|---|---|---|---|")
     for run in range(3):
