@@ -251,7 +251,8 @@ def main(argv):
             result.update(model=args.model, subdivide=subdivide)
             print(json.dumps(result), flush=True)
             rows.append(result)
-    print("\n| model | vertices | method | bind (s) | per frame median / min (ms) | memory added (MB) | dihedral change mean / p99 (deg) |")
+    print("\n| model | vertices | method | bind (s) | per frame median / min (ms) | memory added (MB) "
+          "| dihedral change mean / p99 (deg) |")
     print("|---|---|---|---|---|---|---|")
     for r in rows:
         if "skipped" in r:
