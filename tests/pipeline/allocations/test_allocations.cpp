@@ -20,7 +20,12 @@
 #include <random>
 #include <thread>
 
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(memory_sanitizer) || __has_feature(thread_sanitizer)
+#define MBI_SANITIZED_MALLOC 1
+#endif
+#endif
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__) || defined(MBI_SANITIZED_MALLOC)
 #define MBI_COUNT_ALLOCATIONS 0  // the sanitizer owns malloc
 #else
 #define MBI_COUNT_ALLOCATIONS 1
