@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <string>
@@ -26,10 +27,41 @@ using mbi::pipeline::ContactMode;
 
 namespace {
 
-// The paper bar (1 x 1 x 6, 23,402 vertices) in a generated cage with a margin, dropped from
-// 0.3 m onto a ground at y = -0.8 (the bar's bottom is at y = -0.5), damped to rest.
-std::string bar_scene(const std::string& contact, const std::string& method, int frames) {
-  return "[dense]\nbuiltin = \"paper-bar\"\n[control]\ngenerate_vertices = 60\n"
+// A ball of radius 0.5 about the origin (a latitude-longitude sphere, 482 vertices), written once
+// per process: small enough for the sanitizer build.
+std::string ball_file() {
+  static const mbi::test::TempDir dir("contact-ball");
+  static const std::string file = [] {
+    const fs::path path = dir / "ball.obj";
+    std::ofstream out(path);
+    out.precision(17);
+    const int lat = 16, lon = 32;
+    const double pi = 3.14159265358979323846;
+    out << "v 0 -0.5 0\n";
+    for (int i = 1; i < lat; ++i)
+      for (int j = 0; j < lon; ++j) {
+        const double t = pi * i / lat, f = 2 * pi * j / lon;
+        out << "v " << 0.5 * std::sin(t) * std::cos(f) << " " << -0.5 * std::cos(t) << " " << 0.5 * std::sin(t) * std::sin(f)
+            << "\n";
+      }
+    out << "v 0 0.5 0\n";
+    auto ring = [&](int i, int j) { return 2 + (i - 1) * lon + j % lon; };  // 1-based
+    const int top = 2 + (lat - 1) * lon;
+    for (int j = 0; j < lon; ++j) out << "f 1 " << ring(1, j + 1) << " " << ring(1, j) << "\n";
+    for (int i = 1; i + 1 < lat; ++i)
+      for (int j = 0; j < lon; ++j)
+        out << "f " << ring(i, j) << " " << ring(i, j + 1) << " " << ring(i + 1, j + 1) << "\nf " << ring(i, j) << " "
+            << ring(i + 1, j + 1) << " " << ring(i + 1, j) << "\n";
+    for (int j = 0; j < lon; ++j) out << "f " << top << " " << ring(lat - 1, j) << " " << ring(lat - 1, j + 1) << "\n";
+    return path.string();
+  }();
+  return file;
+}
+
+// The ball in a generated cage with a margin, dropped from 0.3 m onto a ground at y = -0.8 (its
+// bottom is at y = -0.5), damped to rest.
+std::string ball_scene(const std::string& contact, const std::string& method, int frames) {
+  return "[dense]\npath = \"" + ball_file() + "\"\n[control]\ngenerate_vertices = 60\n"
          "[simulation]\ndt = 0.0333333\nframes = " + std::to_string(frames) +
          "\ngravity = [0, -9.81, 0]\ndamping_mass = 2.0\nground = -0.8\ncontact = \"" + contact +
          "\"\n[interpolation]\nmethod = \"" + method + "\"\ngpu = \"off\"\n"
@@ -70,18 +102,18 @@ TEST_CASE("contact = surface: the dense surface rests on the ground within 1e-3 
   const int frames = 75;  // the fall takes 8 frames; settled (damping_mass) by frame 45
   for (const std::string method : {"bi", "phong", "modified-bi"}) {
     INFO(method);
-    const Run surface = run_text(bar_scene("surface", method, frames), dir, "surface-" + method);
+    const Run surface = run_text(ball_scene("surface", method, frames), dir, "surface-" + method);
     REQUIRE(surface.cache.frames.size() == frames + 1);
     CHECK(gap(surface, 0) > 0.04);  // it starts above the ground
     for (size_t k = 45; k <= frames; ++k) CHECK(std::abs(gap(surface, k)) <= 1e-3);
     // the approach side within the same bound at every frame, the impact included
     for (size_t k = 0; k <= frames; ++k) CHECK(gap(surface, k) >= -1e-3);
     const nlohmann::json& last = surface.metrics["frames"].back();
-    CHECK(last["contact_points"].get<int>() > 10);  // the bar's bottom face (flat for BI, curved by M otherwise)
+    CHECK(last["contact_points"].get<int>() >= 1);
     CHECK(last["newton_iterations"].get<int>() >= 1);
-    CHECK(surface.metrics["contact"]["points"] == 23402);
+    CHECK(surface.metrics["contact"]["points"] == 482);
   }
-  const Run control = run_text(bar_scene("control", "modified-bi", frames), dir, "control");
+  const Run control = run_text(ball_scene("control", "modified-bi", frames), dir, "control");
   for (size_t k = 45; k <= frames; ++k) CHECK(gap(control, k) > 0.01);  // the cage's margin
   CHECK_FALSE(control.metrics.contains("contact"));
   CHECK_FALSE(control.metrics["frames"].back().contains("contact_points"));
@@ -89,7 +121,7 @@ TEST_CASE("contact = surface: the dense surface rests on the ground within 1e-3 
 
 TEST_CASE("contact = control: the ground key keeps its meaning, the simulator's ground plane on the control nodes",
           "[scenes][contact]") {
-  const Scene sc = parse_scene(bar_scene("control", "bi", 20), "bar.toml");
+  const Scene sc = parse_scene(ball_scene("control", "bi", 20), "ball.toml");
   const mbi::sim::Parameters& p = sc.simulation.parameters;
   CHECK(p.ground);
   CHECK(p.ground_plane.offset == -0.8);
@@ -110,13 +142,13 @@ TEST_CASE("contact = control: the ground key keeps its meaning, the simulator's 
 
 TEST_CASE("contact = surface: the ground becomes a plane collider after the [[colliders]]; Newton to a tolerance",
           "[scenes][contact]") {
-  const std::string text = bar_scene("surface", "bi", 5) +
+  const std::string text = ball_scene("surface", "bi", 5) +
                            "[[colliders]]\nshape = \"sphere\"\ncenter = [0, 2, 0]\nradius = 0.5\nfriction = 0.3\n"
                            "motion = { velocity = [0, -1, 0], start = 0.5 }\n"
                            "[[colliders]]\nshape = \"box\"\ncenter = [3, 0, 0]\nhalf_extents = [0.5, 0.5, 0.5]\n"
                            "axes = [[0, 1, 0], [-1, 0, 0], [0, 0, 1]]\n"
                            "[[colliders]]\nshape = \"capsule\"\na = [0, 3, -1]\nb = [0, 3, 1]\nradius = 0.1\n";
-  const Scene sc = parse_scene(text, "bar.toml");
+  const Scene sc = parse_scene(text, "ball.toml");
   CHECK(sc.simulation.contact == ContactMode::Surface);
   CHECK_FALSE(sc.simulation.parameters.ground);  // no projection of the control nodes
   CHECK(sc.simulation.parameters.newton_iterations == kSurfaceNewtonIterations);
@@ -140,12 +172,12 @@ TEST_CASE("contact = surface: the ground becomes a plane collider after the [[co
 
 TEST_CASE("contact = surface: contact_select names the dense vertices that touch", "[scenes][contact]") {
   mbi::test::TempDir dir("contact-select");
-  // the lower half of the bar's dense vertices (y <= 0)
-  const std::string text = bar_scene("surface", "bi", 3) + "";
+  // the lower half of the ball's vertices (y <= 0)
+  const std::string text = ball_scene("surface", "bi", 3) + "";
   std::string with = text;
   with.insert(with.find("[interpolation]"),
               "contact_stiffness = 1e8\ncontact_select = { half_space = { point = [0, 0, 0], normal = [0, -1, 0] } }\n");
-  const Scene sc = parse_scene(with, "bar.toml");
+  const Scene sc = parse_scene(with, "ball.toml");
   const SceneModels m = load_models(sc);
   const long below = (m.dense.V.col(1).array() <= 0).count();
   const Run run = run_text(with, dir, "select");
@@ -155,21 +187,21 @@ TEST_CASE("contact = surface: contact_select names the dense vertices that touch
 }
 
 TEST_CASE("contact = surface: a collider overlapping the model at rest is an error naming it", "[scenes][contact]") {
-  std::string text = bar_scene("surface", "bi", 5) + "[[colliders]]\nshape = \"sphere\"\ncenter = [0, 3, 0]\nradius = 0.1\n";
-  text.replace(text.find("ground = -0.8"), 13, "ground = -0.3");  // the bar's bottom is at y = -0.5
-  const Scene sc = parse_scene(text, "bar.toml");
+  std::string text = ball_scene("surface", "bi", 5) + "[[colliders]]\nshape = \"sphere\"\ncenter = [0, 3, 0]\nradius = 0.1\n";
+  text.replace(text.find("ground = -0.8"), 13, "ground = -0.3");  // the ball's bottom is at y = -0.5
+  const Scene sc = parse_scene(text, "ball.toml");
   const SceneModels m = load_models(sc);
   try {
     make_driver(sc, m);
     FAIL("no error");
   } catch (const Error& e) {
-    CHECK_THAT(e.what(), Catch::Matchers::Contains("bar.toml: simulation.contact: collider 1 overlaps the model at rest") &&
+    CHECK_THAT(e.what(), Catch::Matchers::Contains("ball.toml: simulation.contact: collider 1 overlaps the model at rest") &&
                              Catch::Matchers::Contains("then the ground"));
   }
 }
 
 TEST_CASE("contact keys and [[colliders]]: bad input is an error naming the key and the collider", "[scenes][contact]") {
-  const std::string base = bar_scene("surface", "bi", 5);
+  const std::string base = ball_scene("surface", "bi", 5);
   auto error = [&](const std::string& text) {
     try {
       parse_scene(text, "s.toml");
@@ -202,7 +234,7 @@ TEST_CASE("contact keys and [[colliders]]: bad input is an error naming the key 
   std::string foo = base;
   foo.replace(foo.find("\"surface\""), 9, "\"foo\"");
   CHECK_THAT(error(foo), contains("simulation.contact: unknown value \"foo\" (expected one of: control, surface)"));
-  const std::string control = bar_scene("control", "bi", 5);
+  const std::string control = ball_scene("control", "bi", 5);
   CHECK_THAT(error(control + sphere), contains("colliders: [[colliders]] need simulation.contact = \"surface\""));
   std::string stiff = control;
   stiff.insert(stiff.find("[interpolation]"), "contact_stiffness = 1e5\n");
