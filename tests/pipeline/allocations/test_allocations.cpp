@@ -37,7 +37,7 @@ constexpr std::size_t kLarge = 4096;  // bytes: an allocation above this counts
 std::atomic<bool> counting{false};
 std::atomic<long> large_allocations{0};
 
-void note(std::size_t bytes) {
+[[maybe_unused]] void note(std::size_t bytes) {
   if (bytes > kLarge && counting.load(std::memory_order_relaxed))
     large_allocations.fetch_add(1, std::memory_order_relaxed);
 }
