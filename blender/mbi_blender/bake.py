@@ -9,7 +9,7 @@ import os
 
 import bpy
 
-from . import jobs, live, pc2
+from . import gn, jobs, live, pc2
 
 MODIFIER = live.CACHE_MODIFIER
 
@@ -43,11 +43,11 @@ def bake_steps(scene, models, start, end, paths):
         for model, path in zip(models, paths):
             writers.append(pc2.Writer(path, len(model.data.vertices), samples, float(start)))
         for i, frame in enumerate(range(start, end + 1)):
-            scene.frame_set(frame)  # the live path writes the models' shape keys
+            scene.frame_set(frame)  # the live path writes the models' attributes
             for model, writer in zip(models, writers):
                 if model.name in live.errors:
                     raise ValueError("frame %d: %s: %s" % (frame, model.name, live.errors[model.name]))
-                writer.write(live.shape_positions(model))
+                writer.write(live.live_positions(model))
             yield (i + 1) / samples
         for writer in writers:
             writer.commit()
@@ -62,9 +62,9 @@ def bake_steps(scene, models, start, end, paths):
 
 
 def attach(model, filepath, start):
-    """The cache played first in the model's stack; its live key muted."""
+    """The cache played first in the model's stack; its live modifier off."""
     attach_cache(model, filepath, start)
-    live.shape_key(model).mute = True
+    gn.show(model, False)
     model.mbi.baked = True
 
 
@@ -94,7 +94,7 @@ def unbake(model, depsgraph):
         live.update_all(depsgraph)
         return
     model.mbi.baked = False
-    live.shape_key(model).mute = False
+    gn.show(model, True)
     live.update_all(depsgraph)
 
 

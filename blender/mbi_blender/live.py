@@ -1,18 +1,19 @@
-"""The live path: the evaluated cage's nodes deform the bound meshes into their "mbi" shape key.
+"""The live path: the evaluated cage's nodes deform the bound meshes through a point attribute.
 
 On each frame change, and when a cage is edited in place, a handler reads the cage as Blender
 evaluated it (armature, shape keys, hooks, lattice), runs the bound Deformer (float32 kernel, no
-allocation) and writes the positions into the model's shape key "mbi" (value 1, relative to the
-basis), so the mesh data's basis stays the rest shape. The Deformers are not saved: they are
-rebuilt from the .blend's data when stale (binding.py, docs/blender.md).
+allocation) and writes the positions into the model's point attribute "mbi_position", which the
+add-on's Geometry Nodes modifier "mbi" (first in the stack) sets as the positions: the mesh's
+vertices stay the rest shape, and an attribute takes a fast write (a shape key has none in 3.4).
+The Deformers are not saved: they are rebuilt from the .blend's data when stale (binding.py,
+docs/blender.md).
 """
 import bpy
 import numpy as np
 from bpy.app.handlers import persistent
 
-from . import binding, harmonic, module, storage
+from . import binding, gn, harmonic, module, storage
 
-SHAPE_KEY = "mbi"
 CACHE_MODIFIER = "mbi cache"  # the Mesh Cache modifier of a baked model
 errors = {}   # model name -> last message of the live path (shown in the panel)
 _extensions = {}  # cage.name_full -> (rest key, harmonic.Extension)
@@ -46,28 +47,20 @@ def cage_nodes(cage, depsgraph):
     return X.astype(np.float64)
 
 
-def shape_key(model):
-    if model.data.shape_keys is None:
-        model.shape_key_add(name="Basis", from_mix=False)
-    keys = model.data.shape_keys.key_blocks
-    block = keys.get(SHAPE_KEY) or model.shape_key_add(name=SHAPE_KEY, from_mix=False)
-    block.value = 1.0
-    return block
-
-
 def bind(model, cage, method, alpha):
     """Binds the model to the cage now; returns the seconds of the embedding and precompute."""
     matrix = np.array(cage.matrix_world.inverted() @ model.matrix_world).ravel().tolist()
     seconds = binding.bind(model, cage, method, alpha, matrix)
-    shape_key(model)
+    gn.attribute(model)
+    gn.modifier(model)
     return seconds
 
 
-def shape_positions(model):
-    """(p, 3) float32: the model's live positions (its shape key, in the model's space)."""
-    block = shape_key(model)
-    co = np.empty(len(block.data) * 3, dtype=np.float32)
-    block.data.foreach_get("co", co)
+def live_positions(model):
+    """(p, 3) float32: the model's live positions (its attribute, in the model's space)."""
+    attribute = gn.attribute(model)
+    co = np.empty(len(attribute.data) * 3, dtype=np.float32)
+    attribute.data.foreach_get("vector", co)
     return co.reshape(-1, 3)
 
 
@@ -76,22 +69,20 @@ def unbind(model):
     if CACHE_MODIFIER in model.modifiers:
         model.modifiers.remove(model.modifiers[CACHE_MODIFIER])
     model.mbi.baked = False
-    keys = model.data.shape_keys
-    if keys is not None and SHAPE_KEY in keys.key_blocks:
-        model.shape_key_remove(keys.key_blocks[SHAPE_KEY])
+    gn.remove(model)
     model.mbi.cage = None
 
 
 def deform(model, depsgraph):
-    """Writes the model's positions for the cage as evaluated in depsgraph into its shape key."""
+    """Writes the model's positions for the cage as evaluated in depsgraph into its attribute."""
     entry = binding.get(model)
     X = cage_nodes(model.mbi.cage, depsgraph)
     out = entry.deformer.deform(X, out=entry.out)
     if entry.inverse is not None:
         inv = entry.inverse
         out = (out @ inv[:3, :3].T + inv[:3, 3]).astype(np.float32)
-    block = shape_key(model)
-    block.data.foreach_set("co", out.ravel())
+    gn.attribute(model).data.foreach_set("vector", out.ravel())
+    gn.modifier(model)
     model.data.update()
 
 

@@ -152,8 +152,23 @@ def bad_input():
         message = str(error).strip()
         check("does not fit in the cage" in message and "outside" in message,
               "a cage that does not enclose the model is refused: %s" % message)
-    check(model.mbi.cage == cage and len(model.data.shape_keys.key_blocks) == 2,
+    check(model.mbi.cage == cage and model.modifiers[0].name == "mbi" and len(model.modifiers) == 1,
           "the refused bind leaves the earlier one as it was")
+
+
+def unbind(model, rest_model):
+    """Unbind removes what the add-on made: the modifier, the attribute, the node group; the model is at rest."""
+    group = model.modifiers["mbi"].node_group
+    check(group is not None and "mbi_position" in model.data.attributes and model.data.shape_keys is None,
+          "a bound model carries the attribute and the modifier, no shape key")
+    check(np.abs(world(model, positions(model.data)) - rest_model).max() == 0, "its mesh vertices stay at rest")
+    select_only([model], model)
+    check(bpy.ops.mbi.unbind() == {"FINISHED"}, "the unbind operator ran")
+    check("mbi" not in model.modifiers and "mbi_position" not in model.data.attributes
+          and not any(g.get("mbi_live") for g in bpy.data.node_groups),
+          "unbind removed the modifier, the attribute and the node group")
+    P, _ = blender_frame(model, model, 11)
+    check(model.mbi.cage is None and np.abs(P - rest_model).max() == 0, "the unbound model is at rest at frame 11")
 
 
 def main(work, exe):
@@ -183,6 +198,7 @@ def main(work, exe):
     compare(mbi, exe, work, model, cage, rest_model, size, "reopened")
     edit_in_place(mbi, exe, work, model, cage, rest_model, size)
     bad_input()
+    unbind(model, rest_model)
     print("PASS")
 
 

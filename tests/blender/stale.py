@@ -39,7 +39,8 @@ def set_rest(obj, R):
     """New rest positions of the same count: the mesh's vertices and its basis key."""
     flat = R.astype(np.float32).ravel()
     obj.data.vertices.foreach_set("co", flat)
-    obj.data.shape_keys.key_blocks["Basis"].data.foreach_set("co", flat)
+    if obj.data.shape_keys is not None:
+        obj.data.shape_keys.key_blocks["Basis"].data.foreach_set("co", flat)
     obj.data.update()
     bpy.context.view_layer.update()
 
