@@ -30,6 +30,10 @@ class MBI_PT_panel(bpy.types.Panel):
             for name in ("young", "poisson", "density", "mass_damping", "stiffness_damping", "substeps"):
                 box.prop(obj.mbi, name)
             box.prop_search(obj.mbi, "pin_group", obj, "vertex_groups")
+            box.prop(obj.mbi, "pin_motion")
+            if obj.mbi.pin_motion == "rigid":
+                for name in ("pin_velocity", "pin_rate", "pin_axis", "pin_center", "pin_start", "pin_stop"):
+                    box.prop(obj.mbi, name)
             box.operator("mbi.simulate")
         elif obj.mbi.cage is not None:
             layout.label(text="Bound to %s" % obj.mbi.cage.name)

@@ -4,7 +4,8 @@ baked from it as by the bake operator.
 
 The simulation runs in world space (a Blender unit is a metre), one step of 1/fps s a frame, the
 scene's gravity; the first frame of the range is the rest state. Nodes of the cage's pinned
-vertex group (weight > 0) are held where they are.
+vertex group (weight > 0) are held where they are, or moved by a scripted rigid motion (velocity
+and a rotation about an axis, from a start to a stop time: mbi's kinematic constraint).
 """
 import os
 
@@ -36,10 +37,28 @@ def simulator(scene, cage):
     sim = mbi.Simulator(U, storage.tets(cage.data), youngs_modulus=s.young, poisson_ratio=s.poisson,
                         density=s.density, dt=scene.render.fps_base / scene.render.fps, substeps=s.substeps,
                         gravity=gravity, mass_damping=s.mass_damping, stiffness_damping=s.stiffness_damping)
-    pins = pinned_nodes(cage)
-    if len(pins):
-        sim.fix(pins)
+    pin(sim, cage, pinned_nodes(cage))
     return sim, np.linalg.inv(M)
+
+
+def pin(sim, cage, pins):
+    """Holds the pinned nodes, or moves them by the cage's rigid motion (times from the first frame)."""
+    s = cage.mbi
+    if s.pin_motion == "held":
+        if len(pins):
+            sim.fix(pins)
+        return
+    if not len(pins):
+        raise ValueError("the cage %s has a rigid motion of its pinned nodes but no pinned group" % cage.name)
+    if s.pin_rate != 0 and np.linalg.norm(s.pin_axis) == 0:
+        raise ValueError("the cage %s's pinned rotation has a zero axis" % cage.name)
+    stop = s.pin_stop if s.pin_stop > 0 else 1e300
+    if stop < s.pin_start:
+        raise ValueError("the cage %s's pinned motion stops (%g s) before it starts (%g s)"
+                         % (cage.name, s.pin_stop, s.pin_start))
+    axis = tuple(s.pin_axis) if np.linalg.norm(s.pin_axis) > 0 else (0.0, 0.0, 1.0)
+    sim.add_kinematic(pins, center=tuple(s.pin_center), axis=axis, angular_velocity=s.pin_rate,
+                      velocity=tuple(s.pin_velocity), start=s.pin_start, stop=stop)
 
 
 def simulate_job(scene, cage, start, end, directory):

@@ -9,6 +9,9 @@ INTERIOR = [("auto", "Auto", "Follow the boundary (harmonic) when only the bound
             ("harmonic", "Follow boundary", "Always the harmonic extension of the boundary's motion"),
             ("animated", "As animated", "Every node as Blender evaluated it")]
 
+PIN_MOTIONS = [("held", "Held", "The pinned nodes stay where they are"),
+               ("rigid", "Rigid motion", "The pinned nodes move rigidly: velocity plus a rotation about an axis")]
+
 
 class MbiObjectSettings(bpy.types.PropertyGroup):
     is_cage: bpy.props.BoolProperty(name="Is an mbi cage", default=False)
@@ -23,6 +26,17 @@ class MbiObjectSettings(bpy.types.PropertyGroup):
     substeps: bpy.props.IntProperty(name="Substeps", default=1, min=1, max=1000)
     pin_group: bpy.props.StringProperty(name="Pinned group",
                                         description="Vertex group of the cage's nodes held in place (weight > 0)")
+    pin_motion: bpy.props.EnumProperty(name="Pinned motion", items=PIN_MOTIONS, default="held")
+    pin_velocity: bpy.props.FloatVectorProperty(name="Velocity (m/s)", size=3, subtype="VELOCITY")
+    pin_rate: bpy.props.FloatProperty(name="Angular velocity (rad/s)", default=0.0,
+                                      description="Rotation rate about the axis through the center")
+    pin_axis: bpy.props.FloatVectorProperty(name="Axis", size=3, default=(0.0, 0.0, 1.0), subtype="DIRECTION")
+    pin_center: bpy.props.FloatVectorProperty(name="Center (m)", size=3, subtype="TRANSLATION",
+                                              description="A point of the rotation axis, in world space")
+    pin_start: bpy.props.FloatProperty(name="Start (s)", default=0.0, min=0.0,
+                                       description="Seconds after the first frame when the motion starts")
+    pin_stop: bpy.props.FloatProperty(name="Stop (s)", default=0.0, min=0.0,
+                                      description="Seconds after the first frame when it stops (0: never)")
     cage: bpy.props.PointerProperty(name="Cage", type=bpy.types.Object,
                                     description="The mbi cage this mesh is bound to")
     method: bpy.props.EnumProperty(name="Method", items=METHODS, default="modified-bi")

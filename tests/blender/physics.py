@@ -42,8 +42,8 @@ def setup():
     return model, cage, pins
 
 
-def mbi_run(mbi, exe, work, model, cage, pins):
-    """The same simulation as a scene for `mbi run`: its dense.pc2."""
+def mbi_run(mbi, exe, work, model, cage, pins, motion=""):
+    """The same simulation as a scene for `mbi run` (pinned nodes fixed, or moved by motion): its dense.pc2."""
     base = os.path.join(work, "cage")
     mbi.write_tetgen(base, positions(cage.data), tets(cage))
     V = positions(model.data)
@@ -66,8 +66,9 @@ frames = %d
 gravity = [%r, %r, %r]
 damping_mass = %r
 [[constraints]]
-type = "fixed"
+type = "%s"
 select = { indices = %s }
+%s
 [interpolation]
 gpu = "off"
 [output]
@@ -76,14 +77,60 @@ control_vtk = false
 image = false
 metrics = false
 """ % (MATERIAL["young"], MATERIAL["poisson"], MATERIAL["density"], 1.0 / FPS, END - START, *g,
-       MATERIAL["mass_damping"], pins.tolist())
+       MATERIAL["mass_damping"], "kinematic" if motion else "fixed", pins.tolist(), motion)
     path = os.path.join(work, "scene.toml")
     with open(path, "w") as f:
         f.write(scene)
-    run = subprocess.run([exe, "run", path, "--out", os.path.join(work, "run"), "--force", "--quiet"],
-                         capture_output=True, text=True)
+    out = os.path.join(work, "run-kinematic" if motion else "run")
+    run = subprocess.run([exe, "run", path, "--out", out, "--force", "--quiet"], capture_output=True, text=True)
     check(run.returncode == 0, "mbi run of the same scene: %s" % run.stderr.strip()[-500:])
-    return mbi.read_point_cache(os.path.join(work, "run", "dense.pc2")).frames
+    return mbi.read_point_cache(os.path.join(out, "dense.pc2")).frames
+
+
+def rigid_pins(mbi, exe, work, pins):
+    """The saved scene again, its pinned nodes moved by a rigid motion set in the cage's panel keys: the baked
+    model equals `mbi run` with a kinematic constraint, and the pinned nodes follow the motion's formula."""
+    bpy.ops.wm.open_mainfile(filepath=os.path.join(work, "physics.blend"))
+    model, cage = bpy.data.objects["model"], next(o for o in bpy.data.objects if o.mbi.is_cage)
+    rest = evaluated(model)
+    size = np.linalg.norm(np.ptp(rest, axis=0))
+    U = positions(cage.data)
+    center, axis, rate, velocity, start, stop = U[pins].mean(axis=0), (1.0, 0.0, 0.0), 2.0, (0.0, 0.0, 0.6), 0.1, 0.4
+    s = cage.mbi
+    s.pin_group = ""
+    s.pin_motion = "rigid"
+    select_only([cage], cage)
+    try:
+        bpy.ops.mbi.simulate(directory="//rigid_cache")
+        fail("a rigid motion without a pinned group was simulated")
+    except RuntimeError as error:
+        check("no pinned group" in str(error), "a rigid motion without pinned nodes is refused: %s"
+              % str(error).strip())
+    s.pin_group = "pin"
+    s.pin_velocity, s.pin_rate, s.pin_axis, s.pin_center = velocity, rate, axis, center
+    s.pin_start, s.pin_stop = start, stop
+    check(bpy.ops.mbi.simulate(directory="//rigid_cache") == {"FINISHED"}, "the simulate operator ran, pins moving")
+    motion = ("motion = { twist_axis = [%r, %r, %r], twist_center = [%r, %r, %r], twist_rate = %r, "
+              "velocity = [%r, %r, %r], start = %r, stop = %r }" % (*axis, *map(float, center), rate, *velocity,
+                                                                   start, stop))
+    expected = mbi_run(mbi, exe, work, model, cage, pins, motion)
+    baked = mbi.read_point_cache(bpy.path.abspath(model.modifiers["mbi cache"].filepath)).frames
+    error = np.abs(baked - expected).max() / size
+    check(error <= 1e-6, "with moving pins the baked model equals mbi run's at every frame (%.2e)" % error)
+    held = mbi.read_point_cache(os.path.join(work, "run", "dense.pc2")).frames
+    check(np.abs(baked - held).max() / size > 0.05, "and differs from the run with held pins (%.3f of its size)"
+          % (np.abs(baked - held).max() / size))
+    t = (END - START) / FPS
+    moved = min(max(t, start), stop) - start
+    angle = rate * moved
+    c, sn = np.cos(angle), np.sin(angle)
+    R = np.array([[1, 0, 0], [0, c, -sn], [0, sn, c]])
+    formula = center + np.array(velocity) * moved + (U[pins] - center) @ R.T
+    X = evaluated(cage, END)
+    error = np.abs(X[pins] - formula).max() / size
+    check(error <= 1e-5, "the pinned nodes at the last frame are where the rigid motion puts them (%.2e)" % error)
+    check(np.abs(X[pins] - U[pins]).max() / size > 0.05, "and they moved (%.3f of the size)"
+          % (np.abs(X[pins] - U[pins]).max() / size))
 
 
 def main(work, exe):
@@ -121,6 +168,7 @@ def main(work, exe):
     X = evaluated(cage, END)
     check(np.array_equal(X[pins], positions(cage.data)[pins]) and np.abs(X - positions(cage.data)).max() > 0,
           "the cage's cache moves it, its pinned nodes held")
+    rigid_pins(mbi, exe, work, pins)
     print("PASS")
 
 
