@@ -1,8 +1,8 @@
 """mbi in Blender: a tetrahedral cage around a mesh, bound meshes that follow the cage's animation.
 
 The cage is a mesh object whose vertices are the control nodes (animate them with Blender's own
-tools) and whose tetrahedra are stored in its mesh data; a bound mesh follows through a shape key
-that a frame-change handler writes (docs/blender.md).
+tools) and whose tetrahedra are stored in its mesh data; a bound mesh follows through a point
+attribute that a frame-change handler writes and a Geometry Nodes modifier applies (docs/blender.md).
 """
 
 bl_info = {

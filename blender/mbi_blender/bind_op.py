@@ -38,7 +38,7 @@ class MBI_OT_bind(bpy.types.Operator):
 
 
 class MBI_OT_unbind(bpy.types.Operator):
-    """Unbind the selected meshes: remove their mbi shape key"""
+    """Unbind the selected meshes: remove their mbi modifier and attribute"""
     bl_idname = "mbi.unbind"
     bl_label = "Unbind from mbi cage"
     bl_options = {"REGISTER", "UNDO"}
