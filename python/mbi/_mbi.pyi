@@ -391,30 +391,6 @@ class Collider:
     @property
     def radius(self) -> float: ...
 
-class Collider:
-    """A rigid collider (plane, sphere, box, capsule) that the dense points touch, static or moving; m, s."""
-    @staticmethod
-    def plane(point: Vector3, normal: Vector3, *, friction: float = 0.0) -> Collider:
-        """solid where normal . (x - point) < 0"""
-    @staticmethod
-    def sphere(center: Vector3, radius: float, *, friction: float = 0.0) -> Collider: ...
-    @staticmethod
-    def box(center: Vector3, half_extents: Vector3, axes: Optional[ArrayLike] = None, *,
-            friction: float = 0.0) -> Collider: """axes: (3, 3), its rows the box's unit axes"""
-    @staticmethod
-    def capsule(a: Vector3, b: Vector3, radius: float, *, friction: float = 0.0) -> Collider: ...
-    def moving(self, *, velocity: Vector3 = ..., twist_rate: float = 0.0, twist_axis: Vector3 = ...,
-               twist_center: Vector3 = ..., start: float = 0.0, stop: float = 1e300) -> Collider:
-        """the collider moving rigidly from its pose at start (s): velocity m/s, twist_rate rad/s"""
-    def distance(self, p: Vector3, time: float = 0.0) -> Tuple[float, FloatArray]:
-        """(signed distance (m, < 0 inside), unit outward normal) at p"""
-    @property
-    def shape(self) -> Literal["plane", "sphere", "box", "capsule"]: ...
-    @property
-    def friction(self) -> float: ...
-    @property
-    def radius(self) -> float: ...
-
 class FrameResult:
     @property
     def ok(self) -> bool: ...
@@ -434,17 +410,6 @@ class FramePipeline:
     def outside_points(self) -> int: """points outside the control mesh"""
     @property
     def max_outside_distance(self) -> float: """the farthest outside point's distance to the mesh (units of P)"""
-    @staticmethod
-    def with_contact(U: ArrayLike, T: ArrayLike, P: ArrayLike, simulator: Simulator, colliders: Sequence[Collider], *,
-                     stiffness: Optional[float] = None, points: Optional[ArrayLike] = None, method: Method = "modified-bi",
-                     alpha: Optional[float] = None, beta: float = 0.0, pin_boundary: bool = False) -> FramePipeline:
-        """the simulator steps with contact at the dense points P (or the rows `points`) against colliders"""
-    @staticmethod
-    def from_scene(path: PathLike, *, method: Optional[Method] = None) -> FramePipeline:
-        """a scene file's pipeline as `mbi run` builds it (contact keys included)"""
-    @property
-    def contact(self) -> Optional[dict[str, Any]]:
-        """the last frame's contact at the dense points (touching, newton_iterations, ...), or None"""
     @staticmethod
     def with_contact(U: ArrayLike, T: ArrayLike, P: ArrayLike, simulator: Simulator, colliders: Sequence[Collider], *,
                      stiffness: Optional[float] = None, points: Optional[ArrayLike] = None, method: Method = "modified-bi",

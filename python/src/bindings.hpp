@@ -22,7 +22,6 @@ void bind_timing(py::module_& m);      // timing.cpp: C++ baselines of the overh
 void bind_sim(py::module_& m);         // bind_sim.cpp: Simulator
 void bind_pipeline(py::module_& m);    // bind_pipeline.cpp: FramePipeline and its drivers
 void bind_contact(py::module_& m);     // bind_contact.cpp: Collider, FramePipeline with contact (after bind_pipeline)
-void bind_contact(py::module_& m);     // bind_contact.cpp: Collider, FramePipeline with contact (after bind_pipeline)
 void bind_io(py::module_& m);          // bind_io.cpp: file readers and writers
 void bind_cage(py::module_& m);        // bind_cage.cpp: cage
 void bind_scene(py::module_& m);       // bind_scene.cpp: run_scene

@@ -46,7 +46,6 @@ PYBIND11_MODULE(_mbi, m) {
   mbi::python::bind_sim(m);
   mbi::python::bind_pipeline(m);
   mbi::python::bind_contact(m);
-  mbi::python::bind_contact(m);
   mbi::python::bind_io(m);
   mbi::python::bind_cage(m);
   mbi::python::bind_scene(m);
