@@ -78,7 +78,7 @@ double gap(const Eigen::MatrixXd& P, double floor) { return P.col(1).minCoeff() 
 }  // namespace
 
 TEST_CASE("contact targets: the model rests on a plane with its visible surface, BI, Phong and "
-          "modified-BI; contact on the cage's nodes rests a cage margin above",
+          "modified-BI, while contact on the cage's nodes rests a cage margin above",
           "[pipeline][contact][sim][targets]") {
   const double floor = 0.0;
   for (Method m : {Method::BI, Method::Phong, Method::ModifiedBI}) {

@@ -236,7 +236,7 @@ TEST_CASE("surface contact: bad input is an Error naming what is wrong", "[pipel
 }
 
 TEST_CASE("surface contact: a moving collider that jumps into the model (its motion started "
-          "before the contact was attached) pushes it out; steps stay finite",
+          "before the contact was attached) pushes it out, every step finite",
           "[pipeline][contact][sim][errors]") {
   const auto cage = mbi::test::box_tet_mesh(2, 2, 2);
   Eigen::MatrixXd P(50, 3);

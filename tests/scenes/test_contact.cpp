@@ -147,7 +147,7 @@ TEST_CASE("contact = control: the ground key keeps its meaning, the simulator's 
   CHECK(X.col(1).minCoeff() >= -0.8);  // the cage's nodes rest on the ground
 }
 
-TEST_CASE("contact = surface: the ground becomes a plane collider after the [[colliders]]; Newton to a tolerance",
+TEST_CASE("contact = surface: the ground becomes a plane collider after the [[colliders]], Newton to a tolerance",
           "[scenes][contact]") {
   const std::string text = ball_scene("surface", "bi", 5) +
                            "[[colliders]]\nshape = \"sphere\"\ncenter = [0, 2, 0]\nradius = 0.5\nfriction = 0.3\n"
