@@ -56,17 +56,20 @@ SurfaceContact::SurfaceContact(std::shared_ptr<const Deformer> deformer, std::ve
 void SurfaceContact::set_time(double time) {
   if (!std::isfinite(time)) throw Error("contact time must be finite");
   time_ = time;
+  forget();
 }
 
 void SurfaceContact::set_max_depth(double depth) {
   if (!(depth > 0)) throw Error("contact max_depth must be > 0 m (or infinity), got " + num(depth));
   max_depth_ = depth;
+  forget();
 }
 
 void SurfaceContact::set_friction_velocity(double velocity) {
   if (!std::isfinite(velocity) || velocity <= 0)
     throw Error("contact friction velocity must be finite and > 0 m/s, got " + num(velocity));
   friction_velocity_ = velocity;
+  forget();
 }
 
 void SurfaceContact::begin_substep(double end_time, const Eigen::Ref<const Eigen::VectorXd>& x,
@@ -78,15 +81,16 @@ void SurfaceContact::begin_substep_at(double start_time, double end_time, const 
                                       const Eigen::Ref<const Eigen::VectorXd>&) {
   if (!std::isfinite(start_time)) throw Error("contact time must be finite");
   set_time(end_time);
-  deform(x);
+  at_.valid = along_.valid = false;  // a fresh deformation every substep
+  const Eigen::MatrixXd& P = deform(x, at_);
   const size_t C = colliders_.size();
-  guarded_.assign(static_cast<size_t>(positions_.rows()) * C, 0);
+  guarded_.assign(static_cast<size_t>(P.rows()) * C, 0);
   slips_.clear();
   const double h = end_time - start_time;
   smoothing_ = friction_velocity_ * h;
-  for (Eigen::Index p = 0; p < positions_.rows(); ++p)
+  for (Eigen::Index p = 0; p < P.rows(); ++p)
     for (size_t c = 0; c < C; ++c) {
-      const Eigen::Vector3d q = positions_.row(p).transpose();
+      const Eigen::Vector3d q = P.row(p).transpose();
       const Distance d = signed_distance(colliders_[c], q, end_time);
       guarded_[static_cast<size_t>(p) * C + c] = d.value > -max_depth_;
       if (d.value >= 0 || colliders_[c].friction == 0 || !(h > 0)) continue;
@@ -98,6 +102,7 @@ void SurfaceContact::begin_substep_at(double start_time, double end_time, const 
       s.anchor = q + collider_displacement(colliders_[c], q, start_time, end_time);
       if (s.weight > 0 && std::isfinite(s.weight)) slips_.push_back(s);
     }
+  forget();  // guards and slips changed
 }
 
 double SurfaceContact::depth(Eigen::Index point, size_t collider) const {
@@ -105,25 +110,27 @@ double SurfaceContact::depth(Eigen::Index point, size_t collider) const {
   return max_depth_;
 }
 
-void SurfaceContact::deform(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+const Eigen::MatrixXd& SurfaceContact::deform(const Eigen::Ref<const Eigen::VectorXd>& x, Deformed& cache) const {
   const int n = deformer_->vertices();
   if (x.size() != 3 * n)
     throw Error("contact: node positions must have " + std::to_string(3 * n) + " entries, got " +
                 std::to_string(x.size()));
+  if (cache.valid && cache.x == x) return cache.points;
+  if (&cache == &at_) terms_valid_ = false;
+  cache.valid = false;
   X_.resize(n, 3);
   for (int i = 0; i < n; ++i) X_.row(i) = x.segment<3>(3 * i).transpose();
-  positions_.resize(deformer_->points(), 3);
-  deformer_->deform(X_, positions_);
+  cache.points.resize(deformer_->points(), 3);
+  deformer_->deform(X_, cache.points);
+  cache.x = x;
+  cache.valid = true;
+  return cache.points;
 }
 
-Eigen::MatrixXd SurfaceContact::points(const Eigen::Ref<const Eigen::VectorXd>& x) const {
-  deform(x);
-  return positions_;
-}
+Eigen::MatrixXd SurfaceContact::points(const Eigen::Ref<const Eigen::VectorXd>& x) const { return deform(x, at_); }
 
-SurfaceContact::Term SurfaceContact::term(Eigen::Index p, size_t& slip) const {
+SurfaceContact::Term SurfaceContact::term(Eigen::Index p, const Eigen::Vector3d& q, size_t& slip) const {
   Term t;
-  const Eigen::Vector3d q = positions_.row(p).transpose();
   for (size_t c = 0; c < colliders_.size(); ++c) {
     const Distance d = signed_distance(colliders_[c], q, time_);
     if (d.value >= 0) continue;
@@ -133,6 +140,7 @@ SurfaceContact::Term SurfaceContact::term(Eigen::Index p, size_t& slip) const {
     t.hessian.noalias() += law.curvature * d.normal * d.normal.transpose();
     t.active = true;
   }
+  while (slip < slips_.size() && slips_[slip].point < p) ++slip;
   for (; slip < slips_.size() && slips_[slip].point == p; ++slip) {
     const Slip& s = slips_[slip];
     const Eigen::Vector2d u = s.tangent.transpose() * (q - s.anchor);
@@ -145,61 +153,93 @@ SurfaceContact::Term SurfaceContact::term(Eigen::Index p, size_t& slip) const {
   return t;
 }
 
-double SurfaceContact::energy(const Eigen::Ref<const Eigen::VectorXd>& x) const {
-  deform(x);
-  double E = 0.0;
+const std::vector<SurfaceContact::Active>& SurfaceContact::terms(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  const Eigen::MatrixXd& P = deform(x, at_);  // forgets the terms when x changes
+  if (terms_valid_) return terms_;
+  terms_.clear();
   size_t slip = 0;
-  for (Eigen::Index p = 0; p < positions_.rows(); ++p) E += term(p, slip).energy;
+  for (Eigen::Index p = 0; p < P.rows(); ++p) {
+    const Term t = term(p, P.row(p).transpose(), slip);
+    if (t.active) terms_.push_back({p, t});
+  }
+  terms_valid_ = true;
+  return terms_;
+}
+
+double SurfaceContact::energy(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  double E = 0.0;
+  for (const Active& a : terms(x)) E += a.term.energy;
   return E;
 }
 
 void SurfaceContact::add_gradient(const Eigen::Ref<const Eigen::VectorXd>& x,
                                   Eigen::Ref<Eigen::VectorXd> gradient) const {
-  deform(x);
-  dE_dp_.setZero(positions_.rows(), 3);
-  bool any = false;
-  size_t slip = 0;
-  for (Eigen::Index p = 0; p < positions_.rows(); ++p) {
-    const Term t = term(p, slip);
-    if (!t.active) continue;
-    dE_dp_.row(p) = t.gradient.transpose();
-    any = true;
-  }
-  if (!any) return;
+  const std::vector<Active>& active = terms(x);
+  if (active.empty()) return;
+  dE_dp_.setZero(deformer_->points(), 3);
+  for (const Active& a : active) dE_dp_.row(a.point) = a.term.gradient.transpose();
   const Eigen::MatrixXd dE_dX = deformer_->vjp(dE_dp_);  // W^T, exact (fact 11)
   for (Eigen::Index i = 0; i < dE_dX.rows(); ++i) gradient.segment<3>(3 * i) += dE_dX.row(i).transpose();
 }
 
 void SurfaceContact::hessian_blocks(const Eigen::Ref<const Eigen::VectorXd>& x,
                                     std::vector<sim::NodeBlock>& blocks) const {
-  deform(x);
   const interp::Embedding& emb = deformer_->embedding();
   const Eigen::MatrixXi& T = deformer_->elements_matrix();
-  size_t slip = 0;
-  for (Eigen::Index p = 0; p < positions_.rows(); ++p) {
-    const Term t = term(p, slip);
-    if (!t.active) continue;
-    const int e = emb.element(p);
-    for (int a = 0; a < 4; ++a)
-      for (int b = 0; b <= a; ++b)
-        blocks.push_back({T(e, a), T(e, b), emb.bary(p, a) * emb.bary(p, b) * t.hessian});
+  for (const Active& a : terms(x)) {
+    const int e = emb.element(a.point);
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j <= i; ++j)
+        blocks.push_back({T(e, i), T(e, j), emb.bary(a.point, i) * emb.bary(a.point, j) * a.term.hessian});
   }
 }
 
 double SurfaceContact::max_step(const Eigen::Ref<const Eigen::VectorXd>& x,
                                 const Eigen::Ref<const Eigen::VectorXd>& dx) const {
   if (guarded_.empty() || std::isinf(max_depth_)) return 1.0;
-  deform(dx);  // p is linear in x: the points move by W dx
-  moved_ = positions_;
-  deform(x);
+  const Eigen::MatrixXd& D = deform(dx, along_);  // p is linear in x: the points move by W dx
+  const Eigen::MatrixXd& P = deform(x, at_);
   double s = 1.0;
-  for (Eigen::Index p = 0; p < positions_.rows(); ++p)
+  for (Eigen::Index p = 0; p < P.rows(); ++p)
     for (size_t c = 0; c < colliders_.size(); ++c) {
       if (std::isinf(depth(p, c))) continue;
-      s = std::min(s, contact::advance(colliders_[c], positions_.row(p).transpose(), moved_.row(p).transpose(),
-                                       time_, max_depth_));
+      s = std::min(s, contact::advance(colliders_[c], P.row(p).transpose(), D.row(p).transpose(), time_, max_depth_));
     }
   return s;
+}
+
+void SurfaceContact::begin_line(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& dx) {
+  const Eigen::MatrixXd& D = deform(dx, along_);
+  const Eigen::MatrixXd& P = deform(x, at_);
+  line_start_ = x;
+  line_move_ = dx;
+  line_points_.clear();
+  size_t slip = 0;
+  for (Eigen::Index p = 0; p < P.rows(); ++p) {
+    while (slip < slips_.size() && slips_[slip].point < p) ++slip;
+    bool near = slip < slips_.size() && slips_[slip].point == p;  // friction energy is never 0
+    // d(p + s D) >= d(p) - |D| for s in [0, 1]; the margin covers W (x + s dx) != p + s W dx
+    const double reach = D.row(p).norm() + 1e-6 * (diagonal_ + P.row(p).norm() + D.row(p).norm());
+    for (size_t c = 0; c < colliders_.size() && !near; ++c)
+      near = signed_distance(colliders_[c], P.row(p).transpose(), time_).value < reach;
+    if (near) line_points_.push_back(p);
+  }
+  line_valid_ = true;
+}
+
+double SurfaceContact::energy_along(double s) const {
+  if (!line_valid_) throw Error("contact: energy_along needs begin_line (after the last substep or setting)");
+  const Eigen::MatrixXd& P = deform(line_start_, at_);  // both kept from begin_line unless evaluated elsewhere
+  const Eigen::MatrixXd& D = deform(line_move_, along_);
+  double E = 0.0;
+  size_t slip = 0;
+  const auto add = [&](Eigen::Index p) { E += term(p, (P.row(p) + s * D.row(p)).transpose(), slip).energy; };
+  if (s >= 0 && s <= 1) {
+    for (Eigen::Index p : line_points_) add(p);
+  } else {
+    for (Eigen::Index p = 0; p < P.rows(); ++p) add(p);
+  }
+  return E;
 }
 
 }  // namespace mbi::pipeline

@@ -208,8 +208,10 @@ struct Simulator::Impl {
   int block_index(int i, int j) const;  // stored block of the pair, -1 outside the pattern
   double elastic_energy_at(const Eigen::VectorXd& xe) const;
   double poke_energy(const Eigen::VectorXd& xe) const;
-  // Backward Euler's incremental potential at velocity vk (positions x + h vk into xs).
+  // Backward Euler's incremental potential at velocity vk (positions x + h vk into xs), and
+  // the same without the potential's energy.
   double incremental(const Eigen::VectorXd& vk, double h, Eigen::VectorXd& xs) const;
+  double incremental_own(const Eigen::VectorXd& vk, double h, Eigen::VectorXd& xs) const;
   // Adds c times the potential's Hessian blocks at xe to the system; empty or why not.
   std::string add_potential_hessian(const Eigen::VectorXd& xe, double c);
   // The potential's admissible fraction of moving the velocity from vk by dv (max_step).
@@ -433,12 +435,17 @@ double Simulator::Impl::poke_energy(const Eigen::VectorXd& xe) const {
 }
 
 double Simulator::Impl::incremental(const Eigen::VectorXd& vk, double h, Eigen::VectorXd& xs) const {
+  const double own = incremental_own(vk, h, xs);
+  return own + potential->energy(xs);
+}
+
+double Simulator::Impl::incremental_own(const Eigen::VectorXd& vk, double h, Eigen::VectorXd& xs) const {
   xs = x + h * vk;
   const Eigen::VectorXd dv = vk - v;
   // Its gradient in vk is M (vk - v) - h (f_el + f_ext + f_poke - a M vk - dE/dx) = -r.
   double phi = 0.5 * dv.dot(mass_dof.cwiseProduct(dv)) +
                0.5 * h * params.mass_damping * vk.dot(mass_dof.cwiseProduct(vk)) - h * f_ext.dot(vk);
-  return phi + elastic_energy_at(xs) + poke_energy(xs) + potential->energy(xs);
+  return phi + elastic_energy_at(xs) + poke_energy(xs);
 }
 
 std::string Simulator::Impl::add_potential_hessian(const Eigen::VectorXd& xe, double c) {
@@ -467,11 +474,12 @@ double Simulator::Impl::admissible(const Eigen::VectorXd& vk, const Eigen::Vecto
 bool Simulator::Impl::line_search(Eigen::VectorXd& vk, double h, double& phi) {
   const double slope = -r.dot(delta);  // d phi / ds at s = 0 (r = -grad phi on free dofs)
   if (!(slope < 0)) return false;
-  double step = admissible(vk, delta, h);
+  double step = admissible(vk, delta, h);  // x_trial = x + h vk
   if (step == 0.0) return false;
+  potential->begin_line(x_trial, h * delta);  // the potential at x + h (vk + s delta)
   for (int k = 0; k < 40; ++k, step *= 0.5) {
     trial = vk + step * delta;
-    const double value = incremental(trial, h, x_trial);
+    const double value = incremental_own(trial, h, x_trial) + potential->energy_along(step);
     if (std::isfinite(value) && value <= phi + 1e-4 * step * slope) {
       vk.swap(trial);
       phi = value;

@@ -155,6 +155,66 @@ TEST_CASE("surface contact: for BI the force is the per-element assembly of the 
   CHECK((gradient(lagged, x1) - expect).norm() <= 1e-12 * expect.norm());
 }
 
+TEST_CASE("surface contact: energy along a line is the energy at x + s dx, BI, Phong and "
+          "modified-BI, with friction", "[pipeline][contact]") {
+  const Setup s = setup();
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> w(-0.02, 0.02);
+  Eigen::VectorXd dx(s.x.size());  // a random move that also pushes the box 0.15 into the plane
+  for (Eigen::Index k = 0; k < dx.size(); ++k) dx(k) = w(rng) + (k % 3 == 1 ? -0.15 : 0.0);
+  for (Method m : {Method::BI, Method::Phong, Method::ModifiedBI}) {
+    DeformerOptions opt;
+    opt.method = m;
+    auto deformer = std::make_shared<Deformer>(s.mesh.U, s.mesh.T, s.points, opt);
+    SurfaceContact plain(deformer, colliders(), 1e4), lagged(deformer, sliding_colliders(), 1e4);
+    start_friction(lagged, s.x);
+    REQUIRE(lagged.friction_pairs() > 20);
+    const Eigen::VectorXd x1 = nudged(s.x);
+    for (const auto& [contact, x] : {std::pair<SurfaceContact*, Eigen::VectorXd>{&plain, s.x}, {&lagged, x1}}) {
+      // points that start clear and touch further along: a line search that skipped them would differ
+      const auto touching = [&](const Eigen::VectorXd& at) {
+        const Eigen::MatrixXd P = contact->points(at);
+        int count = 0;
+        for (Eigen::Index p = 0; p < P.rows(); ++p)
+          count += signed_distance(contact->colliders()[0], P.row(p).transpose(), contact->time()).value < 0;
+        return count;
+      };
+      REQUIRE(touching(x + dx) > touching(x) + 20);
+      contact->begin_line(x, dx);
+      for (double t : {1.0, 0.5, 0.25, 0.125, 1.0 / 1024, 0.0, 1.5, -0.3}) {
+        const double along = contact->energy_along(t);  // after energy() at another x: still this line
+        const double direct = contact->energy(x + t * dx);
+        INFO("method " << static_cast<int>(m) << (contact == &lagged ? ", friction" : ", plain") << ", s = " << t);
+        REQUIRE(direct > 0);
+        CHECK(std::abs(along - direct) <= 1e-12 * direct);
+      }
+    }
+    lagged.begin_substep_at(0.01, 0.02, x1, Eigen::VectorXd::Zero(x1.size()));
+    CHECK_THROWS_WITH(lagged.energy_along(0.5), Catch::Contains("begin_line"));
+  }
+}
+
+TEST_CASE("surface contact: a new time or law is seen at the same positions", "[pipeline][contact]") {
+  const Setup s = setup();
+  auto deformer = std::make_shared<Deformer>(s.mesh.U, s.mesh.T, s.points);
+  SurfaceContact kept(deformer, sliding_colliders(), 1e4);
+  const double before = kept.energy(s.x);
+  const Eigen::VectorXd g_before = gradient(kept, s.x);
+  kept.set_time(0.5);
+  SurfaceContact fresh(deformer, sliding_colliders(), 1e4);
+  fresh.set_time(0.5);
+  CHECK(kept.energy(s.x) == fresh.energy(s.x));
+  CHECK(kept.energy(s.x) != before);
+  CHECK(gradient(kept, s.x) == gradient(fresh, s.x));
+  CHECK(gradient(kept, s.x) != g_before);
+  start_friction(kept, s.x);  // guards and slips at the positions of the evaluation before
+  start_friction(fresh, s.x);
+  CHECK(kept.energy(s.x) == fresh.energy(s.x));
+  const Eigen::VectorXd x1 = nudged(s.x);
+  CHECK(kept.energy(x1) == fresh.energy(x1));
+  CHECK(gradient(kept, x1) == gradient(fresh, x1));
+}
+
 TEST_CASE("surface contact: the Hessian surrogate is PSD, inside the element pattern, and equals "
           "W^T K W for BI", "[pipeline][contact]") {
   const Setup s = setup();

@@ -78,6 +78,11 @@ class SurfaceContact : public sim::Potential {
   /// -max_depth() on its straight path (p is linear in x), by contact::advance.
   double max_step(const Eigen::Ref<const Eigen::VectorXd>& x,
                   const Eigen::Ref<const Eigen::VectorXd>& dx) const override;
+  /// Deforms x and dx once (p(x + s dx) = p(x) + s W dx) and keeps the points that can touch
+  /// a collider or carry friction for some s in [0, 1] (the distance is 1-Lipschitz), so that
+  /// each energy_along(s) there costs those points only; other s evaluate every point.
+  void begin_line(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& dx) override;
+  double energy_along(double s) const override;
 
  private:
   /// Lagged friction of one point against one collider in the current substep.
@@ -87,17 +92,30 @@ class SurfaceContact : public sim::Potential {
     Eigen::Matrix<double, 3, 2> tangent;    ///< orthonormal basis of the tangent plane
     Eigen::Vector3d anchor;                 ///< start position moved with the collider, m
   };
-  void deform(const Eigen::Ref<const Eigen::VectorXd>& x) const;  // into positions_
+  /// The points W x of the last x given (a deformation only when x changes).
+  struct Deformed {
+    Eigen::VectorXd x;
+    Eigen::MatrixXd points;
+    bool valid = false;
+  };
+  const Eigen::MatrixXd& deform(const Eigen::Ref<const Eigen::VectorXd>& x, Deformed& cache) const;
   double depth(Eigen::Index point, size_t collider) const;        // guarded depth or infinity
-  /// One point's energy (J), gradient (N) and Hessian or PSD surrogate (N/m) at positions_,
-  /// all colliders and its slips; `slip` walks slips_ (start at 0, points in increasing order).
+  /// One point's energy (J), gradient (N) and Hessian or PSD surrogate (N/m) at position q, all
+  /// colliders and its slips; `slip` walks slips_ (start at 0, points in increasing order).
   struct Term {
     double energy = 0.0;
     Eigen::Vector3d gradient = Eigen::Vector3d::Zero();
     Eigen::Matrix3d hessian = Eigen::Matrix3d::Zero();
     bool active = false;
   };
-  Term term(Eigen::Index point, size_t& slip) const;
+  Term term(Eigen::Index point, const Eigen::Vector3d& q, size_t& slip) const;
+  struct Active {
+    Eigen::Index point = 0;
+    Term term;
+  };
+  /// The active terms at x by increasing point (kept until x, the time or the substep changes).
+  const std::vector<Active>& terms(const Eigen::Ref<const Eigen::VectorXd>& x) const;
+  void forget() { terms_valid_ = line_valid_ = false; }  // after a change of time or law
 
   std::shared_ptr<const Deformer> deformer_;
   std::vector<Collider> colliders_;
@@ -109,7 +127,13 @@ class SurfaceContact : public sim::Potential {
   double smoothing_ = 0.0;        // eps_v h of the current substep, m
   std::vector<char> guarded_;     // point-major, per collider; empty before the first substep
   std::vector<Slip> slips_;       // by increasing point
-  mutable Eigen::MatrixXd X_, positions_, dE_dp_, moved_;
+  mutable Eigen::MatrixXd X_, dE_dp_;
+  mutable Deformed at_, along_;        // x of the last evaluation; dx of the last move
+  mutable std::vector<Active> terms_;  // at at_.x
+  mutable bool terms_valid_ = false;
+  Eigen::VectorXd line_start_, line_move_;  // begin_line's x and dx
+  std::vector<Eigen::Index> line_points_;    // the points that can contribute along it
+  bool line_valid_ = false;
 };
 
 }  // namespace mbi::pipeline

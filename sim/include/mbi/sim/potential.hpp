@@ -45,6 +45,15 @@ class Potential {
   }
   /// E(x), J. Must be finite wherever the step evaluates it (or the step fails).
   virtual double energy(const Eigen::Ref<const Eigen::VectorXd>& x) const = 0;
+  /// One line search: begin_line(x, dx) once, then energy_along(s) = energy(x + s dx) (to
+  /// round-off) for any s, the step's fractions s in (0, 1] mostly, so that a potential can
+  /// prepare the move once (e.g. points linear in x). Override both or neither; the default
+  /// keeps x and dx and evaluates energy(x + s dx).
+  virtual void begin_line(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& dx) {
+    line_x_ = x;
+    line_dx_ = dx;
+  }
+  virtual double energy_along(double s) const { return energy(line_x_ + s * line_dx_); }
   /// Adds dE/dx (3 n, N) to `gradient`.
   virtual void add_gradient(const Eigen::Ref<const Eigen::VectorXd>& x,
                             Eigen::Ref<Eigen::VectorXd> gradient) const = 0;
@@ -53,6 +62,9 @@ class Potential {
   /// sparsity pattern); the step fails naming the first pair that does not.
   virtual void hessian_blocks(const Eigen::Ref<const Eigen::VectorXd>& x,
                               std::vector<NodeBlock>& blocks) const = 0;
+
+ private:
+  Eigen::VectorXd line_x_, line_dx_;  // the default line search's move
 };
 
 }  // namespace mbi::sim
