@@ -12,36 +12,10 @@ import addon_utils
 import bpy
 import numpy as np
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from common import check, fail, positions, select_only, world  # noqa: E402
+
 FRAMES = (1, 6, 11)
-
-
-def fail(message):
-    print("FAIL: " + message)
-    sys.exit(1)
-
-
-def check(condition, message):
-    if not condition:
-        fail(message)
-    print("ok: " + message)
-
-
-def world(obj, local):
-    M = np.array(obj.matrix_world)
-    return local @ M[:3, :3].T + M[:3, 3]
-
-
-def positions(mesh):
-    co = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
-    mesh.vertices.foreach_get("co", co)
-    return co.reshape(-1, 3).astype(np.float64)
-
-
-def select_only(objects, active):
-    bpy.ops.object.select_all(action="DESELECT")
-    for obj in objects:
-        obj.select_set(True)
-    bpy.context.view_layer.objects.active = active
 
 
 def make_model():
