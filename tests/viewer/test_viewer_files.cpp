@@ -197,6 +197,7 @@ TEST_CASE("mbi view: a recording onto a full disk is an error, and no output is 
   const mbi::test::ViewRun r = view(corpus_scene() + " --frames 5 --no-panel --script " + quoted(dir / "keys.txt") +
                                         " --record " + quoted(full / "rec.txt") + " --report " + quoted(dir / "r.json"),
                                     dir);
+  INFO(r.err);
   CHECK(r.code == 2);
   CHECK_THAT(r.err, Catch::StartsWith("mbi view: error: --record ") &&
                         Catch::Contains("rec.txt: write error (No space left on device)"));

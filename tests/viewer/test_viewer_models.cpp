@@ -208,13 +208,12 @@ TEST_CASE("mbi view --video: an ffmpeg that never reads its input is an error af
   fs::create_directory(dir / "bin");
   std::ofstream(dir / "bin" / "ffmpeg") << "#!/bin/sh\nexec sleep 300\n";  // holds its input open, reads nothing
   fs::permissions(dir / "bin" / "ffmpeg", fs::perms::owner_all);
-  const std::string cmd = "PATH=" + q(dir / "bin") + ":\"$PATH\" timeout 120 xvfb-run -a -s '-screen 0 1400x900x24' \"" +
-                          std::string(MBI_EXE) + "\" view " + q(cube()) + " --width 640 --height 480 --no-panel --frames 3 --video " +
-                          q(dir / "v.mp4") + " > /dev/null 2> " + q(dir / "err.txt");
-  const int status = std::system(cmd.c_str());
-  const std::string err = mbi::test::slurp(dir / "err.txt");
+  const mbi::test::ViewRun r = mbi::test::view(
+      q(cube()) + " --width 640 --height 480 --no-panel --frames 3 --video " + q(dir / "v.mp4"), dir, true, {},
+      "PATH=" + q(dir / "bin") + ":\"$PATH\" timeout 120");
+  const std::string& err = r.err;
   INFO(err);
-  CHECK(WEXITSTATUS(status) == 2);  // timeout(1) would give 124
+  CHECK(r.code == 2);  // timeout(1) would give 124
   CHECK(err.find("ffmpeg took no frame data for 10 s; no video written") != std::string::npos);
   CHECK_FALSE(fs::exists(dir / "v.mp4"));
   for (const auto& e : fs::directory_iterator(dir.path())) CHECK(e.path().filename().string().rfind(".mbi-tmp", 0) != 0);
