@@ -21,10 +21,22 @@ std::string shape(Eigen::Index rows, Eigen::Index cols) {
 // and may run on several threads at once: each call takes a scratch of its own from a pool).
 struct Scratch {
   Precompute::PoseScratch pose;  // deform(): M and the Bezier points
+  Eigen::MatrixXd X;             // deform_batch(): a frame whose columns are not contiguous, copied
   interp::BezierPoints GB;       // vjp(): dL/dB, dL/dX through B, dL/dM and dL/dX through M
   Eigen::MatrixXd GX, GMX;
   interp::VertexMatrices GM;
 };
+
+// Frame k (n rows) of the poses X as the methods read a pose (contiguous columns): in place when
+// they are (Fortran order), else copied into `copy` (a C-order numpy array; no allocation after
+// the first frame, where Eigen::Ref would allocate a temporary every time).
+Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>> frame(const interp::ConstPointsRef<double>& X, Eigen::Index k,
+                                                                 Eigen::Index n, Eigen::MatrixXd& copy) {
+  const auto f = X.middleRows(k * n, n);
+  if (f.innerStride() == 1) return {f.data(), f.rows(), f.cols(), Eigen::OuterStride<>(f.outerStride())};
+  copy = f;
+  return {copy.data(), copy.rows(), copy.cols(), Eigen::OuterStride<>(copy.rows())};
+}
 
 }  // namespace
 
@@ -208,7 +220,11 @@ void Deformer::deform_batch(const interp::ConstPointsRef<double>& X, interp::Poi
   const Eigen::Index frames = X.rows() / n;
   if (positions.rows() != frames * p || positions.cols() != d)
     throw Error("positions must be " + shape(frames * p, d) + ", got " + shape(positions.rows(), positions.cols()));
-  for (Eigen::Index k = 0; k < frames; ++k) deform(X.middleRows(k * n, n), positions.middleRows(k * p, p));
+  const Impl& I = *impl_;
+  const Impl::Lease s(I);
+  for (Eigen::Index k = 0; k < frames; ++k)
+    interp::evaluate<double>(I.bezier(frame(X, k, n, (*s).X), *s), I.embedding, positions.middleRows(k * p, p),
+                             I.options.threads);
 }
 
 void Deformer::deform_float(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::Ref<interp::RowMatrixXf> positions) {

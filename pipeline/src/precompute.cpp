@@ -77,7 +77,7 @@ const interp::BezierPoints& Precompute::bezier(Method method, const Eigen::Ref<c
 }
 
 void Precompute::M(Method method, const Eigen::Ref<const Eigen::MatrixXd>& X,
-                   Eigen::Ref<interp::VertexMatrices> out) const {
+                   interp::MatrixOut out) const {
   check_pose(X);
   switch (method) {
     case Method::ModifiedBI:

@@ -70,8 +70,9 @@ void bind_modified_bi(py::module_& m) {
       [](Solver& s, const py::object& X, const py::object& out) {
         const int n = s.object.vertices(), d = s.object.dim();
         const Input x = pose(X, n, d);
-        return result(out, static_cast<Eigen::Index>(n) * d, d, {&x},
-                      [&] { return s.run([&](const ModifiedBI& b) { return b.solve(x.map); }); });
+        return result(out, static_cast<Eigen::Index>(n) * d, d, {&x}, [&](interp::MatrixOut M) {
+          s.run([&](const ModifiedBI& b) { b.solve(kept_columns(x), M); });
+        });
       },
       "X"_a, py::kw_only(), "out"_a = py::none(),
       "M ((n d), d) for the deformed control positions X (n, d): rows [i d, i d + d) hold M_i. "
@@ -89,8 +90,11 @@ void bind_modified_bi(py::module_& m) {
         const int n = s.object.vertices(), d = s.object.dim();
         const Input x = pose(X, n, d), mm = vertex_matrices(M, "M", n, d);
         const int K = (d + 1) * (d + 2) / 2;
-        return result(out, static_cast<Eigen::Index>(s.object.elements()) * K, d, {&x, &mm},
-                      [&] { return s.run([&](const ModifiedBI& b) { return b.bezier(x.map, mm.map); }); });
+        return result(out, static_cast<Eigen::Index>(s.object.elements()) * K, d, {&x, &mm}, [&](interp::MatrixOut B) {
+          s.run([&](const ModifiedBI& b) {
+            interp::bezier_points(b.rest_positions(), b.elements_matrix(), kept_columns(x), mm.map, B);
+          });
+        });
       },
       "X"_a, "M"_a, py::kw_only(), "out"_a = py::none(),
       "Element Bezier points ((m K), d), K = (d+1)(d+2)/2: per element its d+1 vertices, then its edge points.");
@@ -113,7 +117,7 @@ void bind_phong(py::module_& m) {
           [](const Phong& p, const py::object& X, const py::object& out) {
             const Input x = pose(X, p.vertices(), p.dim());
             return result(out, static_cast<Eigen::Index>(p.vertices()) * p.dim(), p.dim(), {&x},
-                          [&] { return without_gil([&] { return p.M(x.map); }); });
+                          [&](interp::MatrixOut M) { without_gil([&] { p.M(kept_columns(x), M); }); });
           },
           "X"_a, py::kw_only(), "out"_a = py::none(), "M ((n d), d) at pose X (n, d).")
       .def(

@@ -4,6 +4,7 @@
 
 #include <mbi/base/timer.hpp>
 #include <mbi/interp/embed.hpp>
+#include <mbi/interp/modified_bi.hpp>
 
 #include <pybind11/stl.h>  // std::vector and std::string arguments and results
 
@@ -54,18 +55,30 @@ auto without_gil(F&& f) {
   return f();
 }
 
-/// A control-sized result (M, Bezier points) that compute() makes (releasing the GIL itself):
-/// moved into a new array when out is None (no copy; Fortran order, which FastEvaluator reads
-/// in place), else written into out (rows x cols, checked before compute() runs, against the
-/// call's inputs too).
+/// A control-sized result (M, Bezier points) that compute(target) writes into an
+/// interp::MatrixOut (releasing the GIL itself): a new Eigen matrix handed over without a copy
+/// when out is None (Fortran order, which FastEvaluator reads in place), else out itself, of
+/// either order (rows x cols, checked before compute() runs, against the call's inputs too).
 template <class F>
 py::array result(const py::handle& out, Eigen::Index rows, Eigen::Index cols, std::initializer_list<const Input*> inputs,
                  F&& compute) {
-  if (out.is_none()) return to_numpy(compute());
+  if (out.is_none()) {
+    Eigen::MatrixXd A(rows, cols);
+    compute(interp::MatrixOut(A));
+    return to_numpy(std::move(A));
+  }
   Output o = float_output(out, "out", rows, cols);
   check_disjoint(o, inputs);
-  o.map = compute();
+  compute(interp::MatrixOut(o.map));
   return o.finish();
+}
+
+/// A pose or M read where it is when its columns are contiguous (Fortran order), else copied
+/// into a matrix kept per thread: what the methods' Eigen::Ref<const MatrixXd> takes without the
+/// temporary it would allocate for a C-order array.
+inline Eigen::Ref<const Eigen::MatrixXd> kept_columns(const Input& in) {
+  thread_local Eigen::MatrixXd copy;
+  return columns(in.map, copy);
 }
 
 /// An object whose calls change state it keeps (a FastEvaluator's per-call terms, a Deformer's

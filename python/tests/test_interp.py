@@ -51,6 +51,24 @@ def test_modified_bi_solve_matches_the_defining_formula(mesh):
     assert np.abs(mbi.bezier_points(U, T, X, M) - B).max() == 0.0
 
 
+@pytest.mark.parametrize("layout", ["C", "F", "rows apart"])
+def test_out_is_written_where_it_is_and_equals_the_new_result(mesh, layout):
+    """solve, Phong.M and bezier with out= write into the caller's array itself (C order, Fortran
+    order, every other row of a larger one) the same bits as the calls that return a new array."""
+    U, T = mesh
+    X = meshes.pose(U)
+    solver, phong = mbi.ModifiedBI(U, T), mbi.Phong(U, T)
+    M = solver.solve(X)
+    for call, expect in ((lambda o: solver.solve(X, out=o), M), (lambda o: phong.M(X, out=o), phong.M(X)),
+                         (lambda o: solver.bezier(X, M, out=o), solver.bezier(X, M))):
+        if layout == "rows apart":
+            out = np.full((2 * expect.shape[0], expect.shape[1]), np.nan)[::2]
+        else:
+            out = np.full(expect.shape, np.nan, order=layout)
+        assert call(out) is out
+        assert np.array_equal(out, expect)
+
+
 def test_every_method_reproduces_affine_maps(mesh):
     U, T = mesh
     d = U.shape[1]

@@ -27,3 +27,18 @@ def test_a_loop_with_out_faults_no_page_after_the_first_call(method, call):
 def test_the_count_sees_page_faults():
     # a fixed mmap threshold: each new 1.7 MB result is mapped afresh, 400 pages faulted in a call
     assert faults_per_call("modified-bi", "fresh", {"MALLOC_MMAP_THRESHOLD_": "131072"}) > 100
+
+
+def test_calls_with_out_allocate_no_block_over_4_kb():
+    # glibc maps every block over 4 KB on its own (the heap's top kept trimmed, so that none comes
+    # from it) and unmaps it when freed: a temporary of M, B, a pose or the positions in a call
+    # faults its pages in again every call, as a new M does (solve_new, 32 KB: 8 pages)
+    calls = ["solve", "phong", "bezier", "deform", "vjp", "evaluate", "solve_new"]
+    result = subprocess.run([sys.executable, os.path.join(HERE, "faults.py"), "modified-bi", *calls],
+                            capture_output=True, text=True, timeout=300,
+                            env=dict(os.environ, MALLOC_MMAP_THRESHOLD_="4096", MALLOC_TRIM_THRESHOLD_="0",
+                                     MALLOC_TOP_PAD_="0"))
+    assert result.returncode == 0, result.stderr
+    faults = dict(zip(calls, map(float, result.stdout.split())))
+    assert faults.pop("solve_new") >= 4, faults
+    assert all(f < 1 for f in faults.values()), faults

@@ -686,7 +686,7 @@ VertexMatrices ModifiedBI::solve(const Eigen::Ref<const Eigen::MatrixXd>& X) con
   return M;
 }
 
-void ModifiedBI::solve(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::Ref<VertexMatrices> M) const {
+void ModifiedBI::solve(const Eigen::Ref<const Eigen::MatrixXd>& X, MatrixOut M) const {
   const Impl& I = *impl_;
   const int d = I.d, n = I.n;
   if (X.rows() != n || X.cols() != d)
@@ -765,8 +765,7 @@ BezierPoints ModifiedBI::bezier(const Eigen::Ref<const Eigen::MatrixXd>& X, cons
 }
 
 namespace {
-void check_xm(int n, int d, const Eigen::Ref<const Eigen::MatrixXd>& X,
-              const Eigen::Ref<const VertexMatrices>& M) {
+void check_xm(int n, int d, const Eigen::Ref<const Eigen::MatrixXd>& X, const MatrixIn& M) {
   if (X.rows() != n || X.cols() != d)
     throw Error("X must be " + std::to_string(n) + " x " + std::to_string(d) +
                 ", got " + std::to_string(X.rows()) + " x " + std::to_string(X.cols()));
@@ -785,8 +784,7 @@ BezierPoints bezier_bi(const Eigen::Ref<const Eigen::MatrixXd>& X,
   return B;
 }
 
-void bezier_bi(const Eigen::Ref<const Eigen::MatrixXd>& X, const Eigen::Ref<const Eigen::MatrixXi>& T,
-               Eigen::Ref<BezierPoints> B) {
+void bezier_bi(const Eigen::Ref<const Eigen::MatrixXd>& X, const Eigen::Ref<const Eigen::MatrixXi>& T, MatrixOut B) {
   const int d = static_cast<int>(X.cols());
   if ((d != 2 && d != 3) || T.cols() != d + 1)
     throw Error("X must be n x d (d = 2, 3) and T m x (d+1)");
@@ -815,8 +813,7 @@ BezierPoints bezier_points(const Eigen::Ref<const Eigen::MatrixXd>& U,
 }
 
 void bezier_points(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
-                   const Eigen::Ref<const Eigen::MatrixXd>& X, const Eigen::Ref<const VertexMatrices>& M,
-                   Eigen::Ref<BezierPoints> B) {
+                   const Eigen::Ref<const Eigen::MatrixXd>& X, const MatrixIn& M, MatrixOut B) {
   detail::check_shapes(U, T);
   const int d = static_cast<int>(U.cols());
   const int n = static_cast<int>(U.rows());

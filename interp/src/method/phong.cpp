@@ -64,7 +64,7 @@ Phong::Phong(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const 
 }
 
 namespace {
-void check_size(const char* what, const Eigen::Ref<const Eigen::MatrixXd>& A, Eigen::Index rows, Eigen::Index cols) {
+void check_size(const char* what, const MatrixIn& A, Eigen::Index rows, Eigen::Index cols) {
   if (A.rows() != rows || A.cols() != cols)
     throw Error(std::string(what) + " must be " + std::to_string(rows) + " x " + std::to_string(cols) + ", got " +
                 std::to_string(A.rows()) + " x " + std::to_string(A.cols()));
@@ -99,7 +99,7 @@ Eigen::MatrixXd Phong::vertex_gradients(const Eigen::Ref<const Eigen::MatrixXd>&
   return F;
 }
 
-void Phong::vertex_gradients(const Eigen::MatrixXd& Fe, Eigen::Ref<Eigen::MatrixXd> F) const {
+void Phong::vertex_gradients(const Eigen::MatrixXd& Fe, MatrixOut F) const {
   const int d = dim(), n = vertices();
   F.setZero();
   for (int i = 0; i < n; ++i) {
@@ -117,7 +117,7 @@ VertexMatrices Phong::M(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
   return out;
 }
 
-void Phong::M(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::Ref<VertexMatrices> out) const {
+void Phong::M(const Eigen::Ref<const Eigen::MatrixXd>& X, MatrixOut out) const {
   check_size("M", out, static_cast<Eigen::Index>(vertices()) * dim(), dim());
   thread_local Eigen::MatrixXd Fe;  // the element gradients, kept per thread (no allocation per frame)
   element_gradients(X, Fe);

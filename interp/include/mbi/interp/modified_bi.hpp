@@ -65,6 +65,11 @@ using VertexMatrices = Eigen::MatrixXd;
 /// points P_ij for local pairs in the order of bezier_edges(d).
 using BezierPoints = Eigen::MatrixXd;
 
+/// Caller memory of any positive strides (a numpy array in C or Fortran order, a block), which
+/// the out-variants write (MatrixOut) or read (MatrixIn) where it is, without a copy.
+using MatrixOut = Eigen::Ref<Eigen::MatrixXd, 0, Eigen::Stride<Eigen::Dynamic, Eigen::Dynamic>>;
+using MatrixIn = Eigen::Ref<const Eigen::MatrixXd, 0, Eigen::Stride<Eigen::Dynamic, Eigen::Dynamic>>;
+
 /// Local vertex pairs (i<j) of the edge control points: 3 in 2D, 6 in 3D.
 const std::vector<std::pair<int, int>>& bezier_edges(int d);
 
@@ -112,7 +117,7 @@ class ModifiedBI {
   VertexMatrices solve(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
   /// The same into caller memory M ((n d) x d already, Error otherwise). Its temporaries are kept
   /// per thread: after the first call on a thread it allocates nothing.
-  void solve(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::Ref<VertexMatrices> M) const;
+  void solve(const Eigen::Ref<const Eigen::MatrixXd>& X, MatrixOut M) const;
 
   /// The transpose of solve(), which is linear in X (fact 11): dL/dX (n x d) from
   /// G = dL/dM ((n d) x d). One solve with the cached factor (the system is symmetric) and one
@@ -145,8 +150,7 @@ class ModifiedBI {
 BezierPoints bezier_bi(const Eigen::Ref<const Eigen::MatrixXd>& X,
                        const Eigen::Ref<const Eigen::MatrixXi>& T);
 /// The same into caller memory B ((m K) x d already, Error otherwise).
-void bezier_bi(const Eigen::Ref<const Eigen::MatrixXd>& X, const Eigen::Ref<const Eigen::MatrixXi>& T,
-               Eigen::Ref<BezierPoints> B);
+void bezier_bi(const Eigen::Ref<const Eigen::MatrixXd>& X, const Eigen::Ref<const Eigen::MatrixXi>& T, MatrixOut B);
 
 /// Bezier control points from any M (method.md fact 5); needs rest positions U.
 BezierPoints bezier_points(const Eigen::Ref<const Eigen::MatrixXd>& U,
@@ -154,8 +158,7 @@ BezierPoints bezier_points(const Eigen::Ref<const Eigen::MatrixXd>& U,
                            const Eigen::Ref<const Eigen::MatrixXd>& X, const VertexMatrices& M);
 /// The same into caller memory B ((m K) x d already, Error otherwise).
 void bezier_points(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
-                   const Eigen::Ref<const Eigen::MatrixXd>& X, const Eigen::Ref<const VertexMatrices>& M,
-                   Eigen::Ref<BezierPoints> B);
+                   const Eigen::Ref<const Eigen::MatrixXd>& X, const MatrixIn& M, MatrixOut B);
 
 /// The defining formula x(u) = sum_i phi_i (x_i + M_i (u - u_i)) at rest point u in element e
 /// (slow; for tests and reference).

@@ -45,7 +45,7 @@ class Phong {
   VertexMatrices M(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
   /// The same into caller memory M ((n d) x d already, Error otherwise); its temporaries are
   /// kept per thread, so after the first call on a thread it allocates nothing of the mesh's size.
-  void M(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::Ref<VertexMatrices> M) const;
+  void M(const Eigen::Ref<const Eigen::MatrixXd>& X, MatrixOut M) const;
 
   /// The transpose of M(), which is linear in X: dL/dX (n x d) from G = dL/dM ((n d) x d).
   /// Throws Error on a size mismatch or NaN.
@@ -68,7 +68,7 @@ class Phong {
 
  private:
   void element_gradients(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::MatrixXd& F) const;
-  void vertex_gradients(const Eigen::MatrixXd& Fe, Eigen::Ref<Eigen::MatrixXd> F) const;
+  void vertex_gradients(const Eigen::MatrixXd& Fe, MatrixOut F) const;
   Eigen::MatrixXd U_;
   Eigen::MatrixXi T_;
   Eigen::MatrixXd Dm_inv_;  // (m d) x d, rows [e d, e d + d) hold D_m^-1 of element e

@@ -56,7 +56,7 @@ class Precompute {
   const interp::BezierPoints& bezier(Method method, const Eigen::Ref<const Eigen::MatrixXd>& X,
                                      PoseScratch& scratch) const;
   /// M into caller memory ((n d) x d already), for a method already built; zero for BI.
-  void M(Method method, const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::Ref<interp::VertexMatrices> out) const;
+  void M(Method method, const Eigen::Ref<const Eigen::MatrixXd>& X, interp::MatrixOut out) const;
   /// The transpose of M(method, X), which is linear in X: dL/dX (n x d) from G = dL/dM ((n d) x d),
   /// for a method already built; zero for BI.
   Eigen::MatrixXd M_transpose(Method method, const interp::VertexMatrices& G) const;
