@@ -3,22 +3,27 @@ allocate and fault, and a first 600 MB batch against the same frames looped.
 
     cmake --preset release -DMBI_PYTHON_TIMING=ON && cmake --build --preset release --target mbi_python
     PYTHONPATH=build/release/python python3 python/bench/frame_loop.py [--calls N] [--threads T]
-        [--batch-mb MB] [--skip-batch]
+        [--batch-mb MB] [--batch-runs R] [--skip-batch] [--quick]
 
-The module needs the benchmark's clocks (CMake MBI_PYTHON_TIMING=ON; the shipped one has none).
+The C++ columns need the benchmark's clocks (CMake MBI_PYTHON_TIMING=ON); with the shipped module
+(no clocks) the Python columns, the allocations and the batch are measured alone. --quick (CI,
+scripts/bench.sh --quick): a few seconds, small counts, a 24 MB batch, no idle wait.
 Sizes as in python/tests/faults.py: 1,000 random points in a 7 x 7 x 6-cell box (1,764 tetrahedra).
 
 1. Deformer.deform(X, out=) and Deformer.vjp(G, out=) for BI, Phong and modified-BI: median of
    each Python call and of the same C++ call in a C++ loop (mbi._mbi._timing), in alternating
-   blocks of 100; "fresh" is a new process's first 100 + 100 calls after construction and one call,
-   "warm" N calls (default 10,000) of a process that ran many before.
+   blocks of 100, and of each Python call less its own C++ section (the bindings clock the part
+   they run without the GIL: "outside C++" is what the binding adds to that very call); "fresh"
+   is a new process's first 200 + 200 calls after construction and one call, in blocks of 20
+   that alternate which side goes first, "warm" N calls (default 10,000) of a process that ran
+   many before.
 2. 100 calls with out= (and mbi.evaluate of the method's Bezier points): the peak of the memory
    tracemalloc traces (numpy's arrays and Python's objects) and minor page faults per call.
 3. deform of a batch of frames into a new array (mbi allocates it) of about 600 MB, in a new
-   process, per frame, against the same frames one at a time into one out= array; three processes
-   one after the other. Beside it, the machine's own cost of a first touch: a new process filling
-   a new numpy array of the same size, once after --idle seconds without work (a virtual
-   machine's host may have taken back the memory freed before) and once right after.
+   process, per frame, against the same frames one at a time into one out= array; R processes
+   (default 4) one after the other. Beside it, the machine's own cost of a first touch: a new
+   process filling a new numpy array of the same size, once after --idle seconds without work
+   (a virtual machine's host may have taken back the memory freed before) and once right after.
 """
 import argparse
 import json
@@ -51,22 +56,38 @@ def calls(deformer, X, G, out, dX):
             ("vjp", lambda: deformer.vjp(G, out=dX), lambda n: _mbi._timing.vjp(deformer, G, dX, n))]
 
 
+def timing():
+    """The C++ loops and the section clock, or None in a module built without them."""
+    return getattr(_mbi, "_timing", None)
+
+
 def python_times(call, n):
-    seconds, clock = np.empty(n), time.perf_counter_ns
+    """Seconds of n calls from Python, and of each call's C++ section (NaN without clocks)."""
+    seconds, section, clock = np.empty(n), np.full(n, np.nan), time.perf_counter_ns
+    last_call = timing().last_call if timing() else None
     for k in range(n):
         t0 = clock()
         call()
         seconds[k] = (clock() - t0) * 1e-9
-    return seconds
+        if last_call:
+            section[k] = last_call()
+    return seconds, section
 
 
-def compare(py_call, cpp_times, n, block=100):
-    """Medians (us) of n Python calls and n C++ calls, in alternating blocks."""
-    py, cpp = [], []
-    for _ in range(max(1, n // block)):
-        py.append(python_times(py_call, block))
-        cpp.append(cpp_times(block))
-    return float(np.median(np.concatenate(py))) * 1e6, float(np.median(np.concatenate(cpp))) * 1e6
+def compare(py_call, cpp_times, n, block=100, alternate=False):
+    """Medians (us) of n Python calls, n C++ calls (NaN without clocks) and of each Python call
+    less its C++ section, in blocks; alternate: every other block the C++ side goes first."""
+    py, cpp, outside = [], [], []
+    for k in range(max(1, n // block)):
+        if alternate and k % 2 and timing():
+            cpp.append(cpp_times(block))
+        total, section = python_times(py_call, block)
+        py.append(total)
+        outside.append(total - section)
+        if timing() and not (alternate and k % 2):
+            cpp.append(cpp_times(block))
+    med = lambda v: float(np.median(np.concatenate(v))) * 1e6 if v else float("nan")
+    return med(py), med(cpp), med(outside)
 
 
 def per_call(method, threads, n, fresh):
@@ -74,9 +95,11 @@ def per_call(method, threads, n, fresh):
     result = {}
     for name, py_call, cpp_times in calls(deformer, X, G, out, dX):
         py_call()
-        if not fresh:
-            compare(py_call, cpp_times, 2000)  # warm-up
-        result[name] = compare(py_call, cpp_times, 100 if fresh else n)
+        if fresh:
+            result[name] = compare(py_call, cpp_times, 200, block=20, alternate=True)
+        else:
+            compare(py_call, cpp_times, min(2000, n))  # warm-up
+            result[name] = compare(py_call, cpp_times, n)
     return result
 
 
@@ -133,7 +156,7 @@ def child(args):
     """Runs one measurement in this (new) process and prints it as JSON."""
     kind = args.child
     if kind == "fresh":
-        print(json.dumps(per_call(args.method, args.threads, 100, True)))
+        print(json.dumps(per_call(args.method, args.threads, 0, True)))
     elif kind == "loop":
         print(json.dumps(loop_costs(args.method, args.threads)))
     elif kind == "fill":
@@ -147,33 +170,23 @@ def in_new_process(*argv):
     return json.loads(result.stdout)
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--calls", type=int, default=10_000)
-    parser.add_argument("--batch-mb", type=float, default=600)
-    parser.add_argument("--threads", type=int, default=0, help="the Deformer's threads (0: all cores)")
-    parser.add_argument("--skip-batch", action="store_true")
-    parser.add_argument("--idle", type=float, default=20)
-    parser.add_argument("--child", choices=("fresh", "loop", "batch", "fill"), help=argparse.SUPPRESS)
-    parser.add_argument("--method", default="modified-bi", help=argparse.SUPPRESS)
-    args = parser.parse_args()
-    if getattr(_mbi, "_timing", None) is None:
-        parser.exit(2, "frame_loop.py: this module has no clocks: build it with "
-                       "cmake --preset release -DMBI_PYTHON_TIMING=ON\n")
-    if args.child:
-        return child(args)
-
-    print(f"1,000 points, 1,764 tetrahedra; Deformer threads={args.threads} ({mbi.threads()} cores)")
+def print_per_call(args):
+    print(f"1,000 points, 1,764 tetrahedra; Deformer threads={args.threads} ({mbi.threads()} cores); "
+          f"C++ loops: {'yes' if timing() else 'none in this module (MBI_PYTHON_TIMING=OFF)'}")
     print()
-    print("| method | call | process | from Python (us) | C++ alone (us) | difference (us) |")
-    print("|---|---|---|---|---|---|")
+    print("| method | call | process | from Python (us) | C++ alone (us) | difference (us) | outside C++ (us) |")
+    print("|---|---|---|---|---|---|---|")
     for method in METHODS:
         fresh = in_new_process("--child", "fresh", "--method", method, "--threads", str(args.threads))
         warm = per_call(method, args.threads, args.calls, False)
         for name in ("deform", "vjp"):
-            for process, (py, cpp) in (("fresh", fresh[name]), ("warm", warm[name])):
-                print(f"| {method} | {name}(out=) | {process} | {py:.2f} | {cpp:.2f} | {py - cpp:+.2f} |")
+            for process, (py, cpp, outside) in (("fresh", fresh[name]), ("warm", warm[name])):
+                print(f"| {method} | {name}(out=) | {process} | {py:.2f} | {cpp:.2f} | {py - cpp:+.2f} | "
+                      f"{outside:+.2f} |")
     print()
+
+
+def print_loop_costs(args):
     print("| method | call | numpy bytes at the peak of 100 calls | minor page faults a call |")
     print("|---|---|---|---|")
     for method in METHODS:
@@ -183,11 +196,12 @@ def main():
             call = "mbi.evaluate(B, embedding, out=)" if name == "evaluate" else f"Deformer.{name}(out=)"
             print(f"| {method} | {call} | {peak} | {faults:.2f} |")
     print()
-    if args.skip_batch:
-        return
+
+
+def print_batches(args):
     print("| first batch deform, new process | ms a frame | looped into one out=, ms a frame | ratio |")
     print("|---|---|---|---|")
-    for run in range(3):
+    for run in range(args.batch_runs):
         b = in_new_process("--child", "batch", "--batch-mb", str(args.batch_mb))
         print(f"| run {run + 1}: modified-bi, 100,000 points, {b['frames']} frames, {b['megabytes']:.0f} MB | "
               f"{b['first']:.2f} | {b['looped']:.2f} | {b['first'] / b['looped']:.2f}x |")
@@ -197,6 +211,28 @@ def main():
     warm = in_new_process("--child", "fill", "--batch-mb", str(args.batch_mb))
     print(f"numpy fill of a new {args.batch_mb:.0f} MB array in a new process: after {args.idle:.0f} s idle "
           f"{cold['first']:.3f} s, right after {warm['first']:.3f} s; a second fill {warm['again']:.3f} s")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--calls", type=int, default=10_000)
+    parser.add_argument("--batch-mb", type=float, default=600)
+    parser.add_argument("--batch-runs", type=int, default=4)
+    parser.add_argument("--threads", type=int, default=0, help="the Deformer's threads (0: all cores)")
+    parser.add_argument("--skip-batch", action="store_true")
+    parser.add_argument("--idle", type=float, default=20)
+    parser.add_argument("--quick", action="store_true", help="a few seconds (CI): small counts, a 24 MB batch")
+    parser.add_argument("--child", choices=("fresh", "loop", "batch", "fill"), help=argparse.SUPPRESS)
+    parser.add_argument("--method", default="modified-bi", help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.child:
+        return child(args)
+    if args.quick:
+        args.calls, args.batch_mb, args.batch_runs, args.idle = 200, 24, 1, 0
+    print_per_call(args)
+    print_loop_costs(args)
+    if not args.skip_batch:
+        print_batches(args)
 
 
 if __name__ == "__main__":
