@@ -153,11 +153,26 @@ void check_collider(const Collider& c, const std::string& name) {
 }
 
 Distance signed_distance(const Collider& c, const Eigen::Vector3d& p, double time) {
+  if (c.motion.velocity.isZero() && c.motion.angular_velocity == 0.0) return local_distance(c, p);  // static
   const Pose ps = pose(c.motion, time);
   const Eigen::Vector3d local = c.motion.center + ps.rot.transpose() * (p - ps.shift);
   Distance d = local_distance(c, local);
   d.normal = ps.rot * d.normal;
   return d;
+}
+
+Collider posed(const Collider& c, double time) {
+  const Pose ps = pose(c.motion, time);
+  const auto place = [&](const Eigen::Vector3d& local) -> Eigen::Vector3d {
+    return ps.shift + ps.rot * (local - c.motion.center);
+  };
+  Collider out = c;
+  out.motion = sim::RigidMotion();
+  out.point = place(c.point);
+  out.end = place(c.end);
+  out.normal = ps.rot * c.normal.normalized();
+  out.axes = ps.rot * c.axes;
+  return out;
 }
 
 Eigen::Vector3d collider_velocity(const Collider& c, const Eigen::Vector3d& p, double time) {

@@ -50,15 +50,7 @@ std::shared_ptr<SurfaceContact> make_surface_contact(const Eigen::Ref<const Eige
 int touching_points(const SurfaceContact& contact, const Eigen::Ref<const Eigen::MatrixXd>& X) {
   const Eigen::MatrixXd Xt = X.transpose();  // node-major, as the simulator stacks x
   const Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(Xt.data(), Xt.size());
-  const Eigen::MatrixXd p = contact.points(x);
-  int count = 0;
-  for (Eigen::Index i = 0; i < p.rows(); ++i)
-    for (const Collider& c : contact.colliders())
-      if (signed_distance(c, p.row(i).transpose(), contact.time()).value < 0) {
-        ++count;
-        break;
-      }
-  return count;
+  return contact.touching(x);
 }
 
 }  // namespace mbi::pipeline

@@ -1,8 +1,10 @@
 #include <mbi/error.hpp>
 #include <mbi/pipeline/contact_laws.hpp>
 #include <mbi/pipeline/surface_contact.hpp>
+#include <mbi/interp/adjoint.hpp>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -27,6 +29,10 @@ Eigen::Matrix<double, 3, 2> tangent_basis(const Eigen::Vector3d& n) {
   return T;
 }
 
+/// Whether the point's Bernstein weights (b_i b_j products) are >= 0, up to a deviation from its
+/// element's Bezier hull of 1e-8 of the element's size (far inside gather's margin).
+bool in_hull(const interp::Embedding& emb, Eigen::Index p) { return emb.bary.row(p).minCoeff() >= -1e-9; }
+
 }  // namespace
 
 SurfaceContact::SurfaceContact(std::shared_ptr<const Deformer> deformer, std::vector<Collider> colliders,
@@ -42,6 +48,8 @@ SurfaceContact::SurfaceContact(std::shared_ptr<const Deformer> deformer, std::ve
   diagonal_ = (U.colwise().maxCoeff() - U.colwise().minCoeff()).norm();
   max_depth_ = 1e-3 * diagonal_;
   friction_velocity_ = 1e-4 * diagonal_;
+  index_points();
+  set_time(0.0);
   const Eigen::MatrixXd P = deformer_->deform(U);
   for (size_t c = 0; c < colliders_.size(); ++c)
     for (Eigen::Index p = 0; p < P.rows(); ++p) {
@@ -53,9 +61,27 @@ SurfaceContact::SurfaceContact(std::shared_ptr<const Deformer> deformer, std::ve
     }
 }
 
+void SurfaceContact::index_points() {
+  const interp::Embedding& emb = deformer_->embedding();
+  const int m = deformer_->elements();
+  element_start_.assign(static_cast<size_t>(m) + 1, 0);
+  for (Eigen::Index p = 0; p < emb.bary.rows(); ++p) {
+    if (in_hull(emb, p)) ++element_start_[emb.element(p) + 1];
+    else unbounded_.push_back(p);
+  }
+  for (int e = 0; e < m; ++e) element_start_[e + 1] += element_start_[e];
+  element_points_.resize(static_cast<size_t>(element_start_[m]));
+  std::vector<int> next(element_start_.begin(), element_start_.end() - 1);
+  for (Eigen::Index p = 0; p < emb.bary.rows(); ++p)
+    if (in_hull(emb, p)) element_points_[next[emb.element(p)]++] = static_cast<int>(p);
+  marks_.assign(static_cast<size_t>(emb.bary.rows()), 0);
+}
+
 void SurfaceContact::set_time(double time) {
   if (!std::isfinite(time)) throw Error("contact time must be finite");
   time_ = time;
+  posed_.clear();
+  for (const Collider& c : colliders_) posed_.push_back(posed(c, time));
   forget();
 }
 
@@ -81,17 +107,17 @@ void SurfaceContact::begin_substep_at(double start_time, double end_time, const 
                                       const Eigen::Ref<const Eigen::VectorXd>&) {
   if (!std::isfinite(start_time)) throw Error("contact time must be finite");
   set_time(end_time);
-  at_.valid = along_.valid = false;  // a fresh deformation every substep
-  const Eigen::MatrixXd& P = deform(x, at_);
-  const size_t C = colliders_.size();
-  guarded_.assign(static_cast<size_t>(P.rows()) * C, 0);
   slips_.clear();
+  const size_t C = colliders_.size();
+  guarded_.assign(static_cast<size_t>(deformer_->points()) * C, 1);  // points away from every collider
+  const Sample& S = sample(x);
   const double h = end_time - start_time;
   smoothing_ = friction_velocity_ * h;
-  for (Eigen::Index p = 0; p < P.rows(); ++p)
+  for (size_t i = 0; i < S.points.size(); ++i)
     for (size_t c = 0; c < C; ++c) {
-      const Eigen::Vector3d q = P.row(p).transpose();
-      const Distance d = signed_distance(colliders_[c], q, end_time);
+      const Eigen::Index p = S.points[i];
+      const Eigen::Vector3d q = S.P.row(static_cast<Eigen::Index>(i)).transpose();
+      const Distance d = signed_distance(posed_[c], q, end_time);
       guarded_[static_cast<size_t>(p) * C + c] = d.value > -max_depth_;
       if (d.value >= 0 || colliders_[c].friction == 0 || !(h > 0)) continue;
       const double force = -contact::normal_energy(d.value, stiffness_, depth(p, c)).slope;
@@ -102,7 +128,7 @@ void SurfaceContact::begin_substep_at(double start_time, double end_time, const 
       s.anchor = q + collider_displacement(colliders_[c], q, start_time, end_time);
       if (s.weight > 0 && std::isfinite(s.weight)) slips_.push_back(s);
     }
-  forget();  // guards and slips changed
+  forget();  // guards and slips changed; the slips' points are evaluated from now on
 }
 
 double SurfaceContact::depth(Eigen::Index point, size_t collider) const {
@@ -110,29 +136,134 @@ double SurfaceContact::depth(Eigen::Index point, size_t collider) const {
   return max_depth_;
 }
 
-const Eigen::MatrixXd& SurfaceContact::deform(const Eigen::Ref<const Eigen::VectorXd>& x, Deformed& cache) const {
+void SurfaceContact::check_size(const Eigen::Ref<const Eigen::VectorXd>& x) const {
   const int n = deformer_->vertices();
   if (x.size() != 3 * n)
     throw Error("contact: node positions must have " + std::to_string(3 * n) + " entries, got " +
                 std::to_string(x.size()));
-  if (cache.valid && cache.x == x) return cache.points;
-  if (&cache == &at_) terms_valid_ = false;
-  cache.valid = false;
-  X_.resize(n, 3);
-  for (int i = 0; i < n; ++i) X_.row(i) = x.segment<3>(3 * i).transpose();
-  cache.points.resize(deformer_->points(), 3);
-  deformer_->deform(X_, cache.points);
-  cache.x = x;
-  cache.valid = true;
-  return cache.points;
 }
 
-Eigen::MatrixXd SurfaceContact::points(const Eigen::Ref<const Eigen::VectorXd>& x) const { return deform(x, at_); }
+const Eigen::MatrixXd& SurfaceContact::nodes(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  check_size(x);
+  const int n = deformer_->vertices();
+  X_.resize(n, 3);
+  for (int i = 0; i < n; ++i) X_.row(i) = x.segment<3>(3 * i).transpose();
+  return X_;
+}
+
+void SurfaceContact::gather(const interp::BezierPoints& B, const Eigen::VectorXd& reach,
+                            std::vector<Eigen::Index>& points) const {
+  const int m = deformer_->elements();
+  const Eigen::Index K = B.rows() / m;
+  std::vector<Eigen::Index> picked;
+  for (int e = 0; e < m; ++e) {
+    if (element_start_[e] == element_start_[e + 1]) continue;
+    const auto Be = B.middleRows(e * K, K);
+    const Eigen::RowVector3d c = Be.colwise().mean();
+    const double r = (Be.rowwise() - c).rowwise().norm().maxCoeff();
+    // far beyond round-off of the points' positions and of the per-point tests
+    const double margin = 4e-6 * (diagonal_ + c.norm() + r + reach(e));
+    bool near = false;
+    for (size_t k = 0; k < colliders_.size() && !near; ++k) {
+      // the least distance on the hull: at a Bezier point for a plane (linear), else the sphere's
+      const Collider& col = posed_[k];
+      double lower = kInf;
+      if (col.shape == ColliderShape::Plane) {
+        for (Eigen::Index j = 0; j < K; ++j)
+          lower = std::min(lower, signed_distance(col, Be.row(j).transpose(), time_).value);
+      } else {
+        lower = signed_distance(col, c.transpose(), time_).value - r;
+      }
+      near = lower < reach(e) + margin;
+    }
+    if (near)
+      for (int i = element_start_[e]; i < element_start_[e + 1]; ++i) marks_[element_points_[i]] = 1;
+  }
+  for (Eigen::Index p : unbounded_) marks_[p] = 1;
+  for (const Slip& s : slips_) marks_[s.point] = 1;
+  points.clear();
+  for (size_t p = 0; p < marks_.size(); ++p)
+    if (marks_[p]) {
+      points.push_back(static_cast<Eigen::Index>(p));
+      marks_[p] = 0;
+    }
+}
+
+void SurfaceContact::select(const std::vector<Eigen::Index>& points, interp::Embedding& subset) const {
+  const interp::Embedding& emb = deformer_->embedding();
+  const Eigen::Index k = static_cast<Eigen::Index>(points.size());
+  subset.element.resize(k);
+  subset.bary.resize(k, emb.bary.cols());
+  for (Eigen::Index i = 0; i < k; ++i) {
+    subset.element(i) = emb.element(points[static_cast<size_t>(i)]);
+    subset.bary.row(i) = emb.bary.row(points[static_cast<size_t>(i)]);
+  }
+}
+
+void SurfaceContact::evaluate(const interp::BezierPoints& B, const interp::Embedding& subset,
+                              Eigen::MatrixXd& out) const {
+  out.resize(subset.size(), 3);
+  if (subset.size() == 0) return;
+  interp::evaluate<double>(B, subset, interp::PointsRef<double>(out), deformer_->options().threads);
+}
+
+const SurfaceContact::Sample& SurfaceContact::sample(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  check_size(x);
+  if (at_.valid && at_.x == x) return at_;
+  terms_valid_ = at_.valid = false;
+  at_.B = deformer_->bezier(nodes(x));
+  gather(at_.B, Eigen::VectorXd::Zero(deformer_->elements()), at_.points);
+  select(at_.points, at_.embedding);
+  evaluate(at_.B, at_.embedding, at_.P);
+  at_.x = x;
+  at_.valid = true;
+  return at_;
+}
+
+const SurfaceContact::Sample& SurfaceContact::sample(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                                     const Eigen::Ref<const Eigen::VectorXd>& dx) const {
+  check_size(x);
+  check_size(dx);
+  if (along_.valid && along_.x == x && along_.dx == dx) return along_;
+  along_.valid = false;
+  along_.B = at_.valid && at_.x == x ? at_.B : deformer_->bezier(nodes(x));
+  const interp::BezierPoints BD = deformer_->bezier(nodes(dx));
+  // A point moves by at most its element's largest Bezier move; the cap needs 0.9 of its room
+  // above -max_depth to reach past it before it acts (contact::advance), the line the move itself.
+  const int m = deformer_->elements();
+  const Eigen::Index K = BD.rows() / m;
+  Eigen::VectorXd reach(m);
+  for (int e = 0; e < m; ++e) reach(e) = BD.middleRows(e * K, K).rowwise().norm().maxCoeff() / 0.9;
+  gather(along_.B, reach, along_.points);
+  select(along_.points, along_.embedding);
+  evaluate(along_.B, along_.embedding, along_.P);
+  evaluate(BD, along_.embedding, along_.D);
+  along_.x = x;
+  along_.dx = dx;
+  along_.valid = true;
+  return along_;
+}
+
+Eigen::MatrixXd SurfaceContact::points(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  return deformer_->deform(nodes(x));
+}
+
+int SurfaceContact::touching(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  const Sample& S = sample(x);
+  int count = 0;
+  for (Eigen::Index i = 0; i < S.P.rows(); ++i)
+    for (const Collider& c : posed_)
+      if (signed_distance(c, S.P.row(i).transpose(), time_).value < 0) {
+        ++count;
+        break;
+      }
+  return count;
+}
 
 SurfaceContact::Term SurfaceContact::term(Eigen::Index p, const Eigen::Vector3d& q, size_t& slip) const {
   Term t;
   for (size_t c = 0; c < colliders_.size(); ++c) {
-    const Distance d = signed_distance(colliders_[c], q, time_);
+    const Distance d = signed_distance(posed_[c], q, time_);
     if (d.value >= 0) continue;
     const contact::Law law = contact::normal_energy(d.value, stiffness_, depth(p, c));
     t.energy += law.value;
@@ -154,13 +285,13 @@ SurfaceContact::Term SurfaceContact::term(Eigen::Index p, const Eigen::Vector3d&
 }
 
 const std::vector<SurfaceContact::Active>& SurfaceContact::terms(const Eigen::Ref<const Eigen::VectorXd>& x) const {
-  const Eigen::MatrixXd& P = deform(x, at_);  // forgets the terms when x changes
+  const Sample& S = sample(x);  // forgets the terms when x changes
   if (terms_valid_) return terms_;
   terms_.clear();
   size_t slip = 0;
-  for (Eigen::Index p = 0; p < P.rows(); ++p) {
-    const Term t = term(p, P.row(p).transpose(), slip);
-    if (t.active) terms_.push_back({p, t});
+  for (size_t i = 0; i < S.points.size(); ++i) {
+    const Term t = term(S.points[i], S.P.row(static_cast<Eigen::Index>(i)).transpose(), slip);
+    if (t.active) terms_.push_back({S.points[i], t});
   }
   terms_valid_ = true;
   return terms_;
@@ -176,69 +307,88 @@ void SurfaceContact::add_gradient(const Eigen::Ref<const Eigen::VectorXd>& x,
                                   Eigen::Ref<Eigen::VectorXd> gradient) const {
   const std::vector<Active>& active = terms(x);
   if (active.empty()) return;
-  dE_dp_.setZero(deformer_->points(), 3);
-  for (const Active& a : active) dE_dp_.row(a.point) = a.term.gradient.transpose();
-  const Eigen::MatrixXd dE_dX = deformer_->vjp(dE_dp_);  // W^T, exact (fact 11)
-  for (Eigen::Index i = 0; i < dE_dX.rows(); ++i) gradient.segment<3>(3 * i) += dE_dX.row(i).transpose();
+  std::vector<Eigen::Index> points(active.size());
+  Eigen::MatrixXd G(static_cast<Eigen::Index>(active.size()), 3);
+  for (size_t i = 0; i < active.size(); ++i) {
+    points[i] = active[i].point;
+    G.row(static_cast<Eigen::Index>(i)) = active[i].term.gradient.transpose();
+  }
+  // W^T restricted to the active points (the others have zero rows): exact, fact 11
+  select(points, subset_);
+  const Eigen::MatrixXd& U = deformer_->rest_positions();
+  const int m = deformer_->elements();
+  interp::BezierPoints GB(static_cast<Eigen::Index>(m) * 10, 3);
+  interp::evaluate_transpose(subset_, G, m, GB, deformer_->options().threads);
+  Eigen::MatrixXd GX(U.rows(), 3), GMX(U.rows(), 3);
+  interp::VertexMatrices GM(3 * U.rows(), 3);
+  interp::bezier_transpose(U, deformer_->elements_matrix(), GB, GX, GM);
+  if (deformer_->method() == Method::ModifiedBI) deformer_->solver().solve_transpose(GM, GMX);
+  if (deformer_->method() == Method::Phong) deformer_->phong().M_transpose(GM, GMX);
+  if (deformer_->method() != Method::BI) GX += GMX;
+  for (Eigen::Index i = 0; i < GX.rows(); ++i) gradient.segment<3>(3 * i) += GX.row(i).transpose();
 }
 
 void SurfaceContact::hessian_blocks(const Eigen::Ref<const Eigen::VectorXd>& x,
                                     std::vector<sim::NodeBlock>& blocks) const {
   const interp::Embedding& emb = deformer_->embedding();
   const Eigen::MatrixXi& T = deformer_->elements_matrix();
+  // summed per element first: one block per node pair of a touched element, not per point
+  element_block_.resize(static_cast<size_t>(deformer_->elements()), -1);
   for (const Active& a : terms(x)) {
     const int e = emb.element(a.point);
+    if (element_block_[e] < 0) {
+      element_block_[e] = static_cast<int>(blocks.size());
+      for (int i = 0; i < 4; ++i)
+        for (int j = 0; j <= i; ++j) blocks.push_back({T(e, i), T(e, j), Eigen::Matrix3d::Zero()});
+    }
+    sim::NodeBlock* b = &blocks[static_cast<size_t>(element_block_[e])];
     for (int i = 0; i < 4; ++i)
-      for (int j = 0; j <= i; ++j)
-        blocks.push_back({T(e, i), T(e, j), emb.bary(a.point, i) * emb.bary(a.point, j) * a.term.hessian});
+      for (int j = 0; j <= i; ++j) (b++)->value.noalias() += (emb.bary(a.point, i) * emb.bary(a.point, j)) * a.term.hessian;
   }
+  for (const Active& a : terms(x)) element_block_[emb.element(a.point)] = -1;
 }
 
 double SurfaceContact::max_step(const Eigen::Ref<const Eigen::VectorXd>& x,
                                 const Eigen::Ref<const Eigen::VectorXd>& dx) const {
   if (guarded_.empty() || std::isinf(max_depth_)) return 1.0;
-  const Eigen::MatrixXd& D = deform(dx, along_);  // p is linear in x: the points move by W dx
-  const Eigen::MatrixXd& P = deform(x, at_);
+  const Sample& S = sample(x, dx);  // p is linear in x: the points move by W dx
   double s = 1.0;
-  for (Eigen::Index p = 0; p < P.rows(); ++p)
+  for (size_t i = 0; i < S.points.size(); ++i)
     for (size_t c = 0; c < colliders_.size(); ++c) {
-      if (std::isinf(depth(p, c))) continue;
-      s = std::min(s, contact::advance(colliders_[c], P.row(p).transpose(), D.row(p).transpose(), time_, max_depth_));
+      if (std::isinf(depth(S.points[i], c))) continue;
+      const Eigen::Index r = static_cast<Eigen::Index>(i);
+      s = std::min(s, contact::advance(posed_[c], S.P.row(r).transpose(), S.D.row(r).transpose(), time_, max_depth_));
     }
   return s;
 }
 
 void SurfaceContact::begin_line(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& dx) {
-  const Eigen::MatrixXd& D = deform(dx, along_);
-  const Eigen::MatrixXd& P = deform(x, at_);
+  const Sample& S = sample(x, dx);
   line_start_ = x;
   line_move_ = dx;
   line_points_.clear();
   size_t slip = 0;
-  for (Eigen::Index p = 0; p < P.rows(); ++p) {
+  for (size_t i = 0; i < S.points.size(); ++i) {
+    const Eigen::Index p = S.points[i], r = static_cast<Eigen::Index>(i);
     while (slip < slips_.size() && slips_[slip].point < p) ++slip;
     bool near = slip < slips_.size() && slips_[slip].point == p;  // friction energy is never 0
     // d(p + s D) >= d(p) - |D| for s in [0, 1]; the margin covers W (x + s dx) != p + s W dx
-    const double reach = D.row(p).norm() + 1e-6 * (diagonal_ + P.row(p).norm() + D.row(p).norm());
+    const double reach = S.D.row(r).norm() + 1e-6 * (diagonal_ + S.P.row(r).norm() + S.D.row(r).norm());
     for (size_t c = 0; c < colliders_.size() && !near; ++c)
-      near = signed_distance(colliders_[c], P.row(p).transpose(), time_).value < reach;
-    if (near) line_points_.push_back(p);
+      near = signed_distance(posed_[c], S.P.row(r).transpose(), time_).value < reach;
+    if (near) line_points_.push_back(r);
   }
   line_valid_ = true;
 }
 
 double SurfaceContact::energy_along(double s) const {
   if (!line_valid_) throw Error("contact: energy_along needs begin_line (after the last substep or setting)");
-  const Eigen::MatrixXd& P = deform(line_start_, at_);  // both kept from begin_line unless evaluated elsewhere
-  const Eigen::MatrixXd& D = deform(line_move_, along_);
+  if (!(s >= 0 && s <= 1)) return energy(line_start_ + s * line_move_);
+  const Sample& S = sample(line_start_, line_move_);  // kept from begin_line unless moved elsewhere
   double E = 0.0;
   size_t slip = 0;
-  const auto add = [&](Eigen::Index p) { E += term(p, (P.row(p) + s * D.row(p)).transpose(), slip).energy; };
-  if (s >= 0 && s <= 1) {
-    for (Eigen::Index p : line_points_) add(p);
-  } else {
-    for (Eigen::Index p = 0; p < P.rows(); ++p) add(p);
-  }
+  for (Eigen::Index r : line_points_)
+    E += term(S.points[static_cast<size_t>(r)], (S.P.row(r) + s * S.D.row(r)).transpose(), slip).energy;
   return E;
 }
 

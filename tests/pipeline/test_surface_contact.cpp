@@ -374,3 +374,114 @@ TEST_CASE("surface contact: a cage dropped on a plane rests on its dense surface
   CHECK(sim.positions().col(1).minCoeff() < floor - 0.02);  // the cage's bottom went below the floor
   CHECK(contact->time() == Approx(sim.time()));  // posed at the end of the last substep
 }
+
+namespace {
+
+/// Energy, gradient and Hessian (dense, 3 n square) of the normal contact from every point
+/// (no broad phase), from the laws alone; depth(p, c): the guarded depth of the pair.
+struct Full {
+  double energy = 0.0;
+  Eigen::VectorXd gradient;
+  Eigen::MatrixXd hessian;
+  int touching = 0;
+};
+
+template <typename Depth>
+Full full_contact(const Deformer& deformer, const SurfaceContact& contact, const Eigen::VectorXd& x, Depth depth) {
+  const Eigen::MatrixXd P = contact.points(x);
+  const mbi::interp::Embedding& emb = deformer.embedding();
+  const Eigen::MatrixXi& T = deformer.elements_matrix();
+  Full f;
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(P.rows(), 3);
+  f.hessian.setZero(x.size(), x.size());
+  for (Eigen::Index p = 0; p < P.rows(); ++p) {
+    bool touching = false;
+    for (size_t c = 0; c < contact.colliders().size(); ++c) {
+      const Distance d = signed_distance(contact.colliders()[c], P.row(p).transpose(), contact.time());
+      if (d.value >= 0) continue;
+      touching = true;
+      const contact::Law law = contact::normal_energy(d.value, contact.stiffness(), depth(p, c));
+      f.energy += law.value;
+      G.row(p) += law.slope * d.normal.transpose();
+      const Eigen::Matrix3d K = law.curvature * d.normal * d.normal.transpose();
+      for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b)
+          f.hessian.block<3, 3>(3 * T(emb.element(p), a), 3 * T(emb.element(p), b)) += emb.bary(p, a) * emb.bary(p, b) * K;
+    }
+    f.touching += touching;
+  }
+  const Eigen::MatrixXd GX = deformer.vjp(G);
+  f.gradient.resize(x.size());
+  for (Eigen::Index i = 0; i < GX.rows(); ++i) f.gradient.segment<3>(3 * i) = GX.row(i).transpose();
+  return f;
+}
+
+Eigen::MatrixXd dense_hessian(const SurfaceContact& contact, const Eigen::VectorXd& x) {
+  std::vector<mbi::sim::NodeBlock> blocks;
+  contact.hessian_blocks(x, blocks);
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(x.size(), x.size());
+  for (const mbi::sim::NodeBlock& b : blocks) {
+    H.block<3, 3>(3 * b.row, 3 * b.col) += b.value;
+    if (b.row != b.col) H.block<3, 3>(3 * b.col, 3 * b.row) += b.value.transpose();
+  }
+  return H;
+}
+
+}  // namespace
+
+TEST_CASE("surface contact: the points of elements far from every collider are skipped exactly, "
+          "also when the collider moves into them", "[pipeline][contact]") {
+  // A long bar whose bottom a ball dents, the ball rolling along it by a third of the bar per
+  // substep: into elements that were far from it in the substep before.
+  const mbi::test::Mesh mesh = mbi::test::box_tet_mesh(9, 2, 2, Eigen::Vector3d(3.0, 0.5, 0.5));
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> u(0.0, 1.0), w(-0.01, 0.01);
+  Eigen::MatrixXd points(3000, 3);
+  for (Eigen::Index p = 0; p < points.rows(); ++p) points.row(p) = Eigen::RowVector3d(3 * u(rng), 0.5 * u(rng), 0.5 * u(rng));
+  Collider ball = Collider::sphere({-0.5, -0.78, 0.25}, 0.4);  // 0.12 into the bar's bottom
+  ball.motion.velocity = Eigen::Vector3d(100, 0, 0);              // 1 m per substep of 0.01 s
+  Eigen::VectorXd x0(3 * mesh.U.rows()), dx(x0.size());
+  for (Eigen::Index i = 0; i < mesh.U.rows(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      x0(3 * i + c) = mesh.U(i, c) + (c == 1 ? -0.5 : 0.0) + w(rng);
+      dx(3 * i + c) = w(rng) + (c == 1 ? -0.1 : 0.0);
+    }
+  const double D = 0.02;  // some pairs start deeper: plain penalty for them
+  for (Method m : {Method::BI, Method::Phong, Method::ModifiedBI}) {
+    DeformerOptions opt;
+    opt.method = m;
+    auto deformer = std::make_shared<Deformer>(mesh.U, mesh.T, points, opt);
+    SurfaceContact contact(deformer, {ball}, 1e4);
+    contact.set_max_depth(D);
+    for (double t0 : {0.0, 0.01}) {
+      INFO("method " << static_cast<int>(m) << ", substep from " << t0 << " s");
+      contact.begin_substep_at(t0, t0 + 0.01, x0, Eigen::VectorXd::Zero(x0.size()));
+      const Eigen::MatrixXd P0 = contact.points(x0);
+      const auto depth = [&](Eigen::Index p, size_t c) {
+        return signed_distance(contact.colliders()[c], P0.row(p).transpose(), contact.time()).value > -D
+                   ? D : std::numeric_limits<double>::infinity();
+      };
+      contact.begin_line(x0, dx);
+      for (double s : {0.0, 0.5, 1.0}) {
+        const Eigen::VectorXd x = x0 + s * dx;
+        const Full f = full_contact(*deformer, contact, x, depth);
+        REQUIRE(f.touching > 20);
+        REQUIRE(f.touching < 0.6 * points.rows());  // most points are far from the plane
+        CHECK(contact.touching(x) == f.touching);
+        CHECK(std::abs(contact.energy(x) - f.energy) <= 1e-12 * f.energy);
+        CHECK((gradient(contact, x) - f.gradient).norm() <= 1e-12 * f.gradient.norm());
+        CHECK((dense_hessian(contact, x) - f.hessian).norm() <= 1e-12 * f.hessian.norm());
+        CHECK(std::abs(contact.energy_along(s) - f.energy) <= 1e-12 * f.energy);  // after energy() elsewhere
+      }
+      // The cap: every guarded point of every element, from the laws.
+      const Eigen::MatrixXd P = contact.points(x0), Dp = contact.points(dx);
+      double cap = 1.0;
+      for (Eigen::Index p = 0; p < P.rows(); ++p)
+        if (!std::isinf(depth(p, 0)))
+          cap = std::min(cap, contact::advance(contact.colliders()[0], P.row(p).transpose(), Dp.row(p).transpose(),
+                                               contact.time(), D));
+      CHECK(cap < 1.0);
+      CHECK(std::abs(contact.max_step(x0, dx) - cap) <= 1e-12 * cap);
+    }
+  }
+}

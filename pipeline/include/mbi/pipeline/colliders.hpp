@@ -59,6 +59,9 @@ struct Distance {
 /// shape. Where the gradient is undefined (a sphere's centre, a capsule's axis, a box's medial
 /// surface) the normal is one of the one-sided gradients.
 Distance signed_distance(const Collider& collider, const Eigen::Vector3d& p, double time);
+/// The collider as it is at `time`, static (its motion reset): the same distances at any time as
+/// `collider` has at `time` (to round-off), cheaper to evaluate many times; a plane's normal unit.
+Collider posed(const Collider& collider, double time);
 
 /// Velocity (m/s) at time t of the collider's material point that is at p then.
 Eigen::Vector3d collider_velocity(const Collider& collider, const Eigen::Vector3d& p, double time);

@@ -16,6 +16,8 @@
 // lagged, smoothed Coulomb friction. Its Hessian W^T K W is dense for modified-BI; the step gets
 // the surrogate (b b^T) (x) K_p per touching point, with b the point's BI weights in its own
 // element and K_p the point's 3x3 Hessian: positive semi-definite and inside the FEM's pattern.
+// Only the points of elements whose Bezier points come near a collider are evaluated (a point
+// lies in the convex hull of its element's Bezier points): the others add exactly nothing.
 //
 // Units: stiffness k in N/m per point; positions and depths in m; friction velocity in m/s;
 // energy in J. One SurfaceContact is not for several threads at once (it keeps scratch).
@@ -68,6 +70,10 @@ class SurfaceContact : public sim::Potential {
 
   /// The contact points' positions (p x 3) at node positions x (3 n stacked, as the simulator's).
   Eigen::MatrixXd points(const Eigen::Ref<const Eigen::VectorXd>& x) const;
+  /// Number of contact points (the deformer's points).
+  long long contact_points() const { return deformer_->points(); }
+  /// Number of contact points inside some collider (signed distance < 0) at x, at time().
+  int touching(const Eigen::Ref<const Eigen::VectorXd>& x) const;
 
   double energy(const Eigen::Ref<const Eigen::VectorXd>& x) const override;
   void add_gradient(const Eigen::Ref<const Eigen::VectorXd>& x,
@@ -92,13 +98,28 @@ class SurfaceContact : public sim::Potential {
     Eigen::Matrix<double, 3, 2> tangent;    ///< orthonormal basis of the tangent plane
     Eigen::Vector3d anchor;                 ///< start position moved with the collider, m
   };
-  /// The points W x of the last x given (a deformation only when x changes).
-  struct Deformed {
-    Eigen::VectorXd x;
-    Eigen::MatrixXd points;
+  /// The contact points that can matter at x (or on the move x -> x + dx), found from the
+  /// element Bezier points (a point lies in their convex hull), and their positions W x (and W dx).
+  struct Sample {
+    Eigen::VectorXd x, dx;              // dx empty: positions only
+    interp::BezierPoints B;             // at x
+    std::vector<Eigen::Index> points;   // increasing
+    interp::Embedding embedding;        // their rows of the deformer's embedding
+    Eigen::MatrixXd P, D;               // W x and W dx at those points, rows as `points`
     bool valid = false;
   };
-  const Eigen::MatrixXd& deform(const Eigen::Ref<const Eigen::VectorXd>& x, Deformed& cache) const;
+  const Sample& sample(const Eigen::Ref<const Eigen::VectorXd>& x) const;
+  const Sample& sample(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& dx) const;
+  void check_size(const Eigen::Ref<const Eigen::VectorXd>& x) const;
+  const Eigen::MatrixXd& nodes(const Eigen::Ref<const Eigen::VectorXd>& x) const;  // n x 3 into X_
+  /// The points of the elements whose Bezier points come within `reach` (m, per element) of a
+  /// collider, the points outside every hull, and the points with friction; increasing.
+  void gather(const interp::BezierPoints& B, const Eigen::VectorXd& reach, std::vector<Eigen::Index>& points) const;
+  void index_points();                                          // element_start_ and the rest
+  /// The rows `points` of the deformer's embedding.
+  void select(const std::vector<Eigen::Index>& points, interp::Embedding& subset) const;
+  /// W applied to X's Bezier points B at the points of `subset`.
+  void evaluate(const interp::BezierPoints& B, const interp::Embedding& subset, Eigen::MatrixXd& out) const;
   double depth(Eigen::Index point, size_t collider) const;        // guarded depth or infinity
   /// One point's energy (J), gradient (N) and Hessian or PSD surrogate (N/m) at position q, all
   /// colliders and its slips; `slip` walks slips_ (start at 0, points in increasing order).
@@ -115,10 +136,11 @@ class SurfaceContact : public sim::Potential {
   };
   /// The active terms at x by increasing point (kept until x, the time or the substep changes).
   const std::vector<Active>& terms(const Eigen::Ref<const Eigen::VectorXd>& x) const;
-  void forget() { terms_valid_ = line_valid_ = false; }  // after a change of time or law
+  void forget() { terms_valid_ = line_valid_ = at_.valid = along_.valid = false; }  // after a change of time or law
 
   std::shared_ptr<const Deformer> deformer_;
   std::vector<Collider> colliders_;
+  std::vector<Collider> posed_;  // colliders_ at time_, static: the same distances, cheaper
   double stiffness_ = 0.0;
   double time_ = 0.0;
   double diagonal_ = 0.0;  // control mesh, rest
@@ -127,12 +149,17 @@ class SurfaceContact : public sim::Potential {
   double smoothing_ = 0.0;        // eps_v h of the current substep, m
   std::vector<char> guarded_;     // point-major, per collider; empty before the first substep
   std::vector<Slip> slips_;       // by increasing point
-  mutable Eigen::MatrixXd X_, dE_dp_;
-  mutable Deformed at_, along_;        // x of the last evaluation; dx of the last move
+  std::vector<int> element_start_, element_points_;  // per element, its points inside the hull
+  std::vector<Eigen::Index> unbounded_;              // points with a negative barycentric coordinate
+  mutable std::vector<char> marks_;                   // per point, gather's scratch
+  mutable std::vector<int> element_block_;            // per element, hessian_blocks' scratch (-1)
+  mutable Eigen::MatrixXd X_;
+  mutable interp::Embedding subset_;   // rows of the deformer's embedding, for the vjp
+  mutable Sample at_, along_;          // x of the last evaluation; x and dx of the last move
   mutable std::vector<Active> terms_;  // at at_.x
   mutable bool terms_valid_ = false;
   Eigen::VectorXd line_start_, line_move_;  // begin_line's x and dx
-  std::vector<Eigen::Index> line_points_;    // the points that can contribute along it
+  std::vector<Eigen::Index> line_points_;    // rows of along_ that can contribute along it
   bool line_valid_ = false;
 };
 
