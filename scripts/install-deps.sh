@@ -15,7 +15,8 @@ set -euo pipefail
 # faster factorization of the modified-BI precompute (optional: MBI_WITH_CHOLMOD), and OpenBLAS,
 # which CHOLMOD's supernodal factorization runs on (Debian's reference BLAS is several times
 # slower; the package takes over libblas.so.3 through update-alternatives); pugixml and zlib
-# for VTK XML (.vtu, .pvd) control meshes and trajectories; tinygltf (header-only) for glTF 2.0.
+# for VTK XML (.vtu, .pvd) control meshes and trajectories; tinygltf (header-only) for glTF 2.0;
+# OpenVDB (it brings TBB, Imath and blosc) for mesh colliders' level sets (MBI_WITH_OPENVDB).
 run_packages=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libtet1.5-dev libopenmesh-dev
@@ -24,6 +25,7 @@ run_packages=(
   libglfw3-dev libimgui-dev
   libsuitesparse-dev libopenblas0-pthread
   libpugixml-dev zlib1g-dev libtinygltf-dev
+  libopenvdb-dev
 )
 # Testing: Catch2 (the test suite), Xvfb with xauth (the viewer's tests run under xvfb-run),
 # Python (scripts/test.sh --sanitizers), Google Benchmark (mbi-bench), matplotlib and git (the
