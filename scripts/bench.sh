@@ -5,7 +5,9 @@
 #
 #   bash scripts/bench.sh            full run: every benchmark 3 times in random order, the medians
 #                                    reported (about 6 minutes on a 2-core machine, plus the build)
-#   bash scripts/bench.sh --quick    small sizes, short runs, no 10K precompute (under a minute);
+#   bash scripts/bench.sh --quick    small sizes, short runs, no 10K precompute (under a minute),
+#                                    and the Python frame loop (python/bench/frame_loop.py --quick,
+#                                    a few seconds) when the release build has the Python module;
 #                                    writes to build/bench-quick/ unless --out is given (CI)
 #   bash scripts/bench.sh --out DIR  write into DIR instead
 #   MBI_BENCH_BASELINE=OLD.json      an earlier run (e.g. before a change): its target figures as
@@ -26,7 +28,7 @@ while [ $# -gt 0 ]; do
   case "$1" in
     --quick) quick=1 ;;
     --out) out="$2"; shift ;;
-    -h|--help) sed -n '2,19p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,21p' "$0"; exit 0 ;;
     *) echo "bench.sh: error: unknown option $1" >&2; exit 2 ;;
   esac
   shift
@@ -65,3 +67,9 @@ echo "bench.sh: mbi-bench took ${wall} s"
 baseline=()
 [ -n "${MBI_BENCH_BASELINE:-}" ] && baseline=(--baseline "$MBI_BENCH_BASELINE")
 "$python" scripts/bench_report.py "$json" --machine --wall-s "$wall" "${baseline[@]}"
+if [ "$quick" = 1 ] && [ -f build/release/python/mbi/__init__.py ]; then
+  # the module's interpreter (CMake's Python_EXECUTABLE), not necessarily the report's
+  module_python=$(sed -n 's/^PYTHON = "\(.*\)"$/\1/p' build/release/python/mbi/_build.py)
+  PYTHONPATH=build/release/python "${module_python:-$python}" python/bench/frame_loop.py --quick |
+    tee "$out/$stamp-python.md"
+fi
