@@ -24,16 +24,16 @@ class MBI_OT_bind(bpy.types.Operator):
             self.report({"ERROR"}, "mbi bind: select the meshes to bind, then the cage")
             return {"CANCELLED"}
         context.view_layer.update()  # world matrices of transforms set by a script
+        depsgraph = context.evaluated_depsgraph_get()  # the cage as evaluated, before the bind tags anything
         try:
             module.load()
             for model in models:
-                seconds = live.bind(model, cage, self.method, self.alpha)
+                seconds = live.bind(model, cage, self.method, self.alpha, depsgraph)
                 self.report({"INFO"}, "mbi bind: %s, %d points in %.3f s"
                             % (model.name, len(model.data.vertices), seconds))
         except (RuntimeError, ValueError) as error:
             self.report({"ERROR"}, "mbi bind: %s" % error)
             return {"CANCELLED"}
-        live.update_all(context.evaluated_depsgraph_get())
         return {"FINISHED"}
 
 

@@ -39,12 +39,13 @@ def _tets_count(cage):
     return len(cage.data.get(storage.TETS_KEY, [])) // 4
 
 
-def rest_hash(model, cage):
-    """Hex digest of what a bind depends on besides its options: rest nodes, tetrahedra, rest model, matrix."""
-    h = hashlib.blake2b(digest_size=16)
-    h.update(storage.positions(cage.data).tobytes())
-    h.update(np.asarray(cage.data.get(storage.TETS_KEY, []), dtype=np.int32).tobytes())
-    h.update(storage.positions(model.data).tobytes())
+def rest_hash(model, cage, U32=None, tets=None, rest=None):
+    """Hex digest of what a bind depends on besides its options: rest nodes, tetrahedra, rest model, matrix
+    (the arrays when the caller has them read already)."""
+    h = hashlib.sha1(usedforsecurity=False)  # a fast digest: detects edits, guards nothing
+    h.update((storage.positions(cage.data) if U32 is None else U32).tobytes())
+    h.update(np.asarray(cage.data.get(storage.TETS_KEY, []) if tets is None else tets, dtype=np.int32).tobytes())
+    h.update((storage.positions(model.data) if rest is None else rest).tobytes())
     h.update(np.asarray(model.mbi.bind_matrix, dtype=np.float64).tobytes())
     return h.hexdigest()
 
@@ -56,7 +57,10 @@ def _build(model, cage):
         raise ValueError("%s holds no tetrahedra (not an mbi cage)" % cage.name)
     s = model.mbi
     B = np.array(s.bind_matrix, dtype=np.float64).reshape(4, 4)
-    P = storage.positions(model.data).astype(np.float64) @ B[:3, :3].T + B[:3, 3]
+    rest = storage.positions(model.data)
+    identity = np.array_equal(B, np.eye(4))
+    # float32 as Blender stores it when the model is in cage space (mbi reads it into float64 once)
+    P = rest if identity else rest.astype(np.float64) @ B[:3, :3].T + B[:3, 3]
     U32 = storage.positions(cage.data)
     alpha = s.alpha if s.alpha > 0 else None
     start = time.perf_counter()
@@ -66,12 +70,12 @@ def _build(model, cage):
     except mbi.Error as error:
         raise ValueError("%s does not fit in the cage %s: %s" % (model.name, cage.name, error)) from error
     seconds = time.perf_counter() - start
-    content = rest_hash(model, cage)
-    if s.rest_hash and s.rest_hash != content:
+    content = rest_hash(model, cage, U32, tets, rest)
+    if s.rest_hash and s.rest_hash != content and len(s.rest_hash) == len(content):  # not an older digest
         notes[model.name] = "rest shape changed since the bind: bound again (%.3f s)" % seconds
     s.rest_hash, s.bind_seconds = content, seconds
-    inverse = None if np.array_equal(B, np.eye(4)) else np.linalg.inv(B)
-    return Binding(_key(model, cage, len(tets)), deformer, inverse, content, U32.tobytes(), seconds)
+    return Binding(_key(model, cage, len(tets)), deformer, None if identity else np.linalg.inv(B), content,
+                   U32.tobytes(), seconds)
 
 
 def get(model):

@@ -12,18 +12,26 @@ GROUP = "mbi live"
 OWNER_KEY = "mbi_live"  # ID property marking the node groups the add-on made
 
 
-def attribute(model):
-    """The model's live attribute; a new one starts at the rest positions (never zeros on screen)."""
+def attribute(model, initial=None):
+    """The model's live attribute; a new one starts at initial ((p, 3) float32) or the rest positions
+    (never zeros on screen). Returns (attribute, whether it is new)."""
     mesh = model.data
     found = mesh.attributes.get(ATTRIBUTE)
     if found is not None and found.data_type == "FLOAT_VECTOR" and found.domain == "POINT":
-        return found
+        return found, False
     if found is not None:
         mesh.attributes.remove(found)
     made = mesh.attributes.new(ATTRIBUTE, "FLOAT_VECTOR", "POINT")
     made = mesh.attributes[ATTRIBUTE]  # the reference from new() goes stale when the layers move
-    made.data.foreach_set("vector", storage.positions(mesh).ravel())
-    return made
+    made.data.foreach_set("vector", (storage.positions(mesh) if initial is None else initial).ravel())
+    return made, True
+
+
+def write(model, positions):
+    """The model's positions ((p, 3) float32) into its attribute, written once."""
+    found, new = attribute(model, positions)
+    if not new:
+        found.data.foreach_set("vector", positions.ravel())
 
 
 def node_group():

@@ -8,6 +8,8 @@ vertices stay the rest shape, and an attribute takes a fast write (a shape key h
 The Deformers are not saved: they are rebuilt from the .blend's data when stale (binding.py,
 docs/blender.md).
 """
+import contextlib
+
 import bpy
 import numpy as np
 from bpy.app.handlers import persistent
@@ -17,6 +19,17 @@ from . import binding, gn, harmonic, module, storage
 CACHE_MODIFIER = "mbi cache"  # the Mesh Cache modifier of a baked model
 errors = {}   # model name -> last message of the live path (shown in the panel)
 _extensions = {}  # cage.name_full -> (rest key, harmonic.Extension)
+_just_bound = set()  # models the bind operator wrote: the next depsgraph update is that write, not an edit
+_paused = []  # non-empty: the handlers do nothing (frames stepped only to read animated transforms)
+
+
+@contextlib.contextmanager
+def paused():
+    _paused.append(True)
+    try:
+        yield
+    finally:
+        _paused.pop()
 
 
 def _extension(cage, tets_count):
@@ -39,26 +52,28 @@ def cage_nodes(cage, depsgraph):
         raise ValueError("the evaluated cage %s has %d vertices, its mesh %d: a modifier changed its topology"
                          % (cage.name, len(X), len(cage.data.vertices)))
     mode = cage.mbi.interior
-    if mode == "animated" or tets_count == 0:
-        return X.astype(np.float64)
+    if mode == "animated" or tets_count == 0 or (mode == "auto" and np.array_equal(X, storage.positions(cage.data))):
+        return X.astype(np.float64)  # at rest the extension is the identity: not built for it
     extension = _extension(cage, tets_count)
     if mode == "harmonic" or extension.boundary_moved_only(X):
         return extension.apply(X)
     return X.astype(np.float64)
 
 
-def bind(model, cage, method, alpha):
-    """Binds the model to the cage now; returns the seconds of the embedding and precompute."""
+def bind(model, cage, method, alpha, depsgraph):
+    """Binds the model to the cage now and writes its positions for the cage as evaluated in depsgraph (taken
+    before the bind changed anything, so no evaluation runs here); returns the seconds of the embedding and
+    precompute."""
     matrix = np.array(cage.matrix_world.inverted() @ model.matrix_world).ravel().tolist()
     seconds = binding.bind(model, cage, method, alpha, matrix)
-    gn.attribute(model)
-    gn.modifier(model)
+    deform(model, depsgraph)
+    _just_bound.add(model.name_full)
     return seconds
 
 
 def live_positions(model):
     """(p, 3) float32: the model's live positions (its attribute, in the model's space)."""
-    attribute = gn.attribute(model)
+    attribute = gn.attribute(model)[0]
     co = np.empty(len(attribute.data) * 3, dtype=np.float32)
     attribute.data.foreach_get("vector", co)
     return co.reshape(-1, 3)
@@ -81,7 +96,7 @@ def deform(model, depsgraph):
     if entry.inverse is not None:
         inv = entry.inverse
         out = (out @ inv[:3, :3].T + inv[:3, 3]).astype(np.float32)
-    gn.attribute(model).data.foreach_set("vector", out.ravel())
+    gn.write(model, out)
     gn.modifier(model)
     model.data.update()
 
@@ -105,6 +120,9 @@ def update_all(depsgraph, cages=None, models=()):
 
 @persistent
 def _on_frame(scene, depsgraph=None):
+    if _paused:
+        return
+    _just_bound.clear()
     update_all(depsgraph or bpy.context.evaluated_depsgraph_get())
 
 
@@ -112,6 +130,8 @@ def _on_frame(scene, depsgraph=None):
 def _on_depsgraph(scene, depsgraph):
     """A cage edited without a frame change (edit mode, a posed armature, a key's value), or a bound
     model's mesh edited: its rest content is checked (a hash; frame changes do not come here)."""
+    if _paused:
+        return
     cages, models = set(), set()
     for update in depsgraph.updates:
         obj = update.id.original if isinstance(update.id, bpy.types.Object) else None
@@ -119,15 +139,17 @@ def _on_depsgraph(scene, depsgraph):
             continue
         if obj.mbi.is_cage:
             cages.add(obj.name_full)
-        elif obj.type == "MESH" and obj.mbi.cage is not None:
+        elif obj.type == "MESH" and obj.mbi.cage is not None and obj.name_full not in _just_bound:
             binding.check_content(obj)
             models.add(obj.name_full)
+    _just_bound.clear()
     if cages or models:
         update_all(depsgraph, cages, models)
 
 
 @persistent
 def _on_load(*_):
+    _just_bound.clear()
     binding.clear()
     _extensions.clear()
     errors.clear()

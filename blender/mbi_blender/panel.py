@@ -34,6 +34,12 @@ class MBI_PT_panel(bpy.types.Panel):
             if obj.mbi.pin_motion == "rigid":
                 for name in ("pin_velocity", "pin_rate", "pin_axis", "pin_center", "pin_start", "pin_stop"):
                     box.prop(obj.mbi, name)
+            elif obj.mbi.pin_motion == "object":
+                box.prop(obj.mbi, "pin_object")
+                target = obj.mbi.pin_object
+                if target is not None and target.type == "ARMATURE":
+                    box.prop_search(obj.mbi, "pin_bone", target.pose, "bones")
+            box.prop(obj.mbi, "contact_stiffness")
             box.operator("mbi.simulate")
         elif obj.mbi.cage is not None:
             layout.label(text="Bound to %s" % obj.mbi.cage.name)
@@ -46,6 +52,11 @@ class MBI_PT_panel(bpy.types.Panel):
                 layout.label(text="Baked: %s" % obj.modifiers[live.CACHE_MODIFIER].filepath)
             if obj.name in live.errors:
                 layout.label(text=live.errors[obj.name], icon="ERROR")
+        if not obj.mbi.is_cage and obj.mbi.cage is None:
+            box = layout.box()
+            box.prop(obj.mbi, "collider")
+            if obj.mbi.collider != "none":
+                box.prop(obj.mbi, "friction")
 
 
 def _table(layout, model):

@@ -10,7 +10,14 @@ INTERIOR = [("auto", "Auto", "Follow the boundary (harmonic) when only the bound
             ("animated", "As animated", "Every node as Blender evaluated it")]
 
 PIN_MOTIONS = [("held", "Held", "The pinned nodes stay where they are"),
-               ("rigid", "Rigid motion", "The pinned nodes move rigidly: velocity plus a rotation about an axis")]
+               ("rigid", "Rigid motion", "The pinned nodes move rigidly: velocity plus a rotation about an axis"),
+               ("object", "Follow object", "The pinned nodes move rigidly with an object's (or bone's) animated transform")]
+
+COLLIDERS = [("none", "None", "Not an mbi collider"),
+             ("plane", "Plane", "The plane through the object's origin, normal its local +Z (solid below)"),
+             ("sphere", "Sphere", "Centered in the object's bounding box, radius its largest half extent"),
+             ("box", "Box", "The object's bounding box, rotated with it"),
+             ("capsule", "Capsule", "Along the bounding box's longest axis, radius the largest other half extent")]
 
 
 class MbiObjectSettings(bpy.types.PropertyGroup):
@@ -37,6 +44,16 @@ class MbiObjectSettings(bpy.types.PropertyGroup):
                                        description="Seconds after the first frame when the motion starts")
     pin_stop: bpy.props.FloatProperty(name="Stop (s)", default=0.0, min=0.0,
                                       description="Seconds after the first frame when it stops (0: never)")
+    pin_object: bpy.props.PointerProperty(name="Object", type=bpy.types.Object,
+                                          description="The pinned nodes move rigidly with this object's transform")
+    pin_bone: bpy.props.StringProperty(name="Bone", description="A bone of the armature the pins follow (empty: "
+                                       "the object itself)")
+    contact_stiffness: bpy.props.FloatProperty(name="Contact stiffness (N/m)", default=0.0, min=0.0,
+                                               description="Penalty stiffness per touching vertex (0: mbi's "
+                                               "default, 1e4 m g / diagonal)")
+    # an object the simulated meshes touch (its shape fitted from its bounding box and transform)
+    collider: bpy.props.EnumProperty(name="mbi collider", items=COLLIDERS, default="none")
+    friction: bpy.props.FloatProperty(name="Friction", default=0.0, min=0.0, description="Coulomb coefficient")
     cage: bpy.props.PointerProperty(name="Cage", type=bpy.types.Object,
                                     description="The mbi cage this mesh is bound to")
     method: bpy.props.EnumProperty(name="Method", items=METHODS, default="modified-bi")

@@ -1,6 +1,7 @@
 """Inside `blender -b --factory-startup`: the add-on cages and binds a model, the cage is animated by a
-keyframed shape key, and Blender's evaluated model equals `mbi deform` on the same data (to 1e-6 of
-the model's size), before and after saving and reopening the .blend; an empty mesh is refused.
+keyframed shape key, and Blender's evaluated model (and a second mesh bound in the same bind) equals
+`mbi deform` on the same data (to 1e-6 of its size), before and after saving and reopening the .blend;
+an empty mesh is refused.
 
     blender -b --factory-startup --python live_cage.py -- <work dir> <mbi executable>
 """
@@ -25,6 +26,15 @@ def make_model():
     model.scale = (1.6, 0.8, 0.6)
     bpy.context.view_layer.update()  # matrix_world follows the scale
     return model
+
+
+def make_second():
+    """A second mesh inside the first (a cube of side 0.4), bound to the same cage in the same bind."""
+    bpy.ops.mesh.primitive_cube_add(size=0.4, location=(0.7, -0.2, 0.1), rotation=(0.2, 0.3, 0.0))
+    second = bpy.context.active_object
+    second.name = "second"
+    bpy.context.view_layer.update()
+    return second
 
 
 def twist(U, size):
@@ -73,16 +83,18 @@ def mbi_deform(mbi, exe, work, cage, rest_model, X, tag):
     return mbi.read_points(out)
 
 
-def compare(mbi, exe, work, model, cage, rest_model, size, tag):
-    moved = 0.0
-    for frame in FRAMES:
-        P, X = blender_frame(model, cage, frame)
-        expected = mbi_deform(mbi, exe, work, cage, rest_model, X, "%s%d" % (tag, frame))
-        error = np.abs(P - expected).max() / size
-        check(error <= 1e-6, "%s frame %d: Blender's evaluated model equals mbi deform (%.2e of its size)"
-              % (tag, frame, error))
-        moved = max(moved, np.abs(P - rest_model).max() / size)
-    check(moved > 0.05, "%s: the model followed the cage (moved %.3f of its size)" % (tag, moved))
+def compare(mbi, exe, work, bound, cage, tag):
+    """Each bound (model, rest, size) equals `mbi deform` at FRAMES and moved."""
+    for model, rest_model, size in bound:
+        moved = 0.0
+        for frame in FRAMES:
+            P, X = blender_frame(model, cage, frame)
+            expected = mbi_deform(mbi, exe, work, cage, rest_model, X, "%s%d" % (tag, frame))
+            error = np.abs(P - expected).max() / size
+            check(error <= 1e-6, "%s frame %d: Blender's evaluated %s equals mbi deform (%.2e of its size)"
+                  % (tag, frame, model.name, error))
+            moved = max(moved, np.abs(P - rest_model).max() / size)
+        check(moved > 0.05, "%s: %s followed the cage (moved %.3f of its size)" % (tag, model.name, moved))
 
 
 def edit_in_place(mbi, exe, work, model, cage, rest_model, size):
@@ -136,11 +148,15 @@ def unbind(model, rest_model):
     check(group is not None and "mbi_position" in model.data.attributes and model.data.shape_keys is None,
           "a bound model carries the attribute and the modifier, no shape key")
     check(np.abs(world(model, positions(model.data)) - rest_model).max() == 0, "its mesh vertices stay at rest")
+    second = bpy.data.objects["second"]
     select_only([model], model)
     check(bpy.ops.mbi.unbind() == {"FINISHED"}, "the unbind operator ran")
     check("mbi" not in model.modifiers and "mbi_position" not in model.data.attributes
-          and not any(g.get("mbi_live") for g in bpy.data.node_groups),
-          "unbind removed the modifier, the attribute and the node group")
+          and second.modifiers["mbi"].node_group == group, "unbind removed the modifier and the attribute, "
+          "and kept the node group the second mesh uses")
+    select_only([second], second)
+    bpy.ops.mbi.unbind()
+    check(not any(g.get("mbi_live") for g in bpy.data.node_groups), "unbinding the last mesh removed the node group")
     P, _ = blender_frame(model, model, 11)
     check(model.mbi.cage is None and np.abs(P - rest_model).max() == 0, "the unbound model is at rest at frame 11")
 
@@ -157,10 +173,13 @@ def main(work, exe):
     cage = next(o for o in bpy.data.objects if o.mbi.is_cage)
     tets = np.asarray(cage.data["mbi_tets"].to_list()).reshape(-1, 4)
     check(len(tets) > 0 and tets.max() < len(cage.data.vertices), "the cage holds %d tetrahedra" % len(tets))
-    select_only([model, cage], cage)
-    check(bpy.ops.mbi.bind(method="modified-bi") == {"FINISHED"}, "the bind operator ran")
+    second = make_second()
+    bound = [(model, rest_model, size), (second, world(second, positions(second.data)), 0.4 * np.sqrt(3))]
+    select_only([model, second, cage], cage)
+    check(bpy.ops.mbi.bind(method="modified-bi") == {"FINISHED"}, "the bind operator ran on two meshes")
+    check(model.mbi.cage == cage and second.mbi.cage == cage, "both meshes are bound to the cage")
     animate_cage(cage)
-    compare(mbi, exe, work, model, cage, rest_model, size, "live")
+    compare(mbi, exe, work, bound, cage, "live")
 
     path = os.path.join(work, "scene.blend")
     bpy.ops.wm.save_as_mainfile(filepath=path)
@@ -169,7 +188,8 @@ def main(work, exe):
     reopened = np.asarray(cage.data["mbi_tets"].to_list()).reshape(-1, 4)
     check(np.array_equal(reopened, tets), "the tetrahedra survive save and reopen")
     check(model.mbi.cage == cage, "the model is still bound after reopening")
-    compare(mbi, exe, work, model, cage, rest_model, size, "reopened")
+    compare(mbi, exe, work, [(model, rest_model, size), (bpy.data.objects["second"],) + bound[1][1:]], cage,
+            "reopened")
     edit_in_place(mbi, exe, work, model, cage, rest_model, size)
     bad_input()
     unbind(model, rest_model)
