@@ -236,12 +236,34 @@ const SurfaceContact::Sample& SurfaceContact::sample(const Eigen::Ref<const Eige
   for (int e = 0; e < m; ++e) reach(e) = BD.middleRows(e * K, K).rowwise().norm().maxCoeff() / 0.9;
   gather(along_.B, reach, along_.points);
   select(along_.points, along_.embedding);
-  evaluate(along_.B, along_.embedding, along_.P);
   evaluate(BD, along_.embedding, along_.D);
+  positions_at(x, along_.B, along_.points, along_.P);
   along_.x = x;
   along_.dx = dx;
   along_.valid = true;
   return along_;
+}
+
+void SurfaceContact::positions_at(const Eigen::Ref<const Eigen::VectorXd>& x, const interp::BezierPoints& B,
+                                  const std::vector<Eigen::Index>& points, Eigen::MatrixXd& P) const {
+  // the rows at_ has at x (the same values: a point's evaluation is its own) are copied
+  const bool kept = at_.valid && at_.x == x;
+  std::vector<Eigen::Index> missing, rows;
+  P.resize(static_cast<Eigen::Index>(points.size()), 3);
+  size_t j = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    while (kept && j < at_.points.size() && at_.points[j] < points[i]) ++j;
+    if (kept && j < at_.points.size() && at_.points[j] == points[i]) {
+      P.row(static_cast<Eigen::Index>(i)) = at_.P.row(static_cast<Eigen::Index>(j));
+    } else {
+      missing.push_back(points[i]);
+      rows.push_back(static_cast<Eigen::Index>(i));
+    }
+  }
+  select(missing, subset_);
+  Eigen::MatrixXd Q;
+  evaluate(B, subset_, Q);
+  for (size_t k = 0; k < rows.size(); ++k) P.row(rows[k]) = Q.row(static_cast<Eigen::Index>(k));
 }
 
 Eigen::MatrixXd SurfaceContact::points(const Eigen::Ref<const Eigen::VectorXd>& x) const {

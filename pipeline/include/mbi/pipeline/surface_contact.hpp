@@ -118,6 +118,9 @@ class SurfaceContact : public sim::Potential {
   void index_points();                                          // element_start_ and the rest
   /// The rows `points` of the deformer's embedding.
   void select(const std::vector<Eigen::Index>& points, interp::Embedding& subset) const;
+  /// W x at the given points (B: x's Bezier points), with the rows at_ has kept.
+  void positions_at(const Eigen::Ref<const Eigen::VectorXd>& x, const interp::BezierPoints& B,
+                    const std::vector<Eigen::Index>& points, Eigen::MatrixXd& P) const;
   /// W applied to X's Bezier points B at the points of `subset`.
   void evaluate(const interp::BezierPoints& B, const interp::Embedding& subset, Eigen::MatrixXd& out) const;
   double depth(Eigen::Index point, size_t collider) const;        // guarded depth or infinity
@@ -154,7 +157,7 @@ class SurfaceContact : public sim::Potential {
   mutable std::vector<char> marks_;                   // per point, gather's scratch
   mutable std::vector<int> element_block_;            // per element, hessian_blocks' scratch (-1)
   mutable Eigen::MatrixXd X_;
-  mutable interp::Embedding subset_;   // rows of the deformer's embedding, for the vjp
+  mutable interp::Embedding subset_;   // rows of the deformer's embedding, for the vjp and positions_at
   mutable Sample at_, along_;          // x of the last evaluation; x and dx of the last move
   mutable std::vector<Active> terms_;  // at at_.x
   mutable bool terms_valid_ = false;
