@@ -181,8 +181,9 @@ def print_per_call(args):
         warm = per_call(method, args.threads, args.calls, False)
         for name in ("deform", "vjp"):
             for process, (py, cpp, outside) in (("fresh", fresh[name]), ("warm", warm[name])):
-                print(f"| {method} | {name}(out=) | {process} | {py:.2f} | {cpp:.2f} | {py - cpp:+.2f} | "
-                      f"{outside:+.2f} |")
+                columns = [f"{py:.2f}"] + ["-" if np.isnan(v) else f"{v:{f}}" for v, f in
+                                           ((cpp, ".2f"), (py - cpp, "+.2f"), (outside, "+.2f"))]
+                print(f"| {method} | {name}(out=) | {process} | " + " | ".join(columns) + " |")
     print()
 
 
