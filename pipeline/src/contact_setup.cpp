@@ -44,7 +44,10 @@ std::shared_ptr<SurfaceContact> make_surface_contact(const Eigen::Ref<const Eige
   d.method = pipeline.method;
   d.interp = pipeline.interp;
   auto deformer = std::make_shared<const Deformer>(U, T, points, d);
-  return std::make_shared<SurfaceContact>(std::move(deformer), options.colliders, k);
+  auto contact = std::make_shared<SurfaceContact>(std::move(deformer), options.colliders, k);
+  if (options.max_depth) contact->set_max_depth(*options.max_depth);
+  if (options.friction_velocity) contact->set_friction_velocity(*options.friction_velocity);
+  return contact;
 }
 
 int touching_points(const SurfaceContact& contact, const Eigen::Ref<const Eigen::MatrixXd>& X) {

@@ -7,6 +7,7 @@
 
 #include <mbi/interp/embed.hpp>
 #include <mbi/io/io.hpp>
+#include <mbi/pipeline/driver.hpp>
 #include <mbi/scenes/models.hpp>
 #include <mbi/scenes/runner.hpp>
 
@@ -193,6 +194,21 @@ TEST_CASE("contact = surface: contact_select names the dense vertices that touch
   CHECK(below < m.dense.V.rows());
 }
 
+TEST_CASE("contact = surface: contact_max_depth and contact_friction_velocity reach the contact", "[scenes][contact]") {
+  std::string text = ball_scene("surface", "bi", 3);
+  text.insert(text.find("[interpolation]"), "contact_max_depth = 0.02\ncontact_friction_velocity = 0.5\n");
+  const Scene sc = parse_scene(text, "ball.toml");
+  const SceneModels m = load_models(sc);
+  mbi::pipeline::FramePipeline pipe = make_pipeline(sc, m, mbi::interp::embed(m.U, m.T, m.dense.V));
+  const auto& contact = dynamic_cast<const mbi::pipeline::SimulatorDriver&>(pipe.driver()).contact();
+  REQUIRE(contact);
+  CHECK(contact->max_depth() == 0.02);
+  CHECK(contact->friction_velocity() == 0.5);
+  const Scene plain = parse_scene(ball_scene("surface", "bi", 3), "ball.toml");
+  mbi::pipeline::FramePipeline defaults = make_pipeline(plain, m, mbi::interp::embed(m.U, m.T, m.dense.V));
+  CHECK(dynamic_cast<const mbi::pipeline::SimulatorDriver&>(defaults.driver()).contact()->max_depth() != 0.02);
+}
+
 TEST_CASE("contact = surface: a collider overlapping the model at rest is an error naming it", "[scenes][contact]") {
   std::string text = ball_scene("surface", "bi", 5) + "[[colliders]]\nshape = \"sphere\"\ncenter = [0, 3, 0]\nradius = 0.1\n";
   text.replace(text.find("ground = -0.8"), 13, "ground = -0.3");  // the ball's bottom is at y = -0.5
@@ -255,6 +271,13 @@ TEST_CASE("contact keys and [[colliders]]: bad input is an error naming the key 
   std::string nothing = base;
   nothing.erase(nothing.find("ground = -0.8\n"), 14);
   CHECK_THAT(error(nothing), contains("simulation.contact: \"surface\" needs [[colliders]] or simulation.ground"));
+  for (const char* key : {"contact_max_depth", "contact_friction_velocity"}) {
+    std::string bad = base, unused = control;
+    bad.insert(bad.find("[interpolation]"), std::string(key) + " = -1\n");
+    CHECK_THAT(error(bad), contains(std::string("simulation.") + key + ": value -1 out of range"));
+    unused.insert(unused.find("[interpolation]"), std::string(key) + " = 1\n");
+    CHECK_THAT(error(unused), contains(std::string("simulation.") + key + ": needs contact = \"surface\""));
+  }
   std::string tolerance = base;
   tolerance.insert(tolerance.find("[interpolation]"), "newton_tolerance = -1\n");
   CHECK_THAT(error(tolerance), contains("simulation.newton_tolerance: value -1 out of range"));

@@ -108,6 +108,8 @@ void add_surface_contact(const Scene& sc, const SceneModels& m, pipeline::Simula
   pipeline::SurfaceContactOptions o;
   o.colliders = sc.colliders;
   o.stiffness = sc.simulation.contact_stiffness;
+  o.max_depth = sc.simulation.contact_max_depth;
+  o.friction_velocity = sc.simulation.contact_friction_velocity;
   o.points = contact_points(sc, m);
   const sim::Simulator& s = driver.simulator();
   try {

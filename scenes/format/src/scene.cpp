@@ -438,6 +438,12 @@ std::optional<double> parse_simulation(Table t, SimulationSpec& s) {
     if (!surface) t.fail("contact_stiffness", needs_surface);
     s.contact_stiffness = t.number("contact_stiffness", 0.0, 0, 1e15, true);
   }
+  for (const char* key : {"contact_max_depth", "contact_friction_velocity"}) {
+    if (!t.has(key)) continue;
+    if (!surface) t.fail(key, needs_surface);
+    (std::string(key) == "contact_max_depth" ? s.contact_max_depth : s.contact_friction_velocity) =
+        t.number(key, 0.0, 0, 1e15, true);
+  }
   if (t.has("contact_select")) {
     if (!surface) t.fail("contact_select", needs_surface);
     s.contact_select = parse_selection(t.sub("contact_select"));

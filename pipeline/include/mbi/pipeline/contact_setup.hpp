@@ -33,6 +33,8 @@ struct SurfaceContactOptions {
   std::vector<Collider> colliders;
   std::optional<double> stiffness;  ///< N/m per point; default_contact_stiffness when unset
   std::vector<int> points;          ///< rows of P that touch (sorted); empty = every row
+  std::optional<double> max_depth;          ///< m; SurfaceContact::set_max_depth when set
+  std::optional<double> friction_velocity;  ///< m/s; SurfaceContact::set_friction_velocity when set
 };
 
 /// SurfaceContact of the dense rest points P (p x 3, the pipeline's points) in the control mesh

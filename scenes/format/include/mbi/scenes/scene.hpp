@@ -127,6 +127,9 @@ struct SimulationSpec {
   /// vertices that touch (unset: all)
   std::optional<double> contact_stiffness;
   std::optional<Selection> contact_select;
+  /// contact = surface: the guarded depth (m, > 0) and friction's eps_v (m/s);
+  /// unset: SurfaceContact's defaults (method.md facts 16 and 17)
+  std::optional<double> contact_max_depth, contact_friction_velocity;
   /// m/s; unset: 0 (every Newton iteration runs) with contact = control, 1e-5 of the dense
   /// model's diagonal per substep with contact = surface (surface_newton_tolerance)
   std::optional<double> newton_tolerance;
