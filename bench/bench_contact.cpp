@@ -4,7 +4,8 @@
 // damping_stiffness 0 (refused with contact), no poke, the top tenth of the control nodes fixed.
 // The contact variant has contact = "surface" and a plane that starts at the model's lowest
 // point and rises 0.1 m in the first 0.2 s, pressing into the ball (a cap of 0.1 m is 5% of a
-// sphere's surface); its frames are measured from frame 8 on. The plain variant has no contact
+// sphere's surface) with a soft penalty (kStiffness, kMaxDepth), so that about that much of the
+// sagging surface is inside the plane; its frames are measured from frame 8 on. The plain variant has no contact
 // and no ground. Both with the scene's method (modified-BI) and with BI, whose contact Hessian
 // surrogate is exact against a plane. Counters: ms of each frame, their ratio, Newton
 // iterations per frame of each, the contact frame's line-search halvings, the contact points
