@@ -10,7 +10,7 @@ get its boundary (a closed triangle mesh). Every node of the cage is animated by
 key (a bend growing over the frames; the boundary cage gets the same motion of its nodes). Each
 (model, subdivision, method) runs in a fresh Blender process (--one), so memory is that method's:
   floor          Blender's own cost: the model's mesh re-evaluated each frame, no deformation
-  mbi            the add-on: bind operator (embedding, precompute, first write), live shape key
+  mbi            the add-on: bind operator (embedding, precompute, first write), live attribute
   mbi-boundary   the same with only the cage's boundary animated (the interior by the harmonic extension)
   meshdeform     Mesh Deform modifier, precision 5, bind operator plus its evaluation
   surfacedeform  Surface Deform modifier, bind operator plus its evaluation
