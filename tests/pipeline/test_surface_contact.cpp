@@ -432,7 +432,8 @@ Eigen::MatrixXd dense_hessian(const SurfaceContact& contact, const Eigen::Vector
 TEST_CASE("surface contact: the points of elements far from every collider are skipped exactly, "
           "also when the collider moves into them", "[pipeline][contact]") {
   // A long bar whose bottom a ball dents, the ball rolling along it by a third of the bar per
-  // substep: into elements that were far from it in the substep before.
+  // substep: into elements that were far from it in the substep before; and a tilted plane
+  // under its far end, which the move dx (0.1 down) brings into elements far from it at x.
   const mbi::test::Mesh mesh = mbi::test::box_tet_mesh(9, 2, 2, Eigen::Vector3d(3.0, 0.5, 0.5));
   std::mt19937 rng(23);
   std::uniform_real_distribution<double> u(0.0, 1.0), w(-0.01, 0.01);
@@ -440,6 +441,7 @@ TEST_CASE("surface contact: the points of elements far from every collider are s
   for (Eigen::Index p = 0; p < points.rows(); ++p) points.row(p) = Eigen::RowVector3d(3 * u(rng), 0.5 * u(rng), 0.5 * u(rng));
   Collider ball = Collider::sphere({-0.5, -0.78, 0.25}, 0.4);  // 0.12 into the bar's bottom
   ball.motion.velocity = Eigen::Vector3d(100, 0, 0);              // 1 m per substep of 0.01 s
+  const Collider plane = Collider::plane({2.4, -0.5, 0}, {-0.1, 1, 0});   // 6 cm into the far end
   Eigen::VectorXd x0(3 * mesh.U.rows()), dx(x0.size());
   for (Eigen::Index i = 0; i < mesh.U.rows(); ++i)
     for (int c = 0; c < 3; ++c) {
@@ -451,7 +453,7 @@ TEST_CASE("surface contact: the points of elements far from every collider are s
     DeformerOptions opt;
     opt.method = m;
     auto deformer = std::make_shared<Deformer>(mesh.U, mesh.T, points, opt);
-    SurfaceContact contact(deformer, {ball}, 1e4);
+    SurfaceContact contact(deformer, {ball, plane}, 1e4);
     contact.set_max_depth(D);
     for (double t0 : {0.0, 0.01}) {
       INFO("method " << static_cast<int>(m) << ", substep from " << t0 << " s");
@@ -477,9 +479,10 @@ TEST_CASE("surface contact: the points of elements far from every collider are s
       const Eigen::MatrixXd P = contact.points(x0), Dp = contact.points(dx);
       double cap = 1.0;
       for (Eigen::Index p = 0; p < P.rows(); ++p)
-        if (!std::isinf(depth(p, 0)))
-          cap = std::min(cap, contact::advance(contact.colliders()[0], P.row(p).transpose(), Dp.row(p).transpose(),
-                                               contact.time(), D));
+        for (size_t c = 0; c < 2; ++c)
+          if (!std::isinf(depth(p, c)))
+            cap = std::min(cap, contact::advance(contact.colliders()[c], P.row(p).transpose(), Dp.row(p).transpose(),
+                                                 contact.time(), D));
       CHECK(cap < 1.0);
       CHECK(std::abs(contact.max_step(x0, dx) - cap) <= 1e-12 * cap);
     }
