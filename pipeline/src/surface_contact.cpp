@@ -80,6 +80,7 @@ void SurfaceContact::index_points() {
 void SurfaceContact::set_time(double time) {
   if (!std::isfinite(time)) throw Error("contact time must be finite");
   time_ = time;
+  reference_ = false;  // the distances of begin_substep_at are of another pose
   posed_.clear();
   for (const Collider& c : colliders_) posed_.push_back(posed(c, time));
   forget();
@@ -128,6 +129,15 @@ void SurfaceContact::begin_substep_at(double start_time, double end_time, const 
       s.anchor = q + collider_displacement(colliders_[c], q, start_time, end_time);
       if (s.weight > 0 && std::isfinite(s.weight)) slips_.push_back(s);
     }
+  reference_B_ = S.B;
+  reference_distance_.assign(static_cast<size_t>(deformer_->points()), -kInf);
+  for (size_t i = 0; i < S.points.size(); ++i) {
+    double& d = reference_distance_[static_cast<size_t>(S.points[i])];
+    d = kInf;
+    for (size_t c = 0; c < C; ++c)
+      d = std::min(d, signed_distance(posed_[c], S.P.row(static_cast<Eigen::Index>(i)).transpose(), time_).value);
+  }
+  reference_ = true;
   forget();  // guards and slips changed; the slips' points are evaluated from now on
 }
 
@@ -155,7 +165,6 @@ void SurfaceContact::gather(const interp::BezierPoints& B, const Eigen::VectorXd
                             std::vector<Eigen::Index>& points) const {
   const int m = deformer_->elements();
   const Eigen::Index K = B.rows() / m;
-  std::vector<Eigen::Index> picked;
   for (int e = 0; e < m; ++e) {
     if (element_start_[e] == element_start_[e + 1]) continue;
     const auto Be = B.middleRows(e * K, K);
@@ -176,8 +185,14 @@ void SurfaceContact::gather(const interp::BezierPoints& B, const Eigen::VectorXd
       }
       near = lower < reach(e) + margin;
     }
-    if (near)
-      for (int i = element_start_[e]; i < element_start_[e + 1]; ++i) marks_[element_points_[i]] = 1;
+    if (!near) continue;
+    // A point moved by at most its element's largest Bezier move since the substep's start,
+    // where its distance was measured (unknown: -infinity): also 1-Lipschitz.
+    const double moved = reference_ ? (Be - reference_B_.middleRows(e * K, K)).rowwise().norm().maxCoeff() : 0.0;
+    for (int i = element_start_[e]; i < element_start_[e + 1]; ++i) {
+      const int p = element_points_[i];
+      if (!reference_ || reference_distance_[p] - moved < reach(e) + margin) marks_[p] = 1;
+    }
   }
   for (Eigen::Index p : unbounded_) marks_[p] = 1;
   for (const Slip& s : slips_) marks_[s.point] = 1;

@@ -154,6 +154,11 @@ class SurfaceContact : public sim::Potential {
   std::vector<Slip> slips_;       // by increasing point
   std::vector<int> element_start_, element_points_;  // per element, its points inside the hull
   std::vector<Eigen::Index> unbounded_;              // points with a negative barycentric coordinate
+  // The substep's start (begin_substep_at): Bezier points and each point's least distance to the
+  // colliders (-infinity where not evaluated), so that gather skips points far from them.
+  bool reference_ = false;
+  interp::BezierPoints reference_B_;
+  std::vector<double> reference_distance_;
   mutable std::vector<char> marks_;                   // per point, gather's scratch
   mutable std::vector<int> element_block_;            // per element, hessian_blocks' scratch (-1)
   mutable Eigen::MatrixXd X_;
