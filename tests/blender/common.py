@@ -63,6 +63,46 @@ def mbi_deform(mbi, exe, work, U, T, rest_model, X, tag):
     return mbi.read_points(out)
 
 
+SCENE = """name = "%s"
+[dense]
+path = "model.obj"
+[control]
+path = "cage"
+[material]
+young = %r
+poisson = %r
+density = %r
+[simulation]
+dt = %r
+frames = %d
+gravity = [%r, %r, %r]
+damping_mass = %r
+%s
+[interpolation]
+gpu = "off"
+[output]
+mesh_format = "none"
+control_vtk = false
+image = false
+metrics = false
+"""
+
+
+def write_scene(mbi, work, name, model, cage, material, dt, frames, rest):
+    """The bound model (model.obj) and the cage (cage.node/.ele) as Blender holds them, and scene.toml that
+    simulates them (material: young, poisson, density, mass_damping; the scene's gravity; `rest`: the lines
+    after [simulation]'s keys). Returns the scene's path."""
+    mbi.write_tetgen(os.path.join(work, "cage"), positions(cage.data), tets(cage))
+    F = np.empty(len(model.data.polygons) * 3, dtype=np.int32)
+    model.data.polygons.foreach_get("vertices", F)
+    mbi.write_surface(os.path.join(work, "model.obj"), positions(model.data), F.reshape(-1, 3))
+    path = os.path.join(work, "scene.toml")
+    with open(path, "w") as f:
+        f.write(SCENE % (name, material["young"], material["poisson"], material["density"], dt, frames,
+                         *tuple(bpy.context.scene.gravity), material["mass_damping"], rest))
+    return path
+
+
 def run_main(main):
     """Runs main(*arguments after --); any exception is a failure with its message, not Blender's exit 0."""
     args = sys.argv[sys.argv.index("--") + 1:]

@@ -16,7 +16,7 @@ import bpy
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
-from common import check, fail, positions, run_main, select_only, tets  # noqa: E402
+from common import check, fail, positions, run_main, select_only, write_scene  # noqa: E402
 
 START, END, FPS = 1, 25, 24
 MATERIAL = dict(young=2e4, poisson=0.4, density=500.0, mass_damping=1.0)
@@ -135,27 +135,10 @@ def mbi_run(mbi, exe, work, model, cage):
     pusher = bpy.data.objects["pusher"]
     center, radius = sphere_of(pusher)
     origin = tuple(map(float, pusher.matrix_world.translation))  # the add-on's center of its motion
-    base = os.path.join(work, "cage")
-    mbi.write_tetgen(base, positions(cage.data), tets(cage))
-    F = np.empty(len(model.data.polygons) * 3, dtype=np.int32)
-    model.data.polygons.foreach_get("vertices", F)
-    mbi.write_surface(os.path.join(work, "model.obj"), positions(model.data), F.reshape(-1, 3))
     dt = 1.0 / FPS
-    scene = """name = "blender-contact"
-[dense]
-path = "model.obj"
-[control]
-path = "cage"
-[material]
-young = %r
-poisson = %r
-density = %r
-[simulation]
-dt = %r
-frames = %d
-gravity = [%r, %r, %r]
-damping_mass = %r
-contact = "surface"
+    material = dict(young=cage.mbi.young, poisson=cage.mbi.poisson, density=cage.mbi.density,
+                    mass_damping=cage.mbi.mass_damping)  # as Blender keeps them (float32)
+    colliders = """contact = "surface"
 [[colliders]]
 shape = "plane"
 point = [0, 0, %r]
@@ -165,21 +148,10 @@ friction = %r
 shape = "sphere"
 center = [%r, %r, %r]
 radius = %r
-motion = { velocity = [%r, %r, %r], twist_center = [%r, %r, %r], start = %r, stop = %r }
-[interpolation]
-gpu = "off"
-[output]
-mesh_format = "none"
-control_vtk = false
-image = false
-metrics = false
-""" % (cage.mbi.young, cage.mbi.poisson, cage.mbi.density, dt, END - START,  # as Blender keeps them (float32)
-       *tuple(bpy.context.scene.gravity), cage.mbi.mass_damping,
-       GROUND, FRICTION, *map(float, center), radius, *BALL["velocity"], *origin, (BALL["first"] - START) * dt,
-       (BALL["last"] - START) * dt)
-    path = os.path.join(work, "scene.toml")
-    with open(path, "w") as f:
-        f.write(scene)
+motion = { velocity = [%r, %r, %r], twist_center = [%r, %r, %r], start = %r, stop = %r }""" % (
+        GROUND, FRICTION, *map(float, center), radius, *BALL["velocity"], *origin, (BALL["first"] - START) * dt,
+        (BALL["last"] - START) * dt)
+    path = write_scene(mbi, work, "blender-contact", model, cage, material, dt, END - START, colliders)
     # mbi run's pipeline from the same module as the add-on's (its frames equal mbi run's: test_contact.py):
     # the contact's Newton stops at its iteration cap here, so a build of another tree differs in the last bits
     return mbi.FramePipeline.from_scene(path).run(END - START + 1)

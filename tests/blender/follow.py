@@ -10,13 +10,12 @@ import math
 import os
 import sys
 
-import addon_utils
 import bpy
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
 from common import check, evaluated, fail, positions, run_main, select_only  # noqa: E402
-from physics import END, FPS, START, mbi_run, setup  # noqa: E402
+from physics import END, FPS, START, mbi_run, start  # noqa: E402
 
 FIRST, LAST, RATE, VELOCITY = 3, 9, 2.0, (0.0, 0.0, 0.5)
 
@@ -92,13 +91,7 @@ def follows_bone(work, pins, size):
 
 
 def main(work, exe):
-    addon_utils.enable("mbi_blender", default_set=True)
-    from mbi_blender import module
-    mbi = module.load()
-    model, cage, pins = setup()
-    rest = evaluated(model)
-    size = np.linalg.norm(np.ptp(rest, axis=0))
-    bpy.ops.wm.save_as_mainfile(filepath=os.path.join(work, "physics.blend"))
+    mbi, model, cage, pins, rest, size = start(work)
     refused_without_object(cage)
 
     center = positions(cage.data)[pins].mean(axis=0)

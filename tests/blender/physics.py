@@ -14,7 +14,7 @@ import bpy
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
-from common import check, evaluated, positions, run_main, select_only, tets  # noqa: E402
+from common import check, evaluated, fail, positions, run_main, select_only, write_scene  # noqa: E402
 
 START, END, FPS = 1, 13, 24
 MATERIAL = dict(young=3e4, poisson=0.4, density=1000.0, mass_damping=0.5)
@@ -44,43 +44,9 @@ def setup():
 
 def mbi_run(mbi, exe, work, model, cage, pins, motion=""):
     """The same simulation as a scene for `mbi run` (pinned nodes fixed, or moved by motion): its dense.pc2."""
-    base = os.path.join(work, "cage")
-    mbi.write_tetgen(base, positions(cage.data), tets(cage))
-    V = positions(model.data)
-    F = np.empty(len(model.data.polygons) * 3, dtype=np.int32)
-    model.data.polygons.foreach_get("vertices", F)
-    mbi.write_surface(os.path.join(work, "model.obj"), V, F.reshape(-1, 3))
-    g = tuple(bpy.context.scene.gravity)
-    scene = """name = "blender-physics"
-[dense]
-path = "model.obj"
-[control]
-path = "cage"
-[material]
-young = %r
-poisson = %r
-density = %r
-[simulation]
-dt = %r
-frames = %d
-gravity = [%r, %r, %r]
-damping_mass = %r
-[[constraints]]
-type = "%s"
-select = { indices = %s }
-%s
-[interpolation]
-gpu = "off"
-[output]
-mesh_format = "none"
-control_vtk = false
-image = false
-metrics = false
-""" % (MATERIAL["young"], MATERIAL["poisson"], MATERIAL["density"], 1.0 / FPS, END - START, *g,
-       MATERIAL["mass_damping"], "kinematic" if motion else "fixed", pins.tolist(), motion)
-    path = os.path.join(work, "scene.toml")
-    with open(path, "w") as f:
-        f.write(scene)
+    pinned = '[[constraints]]\ntype = "%s"\nselect = { indices = %s }\n%s' % (
+        "kinematic" if motion else "fixed", pins.tolist(), motion)
+    path = write_scene(mbi, work, "blender-physics", model, cage, MATERIAL, 1.0 / FPS, END - START, pinned)
     out = os.path.join(work, "run-kinematic" if motion else "run")
     run = subprocess.run([exe, "run", path, "--out", out, "--force", "--quiet"], capture_output=True, text=True)
     check(run.returncode == 0, "mbi run of the same scene: %s" % run.stderr.strip()[-500:])
@@ -133,14 +99,21 @@ def rigid_pins(mbi, exe, work, pins):
           % (np.abs(X[pins] - U[pins]).max() / size))
 
 
-def main(work, exe):
+def start(work):
+    """The add-on enabled, the scene set up and saved as physics.blend: mbi, model, cage, pins, the model's
+    evaluated rest positions and its size."""
     addon_utils.enable("mbi_blender", default_set=True)
-    from mbi_blender import module, physics
+    from mbi_blender import module
     mbi = module.load()
     model, cage, pins = setup()
     rest = evaluated(model)
-    size = np.linalg.norm(np.ptp(rest, axis=0))
     bpy.ops.wm.save_as_mainfile(filepath=os.path.join(work, "physics.blend"))
+    return mbi, model, cage, pins, rest, np.linalg.norm(np.ptp(rest, axis=0))
+
+
+def main(work, exe):
+    mbi, model, cage, pins, rest, size = start(work)
+    from mbi_blender import physics
 
     job = physics.simulate_job(bpy.context.scene, cage, START, END, "//mbi_cache")
     for _ in range(3):
