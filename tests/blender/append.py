@@ -12,23 +12,16 @@ import bpy
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
-from common import check, evaluated, mbi_deform, positions, run_main, select_only, tets  # noqa: E402
+from common import (  # noqa: E402
+    agrees_with_mbi_deform, bound_sphere, check, pose_key, positions, run_main, select_only,
+    tets)
 
 
 def source_file(work):
     """A model bound to a posed cage, saved; returns the file, the cage's name and its tetrahedra."""
-    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=3, radius=1.0)
-    model = bpy.context.active_object
-    model.name = "model"
-    bpy.ops.mbi.cage(vertices=150)
-    cage = bpy.context.active_object
-    select_only([model, cage], cage)
-    bpy.ops.mbi.bind()
+    model, cage = bound_sphere(3)
     U = positions(cage.data)
-    cage.shape_key_add(name="Basis", from_mix=False)
-    pose = cage.shape_key_add(name="pose", from_mix=False)
-    pose.data.foreach_set("co", (U + 0.25 * np.stack([U[:, 1] ** 2, U[:, 2], -U[:, 0] * U[:, 2]], axis=1))
-                          .astype(np.float32).ravel())
+    pose = pose_key(cage, U + 0.25 * np.stack([U[:, 1] ** 2, U[:, 2], -U[:, 0] * U[:, 2]], axis=1))
     pose.value = 1.0
     path = os.path.join(work, "source.blend")
     bpy.ops.wm.save_as_mainfile(filepath=path)
@@ -36,12 +29,7 @@ def source_file(work):
 
 
 def agrees(mbi, exe, work, model, cage, tag):
-    P = evaluated(model)
-    expected = mbi_deform(mbi, exe, work, positions(cage.data), tets(cage), positions(model.data),
-                          evaluated(cage), tag)
-    size = np.linalg.norm(np.ptp(P, axis=0))
-    error = np.abs(P - expected).max() / size
-    check(error <= 1e-6, "%s: the model equals mbi deform (%.2e of its size)" % (tag, error))
+    P, size = agrees_with_mbi_deform(mbi, exe, work, model, cage, tag)
     check(np.abs(P - positions(model.data)).max() / size > 0.01, "%s: and it is deformed" % tag)
 
 

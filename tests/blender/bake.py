@@ -15,30 +15,20 @@ import bpy
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
-from common import check, evaluated, fail, positions, run_main, select_only  # noqa: E402
+from common import bound_sphere, check, evaluated, fail, pose_key, positions, run_main, select_only  # noqa: E402
 
 START, END, CHECKED = 3, 12, (3, 7, 12)
 
 
 def setup():
-    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=4, radius=1.0, location=(0.4, -0.2, 0.1))
-    model = bpy.context.active_object
-    model.name = "model"
-    model.scale = (1.6, 0.8, 0.6)
-    bpy.context.view_layer.update()
-    bpy.ops.mbi.cage(vertices=150)
-    cage = bpy.context.active_object
-    select_only([model, cage], cage)
-    bpy.ops.mbi.bind()
+    model, cage = bound_sphere(4, location=(0.4, -0.2, 0.1), scale=(1.6, 0.8, 0.6))
     U = positions(cage.data)
-    cage.shape_key_add(name="Basis", from_mix=False)
-    pose = cage.shape_key_add(name="pose", from_mix=False)
     c = U.mean(axis=0)
     angle = 2.0 * (U[:, 2] - c[2]) / np.ptp(U[:, 2])
     X = U.copy()
     X[:, 0] = c[0] + (U[:, 0] - c[0]) * np.cos(angle) - (U[:, 1] - c[1]) * np.sin(angle)
     X[:, 1] = c[1] + (U[:, 0] - c[0]) * np.sin(angle) + (U[:, 1] - c[1]) * np.cos(angle)
-    pose.data.foreach_set("co", X.astype(np.float32).ravel())
+    pose = pose_key(cage, X)
     for frame, value in ((1, 0.0), (14, 1.0)):
         pose.value = value
         pose.keyframe_insert("value", frame=frame)

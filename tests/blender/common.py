@@ -63,6 +63,41 @@ def mbi_deform(mbi, exe, work, U, T, rest_model, X, tag):
     return mbi.read_points(out)
 
 
+def bound_sphere(subdivisions, location=(0.0, 0.0, 0.0), scale=None):
+    """An ico sphere "model" (radius 1) bound to a 150-node cage made around it: (model, cage)."""
+    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=subdivisions, radius=1.0, location=location)
+    model = bpy.context.active_object
+    model.name = "model"
+    if scale is not None:
+        model.scale = scale
+        bpy.context.view_layer.update()
+    bpy.ops.mbi.cage(vertices=150)
+    cage = bpy.context.active_object
+    select_only([model, cage], cage)
+    bpy.ops.mbi.bind()
+    return model, cage
+
+
+def pose_key(cage, X):
+    """A Basis key and a shape key "pose" holding the node positions X (value 0): the key."""
+    cage.shape_key_add(name="Basis", from_mix=False)
+    pose = cage.shape_key_add(name="pose", from_mix=False)
+    pose.data.foreach_set("co", X.astype(np.float32).ravel())
+    return pose
+
+
+def agrees_with_mbi_deform(mbi, exe, work, model, cage, tag):
+    """Checks the model's evaluated positions against `mbi deform` of its rest by the cage's (1e-6 of its size);
+    returns the evaluated positions and the model's size."""
+    P = evaluated(model)
+    expected = mbi_deform(mbi, exe, work, positions(cage.data), tets(cage), positions(model.data),
+                          evaluated(cage), tag)
+    size = np.linalg.norm(np.ptp(P, axis=0))
+    error = np.abs(P - expected).max() / size
+    check(error <= 1e-6, "%s: the model equals mbi deform on the current rest (%.2e of its size)" % (tag, error))
+    return P, size
+
+
 SCENE = """name = "%s"
 [dense]
 path = "model.obj"

@@ -14,22 +14,15 @@ import bpy
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
-from common import check, evaluated, mbi_deform, positions, run_main, select_only, tets  # noqa: E402
+from common import (  # noqa: E402
+    agrees_with_mbi_deform, bound_sphere, check, pose_key, positions, run_main,
+    select_only)
 
 
 def setup():
-    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=4, radius=1.0)
-    model = bpy.context.active_object
-    model.name = "model"
-    bpy.ops.mbi.cage(vertices=150)
-    cage = bpy.context.active_object
-    select_only([model, cage], cage)
-    bpy.ops.mbi.bind()
+    model, cage = bound_sphere(4)
     U = positions(cage.data)
-    cage.shape_key_add(name="Basis", from_mix=False)
-    pose = cage.shape_key_add(name="pose", from_mix=False)
-    X = U + 0.3 * np.stack([U[:, 2] ** 2, np.sin(U[:, 0]), U[:, 0] * U[:, 1]], axis=1)
-    pose.data.foreach_set("co", X.astype(np.float32).ravel())
+    pose = pose_key(cage, U + 0.3 * np.stack([U[:, 2] ** 2, np.sin(U[:, 0]), U[:, 0] * U[:, 1]], axis=1))
     pose.value = 1.0
     bpy.context.view_layer.update()
     return model, cage
@@ -45,21 +38,13 @@ def set_rest(obj, R):
     bpy.context.view_layer.update()
 
 
-def agrees(mbi, exe, work, model, cage, tag):
-    P = evaluated(model)
-    expected = mbi_deform(mbi, exe, work, positions(cage.data), tets(cage), positions(model.data),
-                          evaluated(cage), tag)
-    size = np.linalg.norm(np.ptp(P, axis=0))
-    error = np.abs(P - expected).max() / size
-    check(error <= 1e-6, "%s: the model equals mbi deform on the current rest (%.2e of its size)" % (tag, error))
-
 
 def main(work, exe):
     addon_utils.enable("mbi_blender", default_set=True)
     from mbi_blender import binding, table_op
     mbi = __import__("mbi_blender.module", fromlist=["load"]).load()
     model, cage = setup()
-    agrees(mbi, exe, work, model, cage, "bound")
+    agrees_with_mbi_deform(mbi, exe, work, model, cage, "bound")
     kept = binding._bound[model.name_full]
     for frame in (2, 3):
         bpy.context.scene.frame_set(frame)
@@ -67,14 +52,14 @@ def main(work, exe):
 
     set_rest(model, positions(model.data) * 0.9)
     check(binding._bound[model.name_full] is not kept, "an in-place edit of the model's rest rebuilt the Deformer")
-    agrees(mbi, exe, work, model, cage, "model-edited")
+    agrees_with_mbi_deform(mbi, exe, work, model, cage, "model-edited")
     U = positions(cage.data)
     inner = np.argmin(np.linalg.norm(U - U.mean(axis=0), axis=1))
     U[inner] += 0.05
     kept = binding._bound[model.name_full]
     set_rest(cage, U)
     check(binding._bound[model.name_full] is not kept, "an in-place edit of the cage's rest rebuilt the Deformer")
-    agrees(mbi, exe, work, model, cage, "cage-edited")
+    agrees_with_mbi_deform(mbi, exe, work, model, cage, "cage-edited")
 
     path, cage_name = os.path.join(work, "stale.blend"), cage.name
     bpy.ops.wm.save_as_mainfile(filepath=path)
@@ -89,7 +74,7 @@ def main(work, exe):
     model, cage = bpy.data.objects["model"], bpy.data.objects[cage_name]
     note = binding.notes.get(model.name, "")
     check("rest shape changed" in note, "a file edited without the add-on is detected at load: %s" % note)
-    agrees(mbi, exe, work, model, cage, "reopened")
+    agrees_with_mbi_deform(mbi, exe, work, model, cage, "reopened")
 
     select_only([model], model)
     check(bpy.ops.mbi.discontinuity() == {"FINISHED"}, "the discontinuity operator ran")
