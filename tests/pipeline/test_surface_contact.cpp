@@ -7,6 +7,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <limits>
+#include <memory>
 #include <random>
 
 using namespace mbi::pipeline;
@@ -64,6 +65,27 @@ Eigen::VectorXd nudged(const Eigen::VectorXd& x0) {
   return x;
 }
 
+/// For one method: a frictionless contact and one with lagged friction from s.x (contact, pose) pairs:
+/// the first at s.x, the second at s.x nudged.
+struct Contacts {
+  std::shared_ptr<Deformer> deformer;
+  std::unique_ptr<SurfaceContact> plain, lagged;
+  std::vector<std::pair<SurfaceContact*, Eigen::VectorXd>> cases;
+};
+
+Contacts contacts(const Setup& s, Method m) {
+  DeformerOptions opt;
+  opt.method = m;
+  Contacts c;
+  c.deformer = std::make_shared<Deformer>(s.mesh.U, s.mesh.T, s.points, opt);
+  c.plain = std::make_unique<SurfaceContact>(c.deformer, colliders(), 1e4);
+  c.lagged = std::make_unique<SurfaceContact>(c.deformer, sliding_colliders(), 1e4);
+  start_friction(*c.lagged, s.x);
+  REQUIRE(c.lagged->friction_pairs() > 20);
+  c.cases = {{c.plain.get(), s.x}, {c.lagged.get(), nudged(s.x)}};
+  return c;
+}
+
 Eigen::VectorXd gradient(const SurfaceContact& c, const Eigen::VectorXd& x) {
   Eigen::VectorXd g = Eigen::VectorXd::Zero(x.size());
   c.add_gradient(x, g);
@@ -76,14 +98,8 @@ TEST_CASE("surface contact: force = finite differences of the energy through the
           "BI, Phong and modified-BI", "[pipeline][contact]") {
   const Setup s = setup();
   for (Method m : {Method::BI, Method::Phong, Method::ModifiedBI}) {
-    DeformerOptions opt;
-    opt.method = m;
-    auto deformer = std::make_shared<Deformer>(s.mesh.U, s.mesh.T, s.points, opt);
-    SurfaceContact plain(deformer, colliders(), 1e4), lagged(deformer, sliding_colliders(), 1e4);
-    start_friction(lagged, s.x);
-    REQUIRE(lagged.friction_pairs() > 20);
-    const Eigen::VectorXd x1 = nudged(s.x);
-    for (const auto& [contact, x] : {std::pair<SurfaceContact*, Eigen::VectorXd>{&plain, s.x}, {&lagged, x1}}) {
+    const Contacts both = contacts(s, m);
+    for (const auto& [contact, x] : both.cases) {
       const Eigen::VectorXd g = gradient(*contact, x);
       REQUIRE(contact->energy(x) > 0);
       Eigen::VectorXd fd(x.size());
@@ -94,7 +110,7 @@ TEST_CASE("surface contact: force = finite differences of the energy through the
         xm(k) -= eps;
         fd(k) = (contact->energy(xp) - contact->energy(xm)) / (2 * eps);
       }
-      INFO("method " << static_cast<int>(m) << (contact == &lagged ? ", guarded, friction" : ", plain"));
+      INFO("method " << static_cast<int>(m) << (contact == both.lagged.get() ? ", guarded, friction" : ", plain"));
       CHECK((fd - g).norm() <= 1e-6 * g.norm());
     }
   }
@@ -163,14 +179,8 @@ TEST_CASE("surface contact: energy along a line is the energy at x + s dx, BI, P
   Eigen::VectorXd dx(s.x.size());  // a random move that also pushes the box 0.15 into the plane
   for (Eigen::Index k = 0; k < dx.size(); ++k) dx(k) = w(rng) + (k % 3 == 1 ? -0.15 : 0.0);
   for (Method m : {Method::BI, Method::Phong, Method::ModifiedBI}) {
-    DeformerOptions opt;
-    opt.method = m;
-    auto deformer = std::make_shared<Deformer>(s.mesh.U, s.mesh.T, s.points, opt);
-    SurfaceContact plain(deformer, colliders(), 1e4), lagged(deformer, sliding_colliders(), 1e4);
-    start_friction(lagged, s.x);
-    REQUIRE(lagged.friction_pairs() > 20);
-    const Eigen::VectorXd x1 = nudged(s.x);
-    for (const auto& [contact, x] : {std::pair<SurfaceContact*, Eigen::VectorXd>{&plain, s.x}, {&lagged, x1}}) {
+    const Contacts both = contacts(s, m);
+    for (const auto& [contact, x] : both.cases) {
       // points that start clear and touch further along: a line search that skipped them would differ
       const auto touching = [&](const Eigen::VectorXd& at) {
         const Eigen::MatrixXd P = contact->points(at);
@@ -184,13 +194,14 @@ TEST_CASE("surface contact: energy along a line is the energy at x + s dx, BI, P
       for (double t : {1.0, 0.5, 0.25, 0.125, 1.0 / 1024, 0.0, 1.5, -0.3}) {
         const double along = contact->energy_along(t);  // after energy() at another x: still this line
         const double direct = contact->energy(x + t * dx);
-        INFO("method " << static_cast<int>(m) << (contact == &lagged ? ", friction" : ", plain") << ", s = " << t);
+        INFO("method " << static_cast<int>(m) << (contact == both.lagged.get() ? ", friction" : ", plain") << ", s = " << t);
         REQUIRE(direct > 0);
         CHECK(std::abs(along - direct) <= 1e-12 * direct);
       }
     }
-    lagged.begin_substep_at(0.01, 0.02, x1, Eigen::VectorXd::Zero(x1.size()));
-    CHECK_THROWS_WITH(lagged.energy_along(0.5), Catch::Contains("begin_line"));
+    const Eigen::VectorXd& x1 = both.cases[1].second;
+    both.lagged->begin_substep_at(0.01, 0.02, x1, Eigen::VectorXd::Zero(x1.size()));
+    CHECK_THROWS_WITH(both.lagged->energy_along(0.5), Catch::Contains("begin_line"));
   }
 }
 
