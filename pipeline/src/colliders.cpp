@@ -1,5 +1,6 @@
 #include <mbi/error.hpp>
 #include <mbi/pipeline/colliders.hpp>
+#include <mbi/sim/rigid_pose.hpp>
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -13,20 +14,6 @@ namespace {
 void check_positive(const std::string& name, const char* field, double value) {
   if (!std::isfinite(value) || value <= 0)
     bad(name, std::string(field) + " must be finite and > 0 m, got " + std::to_string(value));
-}
-
-/// The motion's rigid map at time t: world = shift + rot (local - center).
-struct Pose {
-  Eigen::Matrix3d rot = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d shift = Eigen::Vector3d::Zero();
-};
-
-Pose pose(const sim::RigidMotion& m, double t) {
-  const double s = std::clamp(t, m.start, m.stop) - m.start;
-  Pose p;
-  if (m.angular_velocity != 0.0) p.rot = Eigen::AngleAxisd(m.angular_velocity * s, m.axis.normalized()).toRotationMatrix();
-  p.shift = m.center + m.velocity * s;
-  return p;
 }
 
 /// Unit vector along v, or any unit vector orthogonal to `fallback_axis` when v is 0.
@@ -154,7 +141,7 @@ void check_collider(const Collider& c, const std::string& name) {
 
 Distance signed_distance(const Collider& c, const Eigen::Vector3d& p, double time) {
   if (c.motion.velocity.isZero() && c.motion.angular_velocity == 0.0) return local_distance(c, p);  // static
-  const Pose ps = pose(c.motion, time);
+  const sim::RigidPose ps = sim::rigid_pose(c.motion, time);
   const Eigen::Vector3d local = c.motion.center + ps.rot.transpose() * (p - ps.shift);
   Distance d = local_distance(c, local);
   d.normal = ps.rot * d.normal;
@@ -162,10 +149,8 @@ Distance signed_distance(const Collider& c, const Eigen::Vector3d& p, double tim
 }
 
 Collider posed(const Collider& c, double time) {
-  const Pose ps = pose(c.motion, time);
-  const auto place = [&](const Eigen::Vector3d& local) -> Eigen::Vector3d {
-    return ps.shift + ps.rot * (local - c.motion.center);
-  };
+  const sim::RigidPose ps = sim::rigid_pose(c.motion, time);
+  const auto place = [&](const Eigen::Vector3d& local) { return ps.apply(local, c.motion.center); };
   Collider out = c;
   out.motion = sim::RigidMotion();
   out.point = place(c.point);
@@ -178,14 +163,14 @@ Collider posed(const Collider& c, double time) {
 Eigen::Vector3d collider_velocity(const Collider& c, const Eigen::Vector3d& p, double time) {
   const sim::RigidMotion& m = c.motion;
   if (!(time >= m.start && time < m.stop)) return Eigen::Vector3d::Zero();
-  const Pose ps = pose(m, time);
+  const sim::RigidPose ps = sim::rigid_pose(m, time);
   Eigen::Vector3d v = m.velocity;
   if (m.angular_velocity != 0.0) v += m.angular_velocity * m.axis.normalized().cross(p - ps.shift);
   return v;
 }
 
 Eigen::Vector3d collider_displacement(const Collider& c, const Eigen::Vector3d& p, double from, double to) {
-  const Pose a = pose(c.motion, from), b = pose(c.motion, to);
+  const sim::RigidPose a = sim::rigid_pose(c.motion, from), b = sim::rigid_pose(c.motion, to);
   const Eigen::Vector3d local = a.rot.transpose() * (p - a.shift);  // relative to the centre
   return b.shift + b.rot * local - p;
 }

@@ -1,6 +1,7 @@
 // The only file that includes OpenVDB (its headers compile slowly).
 #include <mbi/error.hpp>
 #include <mbi/pipeline/mesh_level_set.hpp>
+#include <mbi/sim/rigid_pose.hpp>
 
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/MeshToVolume.h>
@@ -180,15 +181,10 @@ LevelSetSample MeshLevelSet::sample(const Eigen::Vector3d& p) const {
 
 LevelSetSample MeshLevelSet::sample(const Eigen::Vector3d& p, const sim::RigidMotion& motion, double time) const {
   if (!p.allFinite() || !std::isfinite(time)) bad("sample: the point or the time is not finite");
-  // world = center + velocity s + rot (local - center), s the time since start within [start, stop]
-  const double s = std::clamp(time, motion.start, motion.stop) - motion.start;
-  Eigen::Matrix3d rot = Eigen::Matrix3d::Identity();
-  if (motion.angular_velocity != 0.0)
-    rot = Eigen::AngleAxisd(motion.angular_velocity * s, motion.axis.normalized()).toRotationMatrix();
-  const Eigen::Vector3d shift = motion.center + motion.velocity * s;
-  LevelSetSample out = grid_->local(motion.center + rot.transpose() * (p - shift));
-  out.gradient = rot * out.gradient;
-  out.normal = rot * out.normal;
+  const sim::RigidPose ps = sim::rigid_pose(motion, time);
+  LevelSetSample out = grid_->local(motion.center + ps.rot.transpose() * (p - ps.shift));
+  out.gradient = ps.rot * out.gradient;
+  out.normal = ps.rot * out.normal;
   return out;
 }
 

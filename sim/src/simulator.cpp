@@ -1,4 +1,5 @@
 #include <mbi/base/timer.hpp>
+#include <mbi/sim/rigid_pose.hpp>
 #include <mbi/sim/simulator.hpp>
 
 #include <Eigen/Geometry>
@@ -103,13 +104,7 @@ struct Kinematic {
   Eigen::MatrixXd p0;  // k x 3
   RigidMotion motion;
   Eigen::Vector3d position(int k, double t) const {
-    const double s = std::clamp(t, motion.start, motion.stop) - motion.start;
-    Eigen::Vector3d r = p0.row(k).transpose() - motion.center;
-    if (motion.angular_velocity != 0.0) {
-      const Eigen::AngleAxisd rot(motion.angular_velocity * s, motion.axis.normalized());
-      r = rot * r;
-    }
-    return motion.center + motion.velocity * s + r;
+    return rigid_pose(motion, t).apply(p0.row(k).transpose(), motion.center);
   }
 };
 
