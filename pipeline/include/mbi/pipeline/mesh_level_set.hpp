@@ -45,7 +45,7 @@ class MeshLevelSet {
   /// count, a non-finite vertex, an index out of range, a triangle that repeats a vertex, a mesh
   /// that is not closed (an edge used by an odd number of triangles: the count and the first
   /// such edge with its triangle), a bad option. Self-intersections are accepted (see the sign
-  /// rule above). Cost: O(triangles + voxels): 0.5 s for 10^4 triangles and 10^6 voxels.
+  /// rule above). Cost: O(triangles + voxels), on TBB's threads.
   MeshLevelSet(const Eigen::Ref<const Eigen::MatrixXd>& vertices, const Eigen::Ref<const Eigen::MatrixXi>& triangles,
                const MeshLevelSetOptions& options = {});
 
@@ -53,7 +53,7 @@ class MeshLevelSet {
   /// about 74^3 voxels (a cube), and a feature 1/20 of the diagonal thick spans 6 voxels.
   static double default_voxel_size(const Eigen::Ref<const Eigen::MatrixXd>& vertices);
 
-  /// Signed distance (m) at p (m, the mesh's frame) and its gradient, O(1) (about 100 ns): one voxel
+  /// Signed distance (m) at p (m, the mesh's frame) and its gradient, O(1) (8 voxels read): one voxel
   /// accurate, continuous (trilinear) inside the band and the interior; the gradient is the
   /// interpolant's, piecewise constant per voxel direction, so the normal jumps by a few degrees
   /// between voxels. Outside the band (no voxel of p's cell resolved) the value is the larger of
