@@ -384,6 +384,8 @@ class Collider:
         """the collider moving rigidly from its pose at start (s): velocity m/s, twist_rate rad/s"""
     def distance(self, p: Vector3, time: float = 0.0) -> Tuple[float, FloatArray]:
         """(signed distance (m, < 0 inside), unit outward normal) at p"""
+    def distances(self, P: ArrayLike, time: float = 0.0) -> Tuple[FloatArray, FloatArray]:
+        """(signed distances (p,) (m, < 0 inside), unit outward normals (p, 3)) at the points P (p, 3)"""
     @property
     def shape(self) -> Literal["plane", "sphere", "box", "capsule"]: ...
     @property

@@ -20,6 +20,23 @@ namespace {
 using pipeline::Collider;
 using Object = Guarded<pipeline::FramePipeline>;
 
+// distance() at many points: one array in, two out, the GIL released while they are measured.
+py::tuple distances(const Collider& c, const py::object& P, double time) {
+  if (!std::isfinite(time)) throw Error("time must be finite, got " + std::to_string(time));
+  const Input p = float_matrix(P, "P", {-1, 3});
+  Eigen::VectorXd d(p.map.rows());
+  Eigen::MatrixXd normals(p.map.rows(), 3);
+  {
+    py::gil_scoped_release release;
+    for (Eigen::Index i = 0; i < p.map.rows(); ++i) {
+      const pipeline::Distance di = pipeline::signed_distance(c, p.map.row(i).transpose(), time);
+      d(i) = di.value;
+      normals.row(i) = di.normal.transpose();
+    }
+  }
+  return py::make_tuple(to_numpy_vector(d), to_numpy(std::move(normals)));
+}
+
 // A Simulator that Python holds, stepped once a frame (not for frame 0, the initial pose) with
 // surface contact as its potential, as pipeline::SimulatorDriver steps the simulator it owns.
 class ContactDriving final : public pipeline::Driver {
@@ -190,6 +207,8 @@ void bind_collider(py::module_& m) {
         const pipeline::Distance d = pipeline::signed_distance(c, vector3(p, "p"), time);
         return py::make_tuple(d.value, to_numpy_vector(d.normal));
       }, py::arg("p"), py::arg("time") = 0.0, "(signed distance (m, < 0 inside), unit outward normal) at p")
+      .def("distances", &distances, py::arg("P"), py::arg("time") = 0.0,
+           "(signed distances (p,) (m, < 0 inside), unit outward normals (p, 3)) at the points P (p, 3)")
       .def_property_readonly("shape", [](const Collider& c) { return std::string(scenes::kColliderShapeNames.name(c.shape)); })
       .def_property_readonly("friction", [](const Collider& c) { return c.friction; })
       .def_property_readonly("radius", [](const Collider& c) { return c.radius; })

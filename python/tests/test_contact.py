@@ -151,6 +151,29 @@ def test_colliders_are_checked():
     assert np.allclose(normal, (1, 0, 0))
 
 
+
+def test_distances_at_many_points_are_distance_at_each():
+    rng = np.random.default_rng(3)
+    P = rng.uniform(-2, 2, (40, 3))
+    shapes = [mbi.Collider.plane((0, 0.1, 0), (0.2, 1, 0)), mbi.Collider.sphere((0.3, 0, 0), 0.8),
+              mbi.Collider.box((0, 0, 0), (1, 0.5, 0.7), [[0, 1, 0], [-1, 0, 0], [0, 0, 1]]),
+              mbi.Collider.capsule((-1, 0, 0), (1, 0.5, 0), 0.4).moving(velocity=(0, 0, 1), twist_rate=2.0)]
+    # a Fortran-order copy, every other row of a larger array, a broadcast row
+    layouts = [P, np.asfortranarray(P), np.repeat(P, 2, axis=0)[::2], np.broadcast_to(P[3], (5, 3))]
+    for c in shapes:
+        for Q in layouts:
+            d, n = c.distances(Q, time=0.3)
+            assert d.shape == (len(Q),) and n.shape == (len(Q), 3)
+            for i in range(len(Q)):
+                value, normal = c.distance(Q[i], time=0.3)
+                assert d[i] == value and np.array_equal(n[i], normal)
+    with pytest.raises(mbi.Error, match="P"):
+        shapes[0].distances(np.zeros((4, 2)))
+    with pytest.raises(mbi.Error, match="P"):
+        shapes[0].distances([[0.0, float("nan"), 0.0]])
+    with pytest.raises(mbi.Error, match="time"):
+        shapes[0].distances(P, time=float("inf"))
+
 def test_with_contact_refuses_what_the_step_cannot_take(scene):
     damped = mbi.Simulator(scene["U"], scene["T"], stiffness_damping=0.01)
     with pytest.raises(mbi.Error, match="stiffness_damping"):
