@@ -46,27 +46,11 @@ def shape(obj, M):
     return dict(shape="capsule", a=center - reach, b=center + reach, radius=radius)
 
 
-def signed_distance(s, P):
-    """Signed distances (m, < 0 inside) of points P (p, 3) to the static shape s, as mbi measures them."""
-    if s["shape"] == "plane":
-        n = s["normal"] / np.linalg.norm(s["normal"])
-        return (P - s["point"]) @ n
-    if s["shape"] == "sphere":
-        return np.linalg.norm(P - s["center"], axis=1) - s["radius"]
-    if s["shape"] == "box":
-        q = np.abs((P - s["center"]) @ s["axes"].T) - s["half_extents"]
-        outside = np.linalg.norm(np.maximum(q, 0.0), axis=1)
-        return np.where(outside > 0, outside, q.max(axis=1))
-    axis = s["b"] - s["a"]
-    length2 = axis @ axis
-    t = np.clip((P - s["a"]) @ axis / length2, 0.0, 1.0) if length2 > 0 else np.zeros(len(P))
-    return np.linalg.norm(P - (s["a"] + t[:, None] * axis), axis=1) - s["radius"]
-
-
-def check_apart(obj, s, models):
-    """Refuses a collider that overlaps a model at rest. models: [(name, world rest points)]."""
+def check_apart(obj, collider, models):
+    """Refuses a collider (mbi.Collider, at its first pose) that overlaps a model at rest.
+    models: [(name, world rest points)]."""
     for name, P in models:
-        d = signed_distance(s, P)
+        d = collider.distances(P)[0]
         inside = np.flatnonzero(d < 0)
         if len(inside):
             deepest = int(inside[np.argmin(d[inside])])

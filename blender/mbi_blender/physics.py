@@ -142,8 +142,8 @@ def contact_pipeline(mbi, scene, cage, sim, U, models, points, marked, poses, st
         raise ValueError("contact takes one method: the meshes bound to %s use %s" % (cage.name, sorted(methods)))
     made = []
     for obj, matrices in zip(marked, poses):
-        collider, s, _ = colliders.make(mbi, obj, matrices, sim.dt, start)
-        colliders.check_apart(obj, s, list(zip([m.name for m in models], points)))
+        collider, _, _ = colliders.make(mbi, obj, matrices, sim.dt, start)
+        colliders.check_apart(obj, collider, list(zip([m.name for m in models], points)))
         made.append(collider)
     method, alpha = methods.pop()
     try:
