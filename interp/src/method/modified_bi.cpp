@@ -378,26 +378,6 @@ std::vector<char> gauge_pins(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T,
 
 }  // namespace detail
 
-double default_alpha(int d) {
-  if (d == 3) return 0.1;
-  if (d == 2) return 0.2;
-  throw Error("dimension must be 2 or 3, got " + std::to_string(d));
-}
-
-double check_alpha(double alpha) {
-  if (!(alpha > 0) || !std::isfinite(alpha)) throw Error("alpha must be a finite number > 0, got " + std::to_string(alpha));
-  return alpha;
-}
-
-double resolve_alpha(const Options& options, int d) {
-  return options.alpha ? check_alpha(*options.alpha) : default_alpha(d);
-}
-
-void check_beta(const Options& options) {
-  if (!(options.beta >= 0) || !std::isfinite(options.beta))
-    throw Error("beta must be > 0 (0 selects the automatic rule), got " + std::to_string(options.beta));
-}
-
 const std::vector<std::pair<int, int>>& bezier_edges(int d) {
   static const std::vector<std::pair<int, int>> e2{{0, 1}, {0, 2}, {1, 2}};
   static const std::vector<std::pair<int, int>> e3{{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
