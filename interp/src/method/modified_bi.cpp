@@ -477,12 +477,12 @@ struct ModifiedBI::Impl {
   Eigen::MatrixXi T;
   Options opt;
   double alpha = 0, beta = 0;
-  detail::Hessians H;
   std::vector<int> reduced;  // full m index -> reduced index, -1 when pinned to 0
   int n_red = 0;
   int null_dim = 0;
-  SpMat Hmm_vibr_red, Hmm_disc_red, Hmx_red;  // restricted blocks (Hmx_red unweighted)
-  Eigen::SparseMatrix<double, Eigen::RowMajor> rhs_op;  // -beta Hmx_red, by rows (sparse path)
+  // -beta R H_mx, by rows: the right-hand sides and the transpose. The Hessians themselves are
+  // not kept (set_alpha assembles them again), so that a bound model holds little beyond the factor.
+  Eigen::SparseMatrix<double, Eigen::RowMajor> rhs_op;
   detail::CholeskyFactor F;
   bool dense = false;
   // dense operator -H^-1 H_mx, row-major (n_red x n): row a holds reduced unknown a's weights
@@ -517,14 +517,24 @@ struct ModifiedBI::Impl {
     F.solve(sol.data(), d);
   }
 
+  // The blocks on the reduced unknowns: R H R^T and R H_mx with R (n_red x d n) selecting them.
+  struct Blocks {
+    SpMat vibr_mm, disc_mm, disc_mx;
+  };
+  Blocks restricted(const detail::Hessians& H) const {
+    return {restrict_to(H.vibr_mm, reduced, n_red, &reduced, n_red),
+            restrict_to(H.disc_mm, reduced, n_red, &reduced, n_red),
+            restrict_to(H.disc_mx, reduced, n_red, nullptr, n)};
+  }
+
   // Factors for `a` and commits alpha, the factor and the dense operator only when all succeed
   // (a failing set_alpha leaves the solver as it was).
-  void factor(double a) {
+  void factor(double a, const Blocks& R) {
     if (n_red == 0) {
       alpha = a;
       return;
     }
-    const SpMat A = a * Hmm_vibr_red + beta * Hmm_disc_red;
+    const SpMat A = a * R.vibr_mm + beta * R.disc_mm;
     detail::CholeskyFactor Fa = detail::cholesky(A, use_cholmod());
     std::vector<double> Ka;
     if (dense) {
@@ -535,9 +545,9 @@ struct ModifiedBI::Impl {
       for (int j0 = 0; j0 < n; j0 += W) {
         const int w = std::min(W, n - j0);
         std::fill(B.begin(), B.end(), 0.0);
-        // column j of H_mx = column j of Hmx_red (CSC): scatter its entries
+        // column j of R H_mx (CSC): scatter its entries
         for (int c = 0; c < w; ++c)
-          for (SpMat::InnerIterator it(Hmx_red, j0 + c); it; ++it)
+          for (SpMat::InnerIterator it(R.disc_mx, j0 + c); it; ++it)
             B[static_cast<size_t>(it.row()) * w + c] = -beta * it.value();
         Fa.solve(B.data(), w);
         for (int r = 0; r < n_red; ++r)
@@ -565,12 +575,12 @@ ModifiedBI::ModifiedBI(const Eigen::Ref<const Eigen::MatrixXd>& U,
   I.alpha = resolve_alpha(options, d);
   check_beta(options);
 
-  I.H = detail::assemble(I.U, I.T);
-  if (I.H.disc_mm.nonZeros() == 0)
+  const detail::Hessians H = detail::assemble(I.U, I.T);
+  if (H.disc_mm.nonZeros() == 0)
     throw Error("the control mesh has no interior faces (a single element?); "
                 "modified-BI needs at least two face-adjacent elements");
   // beta: equal Frobenius norms of the m-blocks of E_vibr and beta E_disc (fact 7).
-  I.beta = options.beta > 0 ? options.beta : I.H.vibr_mm.norm() / I.H.disc_mm.norm();
+  I.beta = options.beta > 0 ? options.beta : H.vibr_mm.norm() / H.disc_mm.norm();
 
   std::vector<char> free_vertex(n, 0);
   for (int e = 0; e < I.m; ++e)
@@ -586,10 +596,7 @@ ModifiedBI::ModifiedBI(const Eigen::Ref<const Eigen::MatrixXd>& U,
     for (int r = 0; r < d; ++r)
       if (free_vertex[i] && !pinned[static_cast<size_t>(i) * d + r]) I.reduced[i * d + r] = I.n_red++;
 
-  // The blocks on the reduced unknowns: R H R^T and R H_mx with R (n_red x d n) selecting them.
-  I.Hmm_vibr_red = restrict_to(I.H.vibr_mm, I.reduced, I.n_red, &I.reduced, I.n_red);
-  I.Hmm_disc_red = restrict_to(I.H.disc_mm, I.reduced, I.n_red, &I.reduced, I.n_red);
-  I.Hmx_red = restrict_to(I.H.disc_mx, I.reduced, I.n_red, nullptr, n);
+  const Impl::Blocks R = I.restricted(H);
   switch (options.solve_path) {
     case SolvePath::Dense: I.dense = true; break;
     case SolvePath::Sparse: I.dense = false; break;
@@ -597,14 +604,14 @@ ModifiedBI::ModifiedBI(const Eigen::Ref<const Eigen::MatrixXd>& U,
       I.dense = static_cast<long long>(I.n_red) * n <= kDenseOperatorMaxEntries;
       break;
   }
-  if (!I.dense) I.rhs_op = -I.beta * I.Hmx_red;
+  I.rhs_op = -I.beta * R.disc_mx;
   if (I.dense && static_cast<long long>(I.n_red) * n > (1LL << 28))
     throw Error("the dense operator would need " + std::to_string(I.n_red) + " x " +
                 std::to_string(n) + " doubles; use SolvePath::Sparse or Automatic");
   if (options.factorization == Factorization::Cholmod && !detail::cholmod_available())
     throw Error("Factorization::Cholmod asked for, but this build has no CHOLMOD "
                 "(configure with MBI_WITH_CHOLMOD=ON and libsuitesparse-dev)");
-  I.factor(I.alpha);
+  I.factor(I.alpha, R);
   warm_up();
 }
 
@@ -618,7 +625,8 @@ ModifiedBI::ModifiedBI(ModifiedBI&&) noexcept = default;
 ModifiedBI& ModifiedBI::operator=(ModifiedBI&&) noexcept = default;
 
 void ModifiedBI::set_alpha(double alpha) {
-  impl_->factor(check_alpha(alpha));
+  const Impl& I = *impl_;
+  impl_->factor(check_alpha(alpha), I.restricted(detail::assemble(I.U, I.T)));
   warm_up();
 }
 
@@ -635,20 +643,15 @@ std::string ModifiedBI::factorization() const { return impl_->F.method; }
 long long ModifiedBI::factor_nonzeros() const { return impl_->F.nonzeros(); }
 long long ModifiedBI::memory_bytes() const {
   const Impl& I = *impl_;
-  auto sp = [](const SpMat& A) {
-    return static_cast<long long>(A.nonZeros()) * (sizeof(double) + sizeof(int)) +
-           static_cast<long long>(A.outerSize() + 1) * sizeof(int);
-  };
-  return static_cast<long long>(I.F.bytes()) + static_cast<long long>(I.K.size() * sizeof(double)) +
-         sp(I.H.vibr_mm) + sp(I.H.disc_mm) + sp(I.H.disc_mx) + sp(I.H.disc_xx) + sp(I.Hmm_vibr_red) +
-         sp(I.Hmm_disc_red) + sp(I.Hmx_red) +
-         static_cast<long long>(I.rhs_op.nonZeros()) * (sizeof(double) + sizeof(int)) +
-         static_cast<long long>(I.rhs_op.outerSize() + 1) * sizeof(int);
+  const auto bytes = [](auto count, size_t each) { return static_cast<long long>(count) * static_cast<long long>(each); };
+  return static_cast<long long>(I.F.bytes()) + bytes(I.K.size(), sizeof(double)) +
+         bytes(I.rhs_op.nonZeros(), sizeof(double) + sizeof(int)) + bytes(I.rhs_op.outerSize() + 1, sizeof(int)) +
+         bytes(I.reduced.size(), sizeof(int)) + bytes(I.U.size(), sizeof(double)) + bytes(I.T.size(), sizeof(int));
 }
-const SpMat& ModifiedBI::vibr_hessian_mm() const { return impl_->H.vibr_mm; }
-const SpMat& ModifiedBI::disc_hessian_mm() const { return impl_->H.disc_mm; }
-const SpMat& ModifiedBI::disc_hessian_mx() const { return impl_->H.disc_mx; }
-const SpMat& ModifiedBI::disc_hessian_xx() const { return impl_->H.disc_xx; }
+SpMat ModifiedBI::vibr_hessian_mm() const { return detail::assemble(impl_->U, impl_->T).vibr_mm; }
+SpMat ModifiedBI::disc_hessian_mm() const { return detail::assemble(impl_->U, impl_->T).disc_mm; }
+SpMat ModifiedBI::disc_hessian_mx() const { return detail::assemble(impl_->U, impl_->T).disc_mx; }
+SpMat ModifiedBI::disc_hessian_xx() const { return detail::assemble(impl_->U, impl_->T).disc_xx; }
 const Eigen::MatrixXd& ModifiedBI::rest_positions() const { return impl_->U; }
 const Eigen::MatrixXi& ModifiedBI::elements_matrix() const { return impl_->T; }
 
@@ -733,11 +736,11 @@ void ModifiedBI::solve_transpose(const Eigen::Ref<const Eigen::MatrixXd>& G, Eig
       if (a < 0) continue;
       for (int c = 0; c < d; ++c) y[static_cast<size_t>(a) * d + c] = G(i * d + c, r);
     }
-  // sol = -beta A^-1 H_mx X with A symmetric: dL/dX = -beta H_mx^T A^-1 dL/dsol
+  // sol = -beta A^-1 R H_mx X with A symmetric: dL/dX = (-beta R H_mx)^T A^-1 dL/dsol
   I.F.solve(y.data(), d);
-  for (int j = 0; j < n; ++j)
-    for (SpMat::InnerIterator it(I.Hmx_red, j); it; ++it)
-      for (int c = 0; c < d; ++c) GX(j, c) -= I.beta * it.value() * y[static_cast<size_t>(it.row()) * d + c];
+  for (int a = 0; a < I.n_red; ++a)
+    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(I.rhs_op, a); it; ++it)
+      for (int c = 0; c < d; ++c) GX(it.col(), c) += it.value() * y[static_cast<size_t>(a) * d + c];
 }
 
 BezierPoints ModifiedBI::bezier(const Eigen::Ref<const Eigen::MatrixXd>& X, const VertexMatrices& M) const {

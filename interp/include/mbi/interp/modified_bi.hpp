@@ -86,8 +86,8 @@ class ModifiedBI {
   ModifiedBI(ModifiedBI&&) noexcept;
   ModifiedBI& operator=(ModifiedBI&&) noexcept;
 
-  /// Changes alpha (> 0) and refactors; beta stays as chosen at construction unless automatic
-  /// (it does not depend on alpha).
+  /// Changes alpha (> 0): assembles the Hessians again (O(m)) and refactors; beta stays as
+  /// chosen at construction unless automatic (it does not depend on alpha).
   void set_alpha(double alpha);
 
   int dim() const;
@@ -109,7 +109,7 @@ class ModifiedBI {
   /// The factorization used: "Eigen SimplicialLLT (AMD)", "CHOLMOD supernodal (METIS)", ...
   std::string factorization() const;
   /// Entries of the Cholesky factor L, and the bytes the precompute keeps (factor, dense
-  /// operator, assembled blocks).
+  /// operator, the right-hand-side operator, the rest mesh).
   long long factor_nonzeros() const;
   long long memory_bytes() const;
 
@@ -131,11 +131,12 @@ class ModifiedBI {
 
   /// The assembled per-component quadratic forms (fact 1): Q(m, x_c) =
   /// [m; x_c]^T [H_mm H_mx; H_mx^T H_xx] [m; x_c] for E_vibr and E_disc separately, unweighted,
-  /// m ordered as m_i = (row c of M_i), vertex-major (d n), x_c of size n. For tests & metrics.
-  const Eigen::SparseMatrix<double>& vibr_hessian_mm() const;
-  const Eigen::SparseMatrix<double>& disc_hessian_mm() const;
-  const Eigen::SparseMatrix<double>& disc_hessian_mx() const;
-  const Eigen::SparseMatrix<double>& disc_hessian_xx() const;
+  /// m ordered as m_i = (row c of M_i), vertex-major (d n), x_c of size n. For tests & metrics:
+  /// each call assembles them anew (O(m)), since the precompute keeps only what solves need.
+  Eigen::SparseMatrix<double> vibr_hessian_mm() const;
+  Eigen::SparseMatrix<double> disc_hessian_mm() const;
+  Eigen::SparseMatrix<double> disc_hessian_mx() const;
+  Eigen::SparseMatrix<double> disc_hessian_xx() const;
 
   const Eigen::MatrixXd& rest_positions() const;
   const Eigen::MatrixXi& elements_matrix() const;
