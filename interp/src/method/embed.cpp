@@ -54,6 +54,12 @@ struct Locator {
   Eigen::MatrixXd U;                 // n x 3 (z = 0 in 2D)
   Eigen::MatrixXi T;
   std::vector<Eigen::Matrix3d> inv;  // inverse edge matrices (top-left d x d used)
+  // the same by rows beside the element's first vertex, in one place: what bary() reads
+  struct Frame {
+    std::array<double, 9> inv;
+    std::array<double, 3> origin;
+  };
+  std::vector<Frame> frame;
   std::vector<Vec3> box_lo, box_hi;  // element bounding boxes (prune the nearest search)
   Vec3 lo = Vec3::Zero();
   double h = 1.0;
@@ -63,15 +69,24 @@ struct Locator {
   int cell_index(int i, int j, int k) const { return (k * dims[1] + j) * dims[0] + i; }
 
   void bary(int e, const Vec3& p, double* b) const {
-    const Vec3 r = p - U.row(T(e, 0)).transpose();
+    const Frame& f = frame[static_cast<size_t>(e)];
+    const double r[3] = {p(0) - f.origin[0], p(1) - f.origin[1], p(2) - f.origin[2]};
     double sum = 0;
     for (int a = 0; a < d; ++a) {
       double v = 0;
-      for (int c = 0; c < d; ++c) v += inv[e](a, c) * r(c);
+      for (int c = 0; c < d; ++c) v += f.inv[static_cast<size_t>(3 * a + c)] * r[c];
       b[a + 1] = v;
       sum += v;
     }
     b[0] = 1.0 - sum;
+  }
+
+  // The smallest barycentric coordinate of p in element e (>= 0: p is in e).
+  double min_bary(int e, const Vec3& p, double* b) const {
+    bary(e, p, b);
+    double mn = b[0];
+    for (int k = 1; k <= d; ++k) mn = std::min(mn, b[k]);
+    return mn;
   }
 
   double distance2(int e, const Vec3& p) const {
@@ -101,6 +116,7 @@ Locator build_locator(const Eigen::Ref<const Eigen::MatrixXd>& U0,
   L.U.leftCols(d) = U0;
   L.T = T;
   L.inv.resize(m);
+  L.frame.resize(m);
   L.box_lo.resize(m);
   L.box_hi.resize(m);
   for (int e = 0; e < m; ++e) {
@@ -110,6 +126,10 @@ Locator build_locator(const Eigen::Ref<const Eigen::MatrixXd>& U0,
     if (!lu.isInvertible()) throw Error("element " + std::to_string(e) + " is degenerate");
     L.inv[e].setZero();
     L.inv[e].topLeftCorner(d, d) = lu.inverse();
+    for (int a = 0; a < 3; ++a) {
+      for (int c = 0; c < 3; ++c) L.frame[e].inv[static_cast<size_t>(3 * a + c)] = L.inv[e](a, c);
+      L.frame[e].origin[static_cast<size_t>(a)] = L.U(T(e, 0), a);
+    }
   }
   Vec3 hi = Vec3::Zero();
   L.lo.head(d) = U0.colwise().minCoeff().transpose();
@@ -120,8 +140,9 @@ Locator build_locator(const Eigen::Ref<const Eigen::MatrixXd>& U0,
   const double ext_max = ext.head(d).maxCoeff();
   double vol = 1;
   for (int a = 0; a < d; ++a) vol *= std::max(ext(a), 1e-3 * ext_max);
-  // About one cell per element, at most 2^22 cells (a bounded number of enlargements).
-  L.h = std::pow(vol / std::max(m, 1), 1.0 / d);
+  // About 8 cells per element (a point meets few bounding boxes), at most 2^22 cells (a bounded
+  // number of enlargements).
+  L.h = std::pow(vol / (8.0 * std::max(m, 1)), 1.0 / d);
   for (int grow = 0;; ++grow) {
     double total = 1;
     for (int a = 0; a < d; ++a) total *= std::max(1.0, std::ceil(ext(a) / L.h));
@@ -162,12 +183,16 @@ Locator build_locator(const Eigen::Ref<const Eigen::MatrixXd>& U0,
 
 constexpr double kInsideTol = 1e-9;
 
-// Locates one point: returns the element; sets distance (0 when inside).
-int locate(const Locator& L, const Vec3& p, std::vector<int>& stamp, int tag, double* b,
+// Locates one point: returns the element; sets distance (0 when inside). hint: an element to
+// try first (the previous point's: neighbouring points of a model mostly share elements), or -1.
+int locate(const Locator& L, const Vec3& p, int hint, std::vector<int>& stamp, int tag, double* b,
            double& distance) {
   const int d = L.d;
+  distance = 0;
+  if (hint >= 0 && L.min_bary(hint, p, b) >= 0) return hint;
   const auto c = L.cell_of(p);
-  // 1. containing element (the one with the largest minimum coordinate in p's cell)
+  // 1. containing element: the first in p's cell that holds p, else the one with the largest
+  // minimum coordinate when that is within the tolerance
   bool in_box = true;
   for (int a = 0; a < d; ++a)
     in_box = in_box && p(a) >= L.lo(a) - L.h * 1e-9 && p(a) <= L.lo(a) + L.dims[a] * L.h * (1 + 1e-9);
@@ -178,9 +203,11 @@ int locate(const Locator& L, const Vec3& p, std::vector<int>& stamp, int tag, do
     std::array<double, 4> bb{};
     for (int s = L.start[cell]; s < L.start[cell + 1]; ++s) {
       const int e = L.items[s];
-      L.bary(e, p, bb.data());
-      double mn = bb[0];
-      for (int k = 1; k <= d; ++k) mn = std::min(mn, bb[k]);
+      const double mn = L.min_bary(e, p, bb.data());
+      if (mn >= 0) {
+        std::copy(bb.begin(), bb.begin() + d + 1, b);
+        return e;
+      }
       if (mn > best_min) {
         best_min = mn;
         best = e;
@@ -188,7 +215,6 @@ int locate(const Locator& L, const Vec3& p, std::vector<int>& stamp, int tag, do
     }
     if (best >= 0 && best_min >= -kInsideTol) {
       L.bary(best, p, b);
-      distance = 0;
       return best;
     }
   }
@@ -309,17 +335,20 @@ Embedding embed(const Eigen::Ref<const Eigen::MatrixXd>& U,
   detail::run_shared(detail::thread_count(np, 4096), [&] {
     std::vector<int> stamp(m, -1);
     std::array<double, 4> bb{};
-    for (long long b, e; blocks.next(b, e);)
+    for (long long b, e; blocks.next(b, e);) {
+      int hint = -1;
       for (long long i = b; i < e; ++i) {
         Vec3 p = Vec3::Zero();
         p.head(d) = Pn.row(i).transpose();
         double dd = 0;
         bb.fill(0.0);
-        const int el = locate(L, p, stamp, static_cast<int>(i), bb.data(), dd);
+        const int el = locate(L, p, hint, stamp, static_cast<int>(i), bb.data(), dd);
+        hint = dd == 0 ? el : -1;
         emb.element(i) = el;
         for (int k = 0; k <= d; ++k) emb.bary(i, k) = bb[k];
         dist(i) = dd;
       }
+    }
   });
   for (int i = 0; i < np; ++i) {
     if (emb.element(i) < 0 || !emb.bary.row(i).allFinite())  // never index element -1
