@@ -53,8 +53,16 @@ class Extension:
                              "animate its interior nodes too (cage setting 'Interior nodes': as animated)"
                              % (len(self.interior), MAX_INTERIOR))
         self.U = U
-        K_II, K_IB = stiffness_blocks(U, np.asarray(T), self.interior, self.boundary)
-        self.H = -np.linalg.solve(K_II, K_IB) if len(self.interior) else np.zeros((0, len(self.boundary)))
+        self.T = np.asarray(T)
+        self._H = None  # formed on the first apply(): a cage whose every node moves never needs it
+
+    @property
+    def H(self):
+        """The dense operator -K_II^-1 K_IB (interior x boundary)."""
+        if self._H is None:
+            K_II, K_IB = stiffness_blocks(self.U, self.T, self.interior, self.boundary)
+            self._H = -np.linalg.solve(K_II, K_IB) if len(self.interior) else np.zeros((0, len(self.boundary)))
+        return self._H
 
     def boundary_moved_only(self, X):
         """True when the interior nodes are exactly at rest and some boundary node is not."""
