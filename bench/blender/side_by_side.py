@@ -3,7 +3,7 @@ Surface Deform on the same model and cage; bind time, time per frame, memory add
 
     MBI_PYTHON_DIR=build/release/python MBI_MODELS_DIR=../shared/models \\
     blender -b --factory-startup --python bench/blender/side_by_side.py -- \\
-        [--model stanford-bunny] [--subdivide 0 2] [--vertices 1000] [--frames 30] [--runs 3]
+        [--model stanford-bunny] [--subdivide 0 2] [--vertices 1000] [--frames 30] [--runs 3] [--processes 1]
 
 The cage is `mbi.cage` of about --vertices nodes around the model; Mesh Deform and Surface Deform
 get its boundary (a closed triangle mesh). Every node of the cage is animated by a keyframed shape
@@ -18,10 +18,14 @@ Per frame: wall time of scene.frame_set (the cage's key, the deformation, the mo
 re-evaluation), median and min over --runs passes of --frames frames. Quality (models up to 200K
 vertices): the change of the dihedral angles at the model's edges at the full 90-degree bend against
 the same bend applied to the model itself, mean and 99th percentile, degrees. Memory: resident set size
-after the frames minus before the bind. A method that takes over --limit s (default 300) is
+after the frames minus before the bind, each read after malloc_trim (live memory, not free heap). A method that takes over --limit s (default 300) is
 reported as skipped. Subdivision: Catmull-Clark (Blender's Subdivision Surface, applied).
+--processes N runs each (model, subdivision, method) in N fresh processes and reports the median of
+each figure.
 """
 import argparse
+import ctypes
+import gc
 import json
 import os
 import subprocess
@@ -37,6 +41,14 @@ METHODS = ("floor", "mbi", "mbi-boundary", "meshdeform", "surfacedeform")
 
 
 def rss_mb():
+    """Resident set size, after a garbage collection and glibc handing free heap pages back
+    (malloc_trim), so that the figure is what is live and not what an allocator happens to keep;
+    done the same for every method."""
+    gc.collect()
+    try:
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):
+        pass
     with open("/proc/self/status") as f:
         for line in f:
             if line.startswith("VmRSS:"):
@@ -223,6 +235,19 @@ def run_one(args, method, subdivide, cage):
     return dict(method=method, skipped="failed: " + (errors[-1] if errors else (run.stdout + run.stderr)[-300:]))
 
 
+def median_of(results):
+    """One result from the same run in several processes: each figure's median (Blender's own
+    resident set varies by some MB from process to process)."""
+    done = [r for r in results if "skipped" not in r]
+    if len(done) < len(results):
+        return next(r for r in results if "skipped" in r)
+    merged = dict(done[0], processes=len(done))
+    for key, value in done[0].items():
+        if isinstance(value, float):
+            merged[key] = float(np.median([r[key] for r in done]))
+    return merged
+
+
 def main(argv):
     parser = argparse.ArgumentParser(prog="side_by_side.py")
     parser.add_argument("--model", default="stanford-bunny")
@@ -232,6 +257,7 @@ def main(argv):
     parser.add_argument("--frames", type=int, default=30)
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--limit", type=int, default=300)
+    parser.add_argument("--processes", type=int, default=1)
     parser.add_argument("--methods", nargs="+", default=list(METHODS))
     parser.add_argument("--one", choices=METHODS)
     parser.add_argument("--cage", default="")
@@ -251,7 +277,7 @@ def main(argv):
     rows = []
     for subdivide in args.subdivide:
         for method in args.methods:
-            result = run_one(args, method, subdivide, base)
+            result = median_of([run_one(args, method, subdivide, base) for _ in range(args.processes)])
             result.update(model=args.model, subdivide=subdivide)
             print(json.dumps(result), flush=True)
             rows.append(result)
