@@ -56,6 +56,12 @@ Distance local_distance(const Collider& c, const Eigen::Vector3d& p) {
       return d;
     case ColliderShape::Box:
       return box_distance(c, p);
+    case ColliderShape::Mesh: {
+      const LevelSetSample s = c.level_set->sample(c.axes.transpose() * (p - c.point));
+      d.value = s.value;
+      d.normal = c.axes * s.normal;
+      return d;
+    }
     case ColliderShape::Capsule: {
       const Eigen::Vector3d axis = c.end - c.point;
       const double len2 = axis.squaredNorm();
@@ -110,6 +116,18 @@ Collider Collider::capsule(const Eigen::Vector3d& a, const Eigen::Vector3d& b, d
   return c;
 }
 
+Collider Collider::mesh(std::shared_ptr<const MeshLevelSet> level_set, double friction) {
+  Collider c;
+  c.shape = ColliderShape::Mesh;
+  c.level_set = std::move(level_set);
+  c.friction = friction;
+  return c;
+}
+
+double distance_lipschitz(const Collider& c) {
+  return c.shape == ColliderShape::Mesh && c.level_set ? c.level_set->lipschitz() : 1.0;
+}
+
 void check_collider(const Collider& c, const std::string& name) {
   if (!(std::isfinite(c.friction) && c.friction >= 0))
     bad(name, "friction must be finite and >= 0, got " + std::to_string(c.friction));
@@ -123,8 +141,12 @@ void check_collider(const Collider& c, const std::string& name) {
       if (!c.end.allFinite()) bad(name, "end must be finite");
       check_positive(name, "radius", c.radius);
       break;
+    case ColliderShape::Mesh:
+      if (!c.level_set) bad(name, "a mesh collider needs its level set");
+      [[fallthrough]];
     case ColliderShape::Box:
-      for (int k = 0; k < 3; ++k) check_positive(name, "half_extents", c.half_extents(k));
+      if (c.shape == ColliderShape::Box)
+        for (int k = 0; k < 3; ++k) check_positive(name, "half_extents", c.half_extents(k));
       if (!c.axes.allFinite() ||
           !(c.axes.transpose() * c.axes - Eigen::Matrix3d::Identity()).isZero(1e-9) ||
           !(c.axes.determinant() > 0))

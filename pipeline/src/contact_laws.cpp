@@ -44,9 +44,11 @@ double advance(const Collider& collider, const Eigen::Vector3d& p, const Eigen::
     const double rate = signed_distance(collider, p + dp, time).value + depth - room0;  // linear in s
     return rate >= 0 ? 1.0 : std::min(1.0, (room0 - keep) / -rate);
   }
+  // the distance falls by at most lipschitz x the distance moved (1 for an exact distance)
+  const double fastest = distance_lipschitz(collider) * length;
   double s = 0.0, room = room0;
   for (int it = 0; it < 100 && room > 2 * keep; ++it) {
-    const double next = s + (room - keep) / length;
+    const double next = s + (room - keep) / fastest;
     if (next >= 1.0) return 1.0;
     s = next;
     room = signed_distance(collider, p + s * dp, time).value + depth;

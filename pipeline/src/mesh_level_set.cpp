@@ -87,10 +87,41 @@ struct MeshLevelSet::Grid {
   double h = 0.0;
   double band_voxels = 0.0;
   Eigen::Vector3d lo, hi;  // index coordinates beyond which no voxel is resolved
+  double lipschitz = 1.0;
 
   LevelSetSample local(const Eigen::Vector3d& p) const;
   LevelSetSample outside(const Eigen::Vector3d& p) const;
+  double steepest() const;
 };
+
+// In a cell the trilinear interpolant's derivative along an axis is a weighted mean of the cell's
+// four differences along that axis, so per cell |gradient| <= the norm of the three largest;
+// the bound is the largest over every cell with a stored corner (the others read the
+// background, as sample() reads them: flat). Outside the band the value is 1-Lipschitz.
+double MeshLevelSet::Grid::steepest() const {
+  auto acc = grid->getConstAccessor();
+  double most = 1.0;
+  double v[3][3][3];
+  for (auto it = grid->cbeginValueOn(); it; ++it) {
+    const openvdb::Coord c = it.getCoord();
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        for (int k = 0; k < 3; ++k) v[i][j][k] = acc.getValue(c.offsetBy(i - 1, j - 1, k - 1));
+    for (int ci = 0; ci < 2; ++ci)  // the 8 cells with c as a corner
+      for (int cj = 0; cj < 2; ++cj)
+        for (int ck = 0; ck < 2; ++ck) {
+          Eigen::Vector3d d = Eigen::Vector3d::Zero();
+          for (int a = 0; a < 2; ++a)
+            for (int b = 0; b < 2; ++b) {
+              d.x() = std::max(d.x(), std::abs(v[ci + 1][cj + a][ck + b] - v[ci][cj + a][ck + b]));
+              d.y() = std::max(d.y(), std::abs(v[ci + a][cj + 1][ck + b] - v[ci + a][cj][ck + b]));
+              d.z() = std::max(d.z(), std::abs(v[ci + a][cj + b][ck + 1] - v[ci + a][cj + b][ck]));
+            }
+          most = std::max(most, d.norm() / h);
+        }
+  }
+  return most;
+}
 
 double MeshLevelSet::default_voxel_size(const Eigen::Ref<const Eigen::MatrixXd>& vertices) {
   check_vertices(vertices);
@@ -127,6 +158,7 @@ MeshLevelSet::MeshLevelSet(const Eigen::Ref<const Eigen::MatrixXd>& vertices,
   // interior band: everything, so that a point deep inside still gets its way out
   g->grid = openvdb::tools::meshToVolume<openvdb::FloatGrid>(mesh, *xform, float(options.band_voxels),
                                                              std::numeric_limits<float>::max());
+  g->lipschitz = g->steepest();
   grid_ = std::move(g);
 }
 
@@ -192,5 +224,6 @@ double MeshLevelSet::voxel_size() const { return grid_->h; }
 double MeshLevelSet::band() const { return grid_->band_voxels * grid_->h; }
 const Eigen::AlignedBox3d& MeshLevelSet::bounds() const { return grid_->bounds; }
 long MeshLevelSet::active_voxels() const { return long(grid_->grid->activeVoxelCount()); }
+double MeshLevelSet::lipschitz() const { return grid_->lipschitz; }
 
 }  // namespace mbi::pipeline

@@ -26,5 +26,6 @@ double MeshLevelSet::voxel_size() const { unavailable(); }
 double MeshLevelSet::band() const { unavailable(); }
 const Eigen::AlignedBox3d& MeshLevelSet::bounds() const { return grid_->bounds; }
 long MeshLevelSet::active_voxels() const { unavailable(); }
+double MeshLevelSet::lipschitz() const { unavailable(); }
 
 }  // namespace mbi::pipeline

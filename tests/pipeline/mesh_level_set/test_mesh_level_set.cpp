@@ -1,7 +1,10 @@
 // MeshLevelSet (docs/mesh-colliders.md): OpenVDB's level set of a closed triangle mesh against
 // exact distances, its rigid motion, its outside value, threads and bad input.
 #include <mbi/error.hpp>
+#include <mbi/pipeline/colliders.hpp>
+#include <mbi/pipeline/contact_laws.hpp>
 #include <mbi/pipeline/mesh_level_set.hpp>
+#include <mbi/sim/rigid_pose.hpp>
 
 #include <catch2/catch.hpp>
 #include <Eigen/Geometry>
@@ -273,4 +276,84 @@ TEST_CASE("mesh level set: bad input is an Error naming the argument and the ele
   CHECK_THROWS_WITH(ls.sample(Eigen::Vector3d(0, std::nan(""), 0)), Contains("the point is not finite"));
   CHECK_THROWS_WITH(ls.sample(Eigen::Vector3d::Zero(), mbi::sim::RigidMotion{}, std::nan("")),
                     Contains("the point or the time is not finite"));
+}
+
+TEST_CASE("mesh level set: the value changes by at most lipschitz() times the step, the gradient is no longer",
+          "[pipeline][mesh_level_set]") {
+  const TriMesh m = icosphere(3, Eigen::Vector3d(0.1, -0.2, 0.3), 0.8);
+  const MeshLevelSet s(m.V, m.F);
+  const double L = s.lipschitz();
+  CHECK(L >= 1.0);
+  CHECK(L < 2.0);  // a few voxels' worth of error in OpenVDB's distances, not a broken bound
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.2, 1.2);
+  double steepest = 0;
+  for (int k = 0; k < 20000; ++k) {
+    const Eigen::Vector3d p(u(rng), u(rng), u(rng));
+    const Eigen::Vector3d q = p + 0.3 * s.voxel_size() * Eigen::Vector3d(u(rng), u(rng), u(rng));
+    const LevelSetSample a = s.sample(p), b = s.sample(q);
+    steepest = std::max(steepest, a.gradient.norm());
+    REQUIRE(a.gradient.norm() <= L * (1 + 1e-12));
+    REQUIRE(std::abs(b.value - a.value) <= L * (q - p).norm() * (1 + 1e-9) + 1e-12);
+  }
+  CHECK(steepest > 1.0);  // the bound is needed: the interpolant is steeper than 1 somewhere
+}
+
+TEST_CASE("mesh collider: a box mesh placed and moved measures as the analytic box within a voxel",
+          "[pipeline][mesh_level_set][colliders]") {
+  const Eigen::Vector3d half(0.4, 0.25, 0.3);
+  const TriMesh m = box_mesh(half);
+  auto level_set = std::make_shared<const MeshLevelSet>(m.V, m.F);
+  Collider mesh = Collider::mesh(level_set, 0.3);
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  mesh.point = Eigen::Vector3d(0.5, -1, 2);
+  mesh.axes = R;
+  Collider box = Collider::box(mesh.point, half, R, 0.3);
+  for (Collider* c : {&mesh, &box}) {
+    c->motion = mbi::sim::RigidMotion{.center = Eigen::Vector3d(0, 0, 1), .axis = Eigen::Vector3d::UnitY(),
+                                      .angular_velocity = 0.5, .velocity = Eigen::Vector3d(0.2, 0, -0.1)};
+    REQUIRE_NOTHROW(check_collider(*c, "collider"));
+  }
+  CHECK(distance_lipschitz(mesh) == level_set->lipschitz());
+  CHECK(distance_lipschitz(box) == 1.0);
+  const double h = level_set->voxel_size();
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-0.5, 0.5);
+  int near = 0;
+  for (int k = 0; k < 6000; ++k) {
+    const double t = 0.1 * (k % 7);
+    const Eigen::Vector3d rest = mesh.point + R * Eigen::Vector3d(u(rng), u(rng), u(rng));
+    const Eigen::Vector3d p = mbi::sim::rigid_pose(box.motion, t).apply(rest, box.motion.center);
+    const Distance a = signed_distance(mesh, p, t), b = signed_distance(box, p, t);
+    if (b.value > level_set->band()) continue;  // resolved: the band outside, all of the inside
+    ++near;
+    REQUIRE(std::abs(a.value - b.value) < h);
+    const Distance ap = signed_distance(posed(mesh, t), p, 0.0);  // posed: the same, static
+    REQUIRE(std::abs(ap.value - a.value) < 1e-9);
+  }
+  CHECK(near > 1000);
+}
+
+TEST_CASE("mesh collider: conservative advancement toward a mesh never passes the depth",
+          "[pipeline][mesh_level_set][colliders]") {
+  const TriMesh m = icosphere(3);
+  const Collider ball = Collider::mesh(std::make_shared<const MeshLevelSet>(m.V, m.F));
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const double depth = 0.02;
+  for (int k = 0; k < 500; ++k) {
+    const Eigen::Vector3d dir = Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized();
+    const Eigen::Vector3d p = (1.05 + 0.3 * std::abs(u(rng))) * dir;
+    const Eigen::Vector3d dp = -2.5 * dir + 0.3 * Eigen::Vector3d(u(rng), u(rng), u(rng));
+    const double s = contact::advance(ball, p, dp, 0.0, depth);
+    const double room0 = signed_distance(ball, p, 0.0).value + depth;
+    for (int j = 0; j <= 200; ++j)  // every point of the allowed segment keeps a tenth of its room
+      REQUIRE(signed_distance(ball, p + s * j / 200.0 * dp, 0.0).value + depth >= 0.1 * room0 - 1e-12);
+    CHECK(s < 1.0);
+  }
+}
+
+TEST_CASE("mesh collider: without a level set it is an Error naming the collider", "[pipeline][mesh_level_set][colliders]") {
+  Collider c = Collider::mesh(nullptr);
+  CHECK_THROWS_WITH(check_collider(c, "colliders[2]"), Catch::Contains("colliders[2]") && Catch::Contains("level set"));
 }

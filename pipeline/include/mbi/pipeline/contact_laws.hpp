@@ -33,8 +33,9 @@ Eigen::Matrix2d friction_hessian(const Eigen::Vector2d& u, double eps);
 
 /// Conservative advancement: the largest s in [0, 1] found such that every point of the segment
 /// p + s' dp, 0 <= s' <= s, keeps at least a tenth of the room d(p) + depth it had above depth
-/// -depth (signed distance to `collider` at `time`); 1 when d(p) <= -depth. The distance is
-/// 1-Lipschitz, so each advance by (room - room_0 / 10) / |dp| is safe; exact for a plane.
+/// -depth (signed distance to `collider` at `time`); 1 when d(p) <= -depth. The distance falls
+/// by at most distance_lipschitz(collider) per unit moved, so each advance by
+/// (room - room_0 / 10) / (lipschitz |dp|) is safe; exact for a plane.
 double advance(const Collider& collider, const Eigen::Vector3d& p, const Eigen::Vector3d& dp, double time,
                double depth);
 

@@ -72,6 +72,11 @@ class MeshLevelSet {
   double band() const;        ///< exterior band width, m (band_voxels h)
   const Eigen::AlignedBox3d& bounds() const;  ///< the mesh's bounding box, m
   long active_voxels() const;  ///< voxels with a resolved distance (memory: 8 to 17 bytes each)
+  /// A bound (>= 1) on |gradient| of sample()'s value everywhere: the value changes by at most
+  /// lipschitz() |dp| along any segment dp. The stored distances are approximate, so the
+  /// trilinear interpolant can be steeper than a true distance (whose bound is 1); measured once
+  /// from the largest difference between neighbouring voxels along each axis, O(voxels).
+  double lipschitz() const;
 
  private:
   struct Grid;
