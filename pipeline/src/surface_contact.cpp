@@ -331,6 +331,7 @@ const std::vector<SurfaceContact::Active>& SurfaceContact::terms(const Eigen::Re
     if (t.active) terms_.push_back({S.points[i], t});
   }
   terms_valid_ = true;
+  active_valid_ = false;
   return terms_;
 }
 
@@ -344,25 +345,53 @@ void SurfaceContact::add_gradient(const Eigen::Ref<const Eigen::VectorXd>& x,
                                   Eigen::Ref<Eigen::VectorXd> gradient) const {
   const std::vector<Active>& active = terms(x);
   if (active.empty()) return;
-  std::vector<Eigen::Index> points(active.size());
   Eigen::MatrixXd G(static_cast<Eigen::Index>(active.size()), 3);
-  for (size_t i = 0; i < active.size(); ++i) {
-    points[i] = active[i].point;
-    G.row(static_cast<Eigen::Index>(i)) = active[i].term.gradient.transpose();
-  }
+  for (size_t i = 0; i < active.size(); ++i) G.row(static_cast<Eigen::Index>(i)) = active[i].term.gradient.transpose();
   // W^T restricted to the active points (the others have zero rows): exact, fact 11
-  select(points, subset_);
+  add_transpose(active_embedding(x), G, gradient);
+}
+
+const interp::Embedding& SurfaceContact::active_embedding(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  const std::vector<Active>& active = terms(x);  // forgets the rows when the terms change
+  if (active_valid_) return active_;
+  std::vector<Eigen::Index> points(active.size());
+  for (size_t i = 0; i < active.size(); ++i) points[i] = active[i].point;
+  select(points, active_);
+  active_valid_ = true;
+  return active_;
+}
+
+void SurfaceContact::add_transpose(const interp::Embedding& subset, const Eigen::MatrixXd& G,
+                                   Eigen::Ref<Eigen::VectorXd> out) const {
   const Eigen::MatrixXd& U = deformer_->rest_positions();
   const int m = deformer_->elements();
   interp::BezierPoints GB(static_cast<Eigen::Index>(m) * 10, 3);
-  interp::evaluate_transpose(subset_, G, m, GB, deformer_->options().threads);
+  interp::evaluate_transpose(subset, G, m, GB, deformer_->options().threads);
   Eigen::MatrixXd GX(U.rows(), 3), GMX(U.rows(), 3);
   interp::VertexMatrices GM(3 * U.rows(), 3);
   interp::bezier_transpose(U, deformer_->elements_matrix(), GB, GX, GM);
   if (deformer_->method() == Method::ModifiedBI) deformer_->solver().solve_transpose(GM, GMX);
   if (deformer_->method() == Method::Phong) deformer_->phong().M_transpose(GM, GMX);
   if (deformer_->method() != Method::BI) GX += GMX;
-  for (Eigen::Index i = 0; i < GX.rows(); ++i) gradient.segment<3>(3 * i) += GX.row(i).transpose();
+  for (Eigen::Index i = 0; i < GX.rows(); ++i) out.segment<3>(3 * i) += GX.row(i).transpose();
+}
+
+bool SurfaceContact::add_hessian_product(const Eigen::Ref<const Eigen::VectorXd>& x,
+                                         const Eigen::Ref<const Eigen::VectorXd>& v,
+                                         Eigen::Ref<Eigen::VectorXd> out) const {
+  if (deformer_->method() == Method::BI) return false;  // the blocks are W^T K W already
+  check_size(v);
+  const std::vector<Active>& active = terms(x);
+  if (active.empty()) return true;
+  const interp::Embedding& rows = active_embedding(x);
+  Eigen::MatrixXd G;  // W v at the active points (p is linear in x), then K_p times it
+  evaluate(deformer_->bezier(nodes(v)), rows, G);
+  for (size_t i = 0; i < active.size(); ++i) {
+    const Eigen::Index r = static_cast<Eigen::Index>(i);
+    G.row(r) = (active[i].term.hessian * G.row(r).transpose()).transpose();
+  }
+  add_transpose(rows, G, out);
+  return true;
 }
 
 void SurfaceContact::hessian_blocks(const Eigen::Ref<const Eigen::VectorXd>& x,

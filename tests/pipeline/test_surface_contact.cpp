@@ -272,6 +272,58 @@ TEST_CASE("surface contact: the Hessian surrogate is PSD, inside the element pat
   }
 }
 
+TEST_CASE("surface contact: the Hessian product is W^T K W (finite differences of the force against "
+          "a plane) for Phong and modified-BI, symmetric PSD with friction; BI has none",
+          "[pipeline][contact]") {
+  const Setup s = setup();
+  const Eigen::Index N = s.x.size();
+  auto product_matrix = [&](const SurfaceContact& c, const Eigen::VectorXd& x) {
+    Eigen::MatrixXd H(N, N);
+    for (Eigen::Index k = 0; k < N; ++k) {
+      Eigen::VectorXd col = Eigen::VectorXd::Zero(N);
+      REQUIRE(c.add_hessian_product(x, Eigen::VectorXd::Unit(N, k), col));
+      H.col(k) = col;
+    }
+    return H;
+  };
+  for (Method m : {Method::Phong, Method::ModifiedBI}) {
+    DeformerOptions opt;
+    opt.method = m;
+    auto deformer = std::make_shared<Deformer>(s.mesh.U, s.mesh.T, s.points, opt);
+    SurfaceContact flat(deformer, {colliders()[0]}, 1e4);
+    const Eigen::MatrixXd H = product_matrix(flat, s.x);
+    Eigen::MatrixXd fd(N, N), S = Eigen::MatrixXd::Zero(N, N);
+    for (Eigen::Index k = 0; k < N; ++k) {
+      Eigen::VectorXd xp = s.x, xm = s.x;
+      xp(k) += 1e-7;
+      xm(k) -= 1e-7;
+      fd.col(k) = (gradient(flat, xp) - gradient(flat, xm)) / 2e-7;
+    }
+    CHECK(H.norm() > 0);
+    CHECK((fd - H).norm() <= 1e-5 * H.norm());
+    std::vector<mbi::sim::NodeBlock> blocks;
+    flat.hessian_blocks(s.x, blocks);
+    for (const auto& b : blocks) {
+      S.block<3, 3>(3 * b.row, 3 * b.col) += b.value;
+      if (b.row != b.col) S.block<3, 3>(3 * b.col, 3 * b.row) += b.value.transpose();
+    }
+    CHECK((S - H).norm() >= 0.01 * H.norm());  // the blocks are only a surrogate here
+    SurfaceContact lagged(deformer, sliding_colliders(), 1e4);
+    start_friction(lagged, s.x);
+    const Eigen::MatrixXd L = product_matrix(lagged, nudged(s.x));
+    CHECK((L - L.transpose()).norm() <= 1e-12 * L.norm());
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (L + L.transpose()));
+    CHECK(eig.eigenvalues().minCoeff() >= -1e-9 * eig.eigenvalues().maxCoeff());
+  }
+  DeformerOptions bi_options;
+  bi_options.method = Method::BI;
+  auto bi = std::make_shared<Deformer>(s.mesh.U, s.mesh.T, s.points, bi_options);
+  SurfaceContact contact(bi, colliders(), 1e4);
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(N);
+  CHECK_FALSE(contact.add_hessian_product(s.x, Eigen::VectorXd::Ones(N), out));
+  CHECK(out.isZero(0));
+}
+
 TEST_CASE("surface contact: bad input is an Error naming what is wrong", "[pipeline][contact][errors]") {
   const Setup s = setup();
   auto deformer = std::make_shared<Deformer>(s.mesh.U, s.mesh.T, s.points);

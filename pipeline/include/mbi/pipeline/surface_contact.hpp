@@ -80,6 +80,10 @@ class SurfaceContact : public sim::Potential {
                     Eigen::Ref<Eigen::VectorXd> gradient) const override;
   void hessian_blocks(const Eigen::Ref<const Eigen::VectorXd>& x,
                       std::vector<sim::NodeBlock>& blocks) const override;
+  /// Adds W^T K W v (K the touching points' 3x3 blocks K_p, those of hessian_blocks) through
+  /// the deformer; false for BI, whose blocks are that matrix.
+  bool add_hessian_product(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& v,
+                           Eigen::Ref<Eigen::VectorXd> out) const override;
   /// The largest fraction (0, 1] of the move x -> x + dx that keeps every guarded point above
   /// -max_depth() on its straight path (p is linear in x), by contact::advance.
   double max_step(const Eigen::Ref<const Eigen::VectorXd>& x,
@@ -123,6 +127,8 @@ class SurfaceContact : public sim::Potential {
                     const std::vector<Eigen::Index>& points, Eigen::MatrixXd& P) const;
   /// W applied to X's Bezier points B at the points of `subset`.
   void evaluate(const interp::BezierPoints& B, const interp::Embedding& subset, Eigen::MatrixXd& out) const;
+  /// Adds W^T G (G one row per point of `subset`) to out (3 n).
+  void add_transpose(const interp::Embedding& subset, const Eigen::MatrixXd& G, Eigen::Ref<Eigen::VectorXd> out) const;
   double depth(Eigen::Index point, size_t collider) const;        // guarded depth or infinity
   /// One point's energy (J), gradient (N) and Hessian or PSD surrogate (N/m) at position q, all
   /// colliders and its slips; `slip` walks slips_ (start at 0, points in increasing order).
@@ -139,6 +145,8 @@ class SurfaceContact : public sim::Potential {
   };
   /// The active terms at x by increasing point (kept until x, the time or the substep changes).
   const std::vector<Active>& terms(const Eigen::Ref<const Eigen::VectorXd>& x) const;
+  /// The rows of the deformer's embedding at the points of terms(x), in their order.
+  const interp::Embedding& active_embedding(const Eigen::Ref<const Eigen::VectorXd>& x) const;
   void forget() { terms_valid_ = line_valid_ = at_.valid = along_.valid = false; }  // after a change of time or law
 
   std::shared_ptr<const Deformer> deformer_;
@@ -166,6 +174,8 @@ class SurfaceContact : public sim::Potential {
   mutable Sample at_, along_;          // x of the last evaluation; x and dx of the last move
   mutable std::vector<Active> terms_;  // at at_.x
   mutable bool terms_valid_ = false;
+  mutable interp::Embedding active_;   // active_embedding's rows
+  mutable bool active_valid_ = false;
   Eigen::VectorXd line_start_, line_move_;  // begin_line's x and dx
   std::vector<Eigen::Index> line_points_;    // rows of along_ that can contribute along it
   bool line_valid_ = false;

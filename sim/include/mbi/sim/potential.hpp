@@ -57,6 +57,15 @@ class Potential {
   /// Adds dE/dx (3 n, N) to `gradient`.
   virtual void add_gradient(const Eigen::Ref<const Eigen::VectorXd>& x,
                             Eigen::Ref<Eigen::VectorXd> gradient) const = 0;
+  /// Adds H v to `out` (3 n, N/m times v's m) and returns true, where H is the Hessian that
+  /// hessian_blocks stands for when those blocks are only a surrogate of it (e.g. H couples nodes
+  /// outside the pattern); then each Newton step is solved with H by conjugate gradients that
+  /// the blocks precondition (method.md fact 14). Default false: the blocks are H itself.
+  virtual bool add_hessian_product(const Eigen::Ref<const Eigen::VectorXd>& /*x*/,
+                                   const Eigen::Ref<const Eigen::VectorXd>& /*v*/,
+                                   Eigen::Ref<Eigen::VectorXd> /*out*/) const {
+    return false;
+  }
   /// Appends the Hessian of E at x, or a symmetric positive semi-definite surrogate of it, as
   /// node blocks. Every pair (row, col) must share an element of the control mesh (the FEM's
   /// sparsity pattern); the step fails naming the first pair that does not.
