@@ -273,7 +273,7 @@ TEST_CASE("surface contact: the Hessian surrogate is PSD, inside the element pat
 }
 
 TEST_CASE("surface contact: the Hessian product is W^T K W (finite differences of the force against "
-          "a plane) for Phong and modified-BI, symmetric PSD with friction; BI has none",
+          "a plane) for Phong and modified-BI, symmetric PSD with friction, and none for BI",
           "[pipeline][contact]") {
   const Setup s = setup();
   const Eigen::Index N = s.x.size();
