@@ -7,7 +7,8 @@
 // sphere's surface) with a soft penalty (kStiffness, kMaxDepth), so that about that much of the
 // sagging surface is inside the plane; its frames are measured from frame 8 on. The plain variant has no contact
 // and no ground. Both with the scene's method (modified-BI) and with BI, whose contact Hessian
-// surrogate is exact against a plane. Counters: ms of each frame, their ratio, Newton
+// surrogate is exact against a plane; and modified-BI with Newton on that surrogate alone
+// (`modified-bi-blocks`: the contact without its exact Hessian product). Counters: ms of each frame, their ratio, Newton
 // iterations per frame of each, the contact frame's line-search halvings, the contact points
 // inside the plane and their fraction of the surface.
 //
@@ -22,6 +23,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <utility>
 
 namespace {
 
@@ -54,6 +56,20 @@ mbi::scenes::Scene large_scene(mbi::pipeline::Method method, bool contact, doubl
   return sc;
 }
 
+/// The contact without its Hessian product: Newton steps on the Hessian blocks alone.
+struct BlocksOnly : mbi::sim::Potential {
+  using Vec = Eigen::Ref<const Eigen::VectorXd>;
+  std::shared_ptr<mbi::pipeline::SurfaceContact> c;
+  explicit BlocksOnly(std::shared_ptr<mbi::pipeline::SurfaceContact> contact) : c(std::move(contact)) {}
+  void begin_substep_at(double t0, double t1, const Vec& x, const Vec& v) override { c->begin_substep_at(t0, t1, x, v); }
+  double max_step(const Vec& x, const Vec& dx) const override { return c->max_step(x, dx); }
+  double energy(const Vec& x) const override { return c->energy(x); }
+  void begin_line(const Vec& x, const Vec& dx) override { c->begin_line(x, dx); }
+  double energy_along(double s) const override { return c->energy_along(s); }
+  void add_gradient(const Vec& x, Eigen::Ref<Eigen::VectorXd> g) const override { c->add_gradient(x, g); }
+  void hessian_blocks(const Vec& x, std::vector<mbi::sim::NodeBlock>& b) const override { c->hessian_blocks(x, b); }
+};
+
 struct Side {
   mbi::scenes::Scene scene;
   std::unique_ptr<FramePipeline> pipe;
@@ -70,7 +86,7 @@ struct Side {
   }
 };
 
-void BM_ContactFrame(benchmark::State& st, mbi::pipeline::Method method) {
+void BM_ContactFrame(benchmark::State& st, mbi::pipeline::Method method, bool blocks_only) {
   const mbi::scenes::Scene plain_scene = large_scene(method, false, 0.0);
   const mbi::scenes::SceneModels m = mbi::scenes::load_models(plain_scene);
   const double lowest = m.dense.V.col(1).minCoeff();
@@ -79,6 +95,9 @@ void BM_ContactFrame(benchmark::State& st, mbi::pipeline::Method method) {
     s->pipe = std::make_unique<FramePipeline>(
         mbi::scenes::make_pipeline(s->scene, m, mbi::interp::embed(m.U, m.T, m.dense.V)));
   with.driver().contact()->set_max_depth(kMaxDepth);
+  if (blocks_only)
+    dynamic_cast<SimulatorDriver&>(with.pipe->driver()).simulator().set_potential(
+        std::make_shared<BlocksOnly>(with.driver().contact()));
   for (int f = 0; f < 8; ++f)  // the plane rises into the ball in frames 1..6
     if (!with.pipe->step().ok || !without.pipe->step().ok) return st.SkipWithError("a step failed while warming up");
   with.ms = without.ms = 0;
@@ -104,9 +123,12 @@ void BM_ContactFrame(benchmark::State& st, mbi::pipeline::Method method) {
 // Not in quick mode (CI): the large scene's contact frames take seconds each.
 [[maybe_unused]] const bool registered = [] {
   if (mbi::bench::quick()) return true;
-  for (mbi::pipeline::Method method : {mbi::pipeline::Method::ModifiedBI, mbi::pipeline::Method::BI})
-    benchmark::RegisterBenchmark((std::string("BM_ContactFrame/large/") + mbi::pipeline::method_name(method)).c_str(),
-                                 BM_ContactFrame, method)
+  using mbi::pipeline::Method;
+  for (auto [method, blocks_only] : {std::pair(Method::ModifiedBI, false), std::pair(Method::ModifiedBI, true),
+                                     std::pair(Method::BI, false)})
+    benchmark::RegisterBenchmark((std::string("BM_ContactFrame/large/") + mbi::pipeline::method_name(method) +
+                                  (blocks_only ? "-blocks" : "")).c_str(),
+                                 BM_ContactFrame, method, blocks_only)
         ->Unit(benchmark::kMillisecond)->UseManualTime()->Iterations(4);
   return true;
 }();
