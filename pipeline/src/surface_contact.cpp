@@ -43,7 +43,11 @@ SurfaceContact::SurfaceContact(std::shared_ptr<const Deformer> deformer, std::ve
     throw Error("surface contact needs a 3D deformer, got " + std::to_string(deformer_->dim()) + "D");
   if (!std::isfinite(stiffness) || stiffness <= 0)
     throw Error("contact stiffness must be finite and > 0 N/m, got " + std::to_string(stiffness));
-  for (size_t i = 0; i < colliders_.size(); ++i) check_collider(colliders_[i], "collider " + std::to_string(i));
+  for (size_t i = 0; i < colliders_.size(); ++i) {
+    check_collider(colliders_[i], "collider " + std::to_string(i));
+    lipschitz_.push_back(distance_lipschitz(colliders_[i]));
+    steepest_ = std::max(steepest_, lipschitz_.back());
+  }
   const Eigen::MatrixXd& U = deformer_->rest_positions();
   diagonal_ = (U.colwise().maxCoeff() - U.colwise().minCoeff()).norm();
   max_depth_ = 1e-3 * diagonal_;
@@ -181,17 +185,18 @@ void SurfaceContact::gather(const interp::BezierPoints& B, const Eigen::VectorXd
         for (Eigen::Index j = 0; j < K; ++j)
           lower = std::min(lower, signed_distance(col, Be.row(j).transpose(), time_).value);
       } else {
-        lower = signed_distance(col, c.transpose(), time_).value - r;
+        lower = signed_distance(col, c.transpose(), time_).value - lipschitz_[k] * r;
       }
-      near = lower < reach(e) + margin;
+      near = lower < lipschitz_[k] * reach(e) + margin;
     }
     if (!near) continue;
     // A point moved by at most its element's largest Bezier move since the substep's start,
-    // where its distance was measured (unknown: -infinity): also 1-Lipschitz.
+    // where its distance was measured (unknown: -infinity): its distance changed by at most
+    // steepest_ times that.
     const double moved = reference_ ? (Be - reference_B_.middleRows(e * K, K)).rowwise().norm().maxCoeff() : 0.0;
     for (int i = element_start_[e]; i < element_start_[e + 1]; ++i) {
       const int p = element_points_[i];
-      if (!reference_ || reference_distance_[p] - moved < reach(e) + margin) marks_[p] = 1;
+      if (!reference_ || reference_distance_[p] - steepest_ * (moved + reach(e)) < margin) marks_[p] = 1;
     }
   }
   for (Eigen::Index p : unbounded_) marks_[p] = 1;
@@ -438,10 +443,10 @@ void SurfaceContact::begin_line(const Eigen::Ref<const Eigen::VectorXd>& x, cons
     const Eigen::Index p = S.points[i], r = static_cast<Eigen::Index>(i);
     while (slip < slips_.size() && slips_[slip].point < p) ++slip;
     bool near = slip < slips_.size() && slips_[slip].point == p;  // friction energy is never 0
-    // d(p + s D) >= d(p) - |D| for s in [0, 1]; the margin covers W (x + s dx) != p + s W dx
+    // d(p + s D) >= d(p) - L |D| for s in [0, 1]; the margin covers W (x + s dx) != p + s W dx
     const double reach = S.D.row(r).norm() + 1e-6 * (diagonal_ + S.P.row(r).norm() + S.D.row(r).norm());
     for (size_t c = 0; c < colliders_.size() && !near; ++c)
-      near = signed_distance(posed_[c], S.P.row(r).transpose(), time_).value < reach;
+      near = signed_distance(posed_[c], S.P.row(r).transpose(), time_).value < lipschitz_[c] * reach;
     if (near) line_points_.push_back(r);
   }
   line_valid_ = true;

@@ -368,7 +368,8 @@ class GivenDriver:
     def set(self, X: ArrayLike) -> None: ...
 
 class Collider:
-    """A rigid collider (plane, sphere, box, capsule) that the dense points touch, static or moving; m, s."""
+    """A rigid collider (plane, sphere, box, capsule, closed triangle mesh) that the dense points touch, static or
+    moving; m, s."""
     @staticmethod
     def plane(point: Vector3, normal: Vector3, *, friction: float = 0.0) -> Collider:
         """solid where normal . (x - point) < 0"""
@@ -379,6 +380,10 @@ class Collider:
             friction: float = 0.0) -> Collider: """axes: (3, 3), its rows the box's unit axes"""
     @staticmethod
     def capsule(a: Vector3, b: Vector3, radius: float, *, friction: float = 0.0) -> Collider: ...
+    @staticmethod
+    def mesh(V: ArrayLike, F: ArrayLike, *, friction: float = 0.0, voxel_size: Optional[float] = None,
+             band_voxels: float = 3.0) -> Collider:
+        """a closed triangle mesh as a signed distance field; distances within a voxel"""
     def moving(self, *, velocity: Vector3 = ..., twist_rate: float = 0.0, twist_axis: Vector3 = ...,
                twist_center: Vector3 = ..., start: float = 0.0, stop: float = 1e300) -> Collider:
         """the collider moving rigidly from its pose at start (s): velocity m/s, twist_rate rad/s"""
@@ -387,7 +392,7 @@ class Collider:
     def distances(self, P: ArrayLike, time: float = 0.0) -> Tuple[FloatArray, FloatArray]:
         """(signed distances (p,) (m, < 0 inside), unit outward normals (p, 3)) at the points P (p, 3)"""
     @property
-    def shape(self) -> Literal["plane", "sphere", "box", "capsule"]: ...
+    def shape(self) -> Literal["plane", "sphere", "box", "capsule", "mesh"]: ...
     @property
     def friction(self) -> float: ...
     @property

@@ -8,6 +8,7 @@
 #include <mbi/interp/embed.hpp>
 #include <mbi/pipeline/contact_setup.hpp>
 #include <mbi/pipeline/frame_pipeline.hpp>
+#include <mbi/pipeline/mesh_level_set.hpp>
 #include <mbi/scenes/models.hpp>
 
 #include <cmath>
@@ -170,6 +171,23 @@ Collider moving(const Collider& c, const py::object& velocity, double twist_rate
   return checked(out, "motion");
 }
 
+// A closed triangle mesh (V (n, 3), F (t, 3)) as a level-set collider; the GIL is let go while
+// OpenVDB builds the grid on its threads.
+Collider mesh_collider(const py::object& V, const py::object& F, double friction, const py::object& voxel_size,
+                       double band_voxels) {
+  const Eigen::MatrixXd v = float_matrix(V, "V", {-1, 3}).map;
+  const Eigen::MatrixXi f = index_matrix(F, "F", {-1, 3});
+  pipeline::MeshLevelSetOptions options;
+  if (!voxel_size.is_none()) options.voxel_size = voxel_size.cast<double>();
+  options.band_voxels = band_voxels;
+  std::shared_ptr<const pipeline::MeshLevelSet> level_set;
+  {
+    py::gil_scoped_release free;
+    level_set = std::make_shared<const pipeline::MeshLevelSet>(v, f, options);
+  }
+  return checked(Collider::mesh(std::move(level_set), friction), "mesh");
+}
+
 std::string repr(const Collider& c) {
   std::ostringstream o;
   o << "Collider." << scenes::kColliderShapeNames.name(c.shape) << "(friction=" << c.friction << ")";
@@ -179,7 +197,8 @@ std::string repr(const Collider& c) {
 void bind_collider(py::module_& m) {
   const auto zero = py::make_tuple(0.0, 0.0, 0.0);
   py::class_<Collider>(m, "Collider",
-      "A rigid collider (plane, sphere, box, capsule) that the dense points touch, static or moving; m, s.")
+      "A rigid collider (plane, sphere, box, capsule, closed triangle mesh) that the dense points touch, static or "
+      "moving; m, s.")
       .def_static("plane", [](const py::object& point, const py::object& normal, double friction) {
         return checked(Collider::plane(vector3(point, "point"), vector3(normal, "normal"), friction), "plane");
       }, py::arg("point"), py::arg("normal"), py::kw_only(), py::arg("friction") = 0.0,
@@ -198,6 +217,11 @@ void bind_collider(py::module_& m) {
       .def_static("capsule", [](const py::object& a, const py::object& b, double radius, double friction) {
         return checked(Collider::capsule(vector3(a, "a"), vector3(b, "b"), radius, friction), "capsule");
       }, py::arg("a"), py::arg("b"), py::arg("radius"), py::kw_only(), py::arg("friction") = 0.0)
+      .def_static("mesh", &mesh_collider, py::arg("V"), py::arg("F"), py::kw_only(), py::arg("friction") = 0.0,
+                  py::arg("voxel_size") = py::none(), py::arg("band_voxels") = 3.0,
+                  "a closed triangle mesh V (n, 3), F (t, 3) as OpenVDB's signed distance field "
+                  "(docs/mesh-colliders.md): voxel_size (m, default the bounding box's diagonal / 128), "
+                  "band_voxels outside it; distances within a voxel")
       .def("moving", &moving, py::kw_only(), py::arg("velocity") = zero, py::arg("twist_rate") = 0.0,
            py::arg("twist_axis") = py::make_tuple(0.0, 0.0, 1.0), py::arg("twist_center") = zero,
            py::arg("start") = 0.0, py::arg("stop") = 1e300,

@@ -152,6 +152,53 @@ def test_colliders_are_checked():
 
 
 
+def box_mesh(half):
+    V = np.array([[(1 if i & 1 else -1) * half[0], (1 if i & 2 else -1) * half[1], (1 if i & 4 else -1) * half[2]]
+                  for i in range(8)])
+    F = np.array([[0, 2, 1], [1, 2, 3], [4, 5, 6], [5, 7, 6], [0, 1, 4], [1, 5, 4], [2, 6, 3], [3, 6, 7],
+                  [0, 4, 2], [2, 4, 6], [1, 3, 5], [3, 7, 5]])
+    return V, F
+
+
+def test_a_mesh_collider_measures_as_the_analytic_shape_within_a_voxel(scene):
+    half = (0.6, 0.3, 0.4)
+    V, F = box_mesh(half)
+    voxel = 0.02
+    mesh = mbi.Collider.mesh(V, F.astype(np.int32), voxel_size=voxel, friction=0.2).moving(velocity=(0, 0, 1))
+    box = mbi.Collider.box((0, 0, 0), half).moving(velocity=(0, 0, 1))
+    assert (mesh.shape, mesh.friction) == ("mesh", 0.2)
+    P = np.random.default_rng(4).uniform(-0.7, 0.7, (2000, 3))
+    d_mesh, _ = mesh.distances(P, time=0.1)
+    d_box, _ = box.distances(P, time=0.1)
+    near = d_box < 3 * voxel  # the band outside, all of the inside
+    assert near.sum() > 500
+    assert np.abs(d_mesh[near] - d_box[near]).max() < voxel
+    with pytest.raises(mbi.Error, match="closed"):
+        mbi.Collider.mesh(V, F[:-1])
+    with pytest.raises(mbi.Error, match="F"):
+        mbi.Collider.mesh(V, F[:, :2])
+
+
+def test_contact_with_a_mesh_collider_presses_like_the_box(scene):
+    """A box mesh pushed down onto the top of the cage's model dents it as the analytic box does."""
+    V = scene["V"]
+    top = np.flatnonzero(V[:, 1] > 0.7)
+    bv, bf = box_mesh((0.2, 0.1, 0.2))
+    shapes = {"mesh": mbi.Collider.mesh(bv + (0.5, 1.15, 0.5), bf, voxel_size=0.01),
+              "box": mbi.Collider.box((0.5, 1.15, 0.5), (0.2, 0.1, 0.2))}
+    lowest = {}
+    for name, c in shapes.items():
+        sim = mbi.Simulator(scene["U"], scene["T"], youngs_modulus=2e5, density=500.0, dt=DT, gravity=(0, 0, 0),
+                            newton_iterations=20)
+        pipe = mbi.FramePipeline.with_contact(scene["U"], scene["T"], V, sim, [c.moving(velocity=(0, -1.0, 0),
+                                              stop=0.2)], points=top, method="bi")
+        positions, figures = run_frames(pipe, 8)
+        assert max(f["touching"] for f in figures) > 0
+        lowest[name] = positions[-1][top, 1].min()
+    assert lowest["box"] < V[top, 1].max() - 0.01
+    assert abs(lowest["mesh"] - lowest["box"]) < 0.01 + 0.02  # a voxel of the level set and the penalty's give
+
+
 def test_distances_at_many_points_are_distance_at_each():
     rng = np.random.default_rng(3)
     P = rng.uniform(-2, 2, (40, 3))

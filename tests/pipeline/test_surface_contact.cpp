@@ -1,5 +1,7 @@
 // Contact at embedded points through the embedding's transpose (method.md facts 16 and 17).
+#include <mbi/error.hpp>
 #include <mbi/pipeline/contact_laws.hpp>
+#include <mbi/pipeline/mesh_level_set.hpp>
 #include <mbi/pipeline/surface_contact.hpp>
 
 #include <catch2/catch.hpp>
@@ -8,6 +10,7 @@
 #include <algorithm>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <random>
 
 using namespace mbi::pipeline;
@@ -440,6 +443,24 @@ TEST_CASE("surface contact: a cage dropped on a plane rests on its dense surface
 
 namespace {
 
+// The box [-half, half] as a mesh collider (12 triangles), or none in a build without OpenVDB.
+std::optional<Collider> box_mesh_collider(const Eigen::Vector3d& half) {
+  Eigen::MatrixXd V(8, 3);
+  Eigen::MatrixXi F(12, 3);
+  for (int i = 0; i < 8; ++i)
+    V.row(i) << (i & 1 ? 1 : -1) * half.x(), (i & 2 ? 1 : -1) * half.y(), (i & 4 ? 1 : -1) * half.z();
+  F << 0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5;
+  try {
+    return Collider::mesh(std::make_shared<const MeshLevelSet>(V, F));
+  } catch (const mbi::Error&) {
+    return std::nullopt;
+  }
+}
+
+}  // namespace
+
+namespace {
+
 /// Energy, gradient and Hessian (dense, 3 n square) of the normal contact from every point
 /// (no broad phase), from the laws alone; depth(p, c): the guarded depth of the pair.
 struct Full {
@@ -511,12 +532,18 @@ TEST_CASE("surface contact: the points of elements far from every collider are s
       x0(3 * i + c) = mesh.U(i, c) + (c == 1 ? -0.5 : 0.0) + w(rng);
       dx(3 * i + c) = w(rng) + (c == 1 ? -0.1 : 0.0);
     }
+  std::vector<Collider> colliders{ball, plane};
+  if (const auto slab = box_mesh_collider({0.3, 0.1, 0.3})) {  // a build with OpenVDB: a mesh too
+    colliders.push_back(*slab);
+    colliders.back().point = Eigen::Vector3d(1.5, -0.58, 0.25);  // 2 cm into the bar's bottom
+    colliders.back().motion.velocity = Eigen::Vector3d(0, 0, 5);  // 5 cm per substep
+  }
   const double D = 0.02;  // some pairs start deeper: plain penalty for them
   for (Method m : {Method::BI, Method::Phong, Method::ModifiedBI}) {
     DeformerOptions opt;
     opt.method = m;
     auto deformer = std::make_shared<Deformer>(mesh.U, mesh.T, points, opt);
-    SurfaceContact contact(deformer, {ball, plane}, 1e4);
+    SurfaceContact contact(deformer, colliders, 1e4);
     contact.set_max_depth(D);
     for (double t0 : {0.0, 0.01}) {
       INFO("method " << static_cast<int>(m) << ", substep from " << t0 << " s");
@@ -542,7 +569,7 @@ TEST_CASE("surface contact: the points of elements far from every collider are s
       const Eigen::MatrixXd P = contact.points(x0), Dp = contact.points(dx);
       double cap = 1.0;
       for (Eigen::Index p = 0; p < P.rows(); ++p)
-        for (size_t c = 0; c < 2; ++c)
+        for (size_t c = 0; c < colliders.size(); ++c)
           if (!std::isinf(depth(p, c)))
             cap = std::min(cap, contact::advance(contact.colliders()[c], P.row(p).transpose(), Dp.row(p).transpose(),
                                                  contact.time(), D));

@@ -239,6 +239,8 @@ TEST_CASE("contact keys and [[colliders]]: bad input is an error naming the key 
              contains("colliders[1].shape: unknown value \"cone\"") && contains("plane, sphere, box, capsule"));
   CHECK_THAT(error(base + "[[colliders]]\nshape = \"sphere\"\ncenter = [0, 0, 0]\n"),
              contains("s.toml:") && contains("colliders[0].radius: missing"));
+  CHECK_THAT(error(base + sphere + "[[colliders]]\nshape = \"mesh\"\n"),
+             contains("colliders[1].shape") && contains("mbi.Collider.mesh"));
   CHECK_THAT(error(base + "[[colliders]]\nshape = \"capsule\"\na = [0, 0, 0]\nradius = 1\n"),
              contains("colliders[0].b: missing"));
   CHECK_THAT(error(base + sphere + "friction = nan\n"), contains("colliders[0].friction: must be finite"));

@@ -581,6 +581,9 @@ pipeline::Collider parse_collider(Table& t, std::size_t index) {
   require(t, "shape");
   pipeline::Collider c;
   c.shape = t.choice("shape", ColliderShape::Plane, kColliderShapeNames);
+  if (c.shape == ColliderShape::Mesh)
+    t.fail("shape", "\"mesh\" colliders are made in Python (mbi.Collider.mesh) or C++ (Collider::mesh); "
+                    "scene files take plane, sphere, box or capsule");
   const double inf = HUGE_VAL;
   if (c.shape == ColliderShape::Plane) {
     c.point = t.vec("point", c.point);

@@ -152,6 +152,9 @@ class SurfaceContact : public sim::Potential {
   std::shared_ptr<const Deformer> deformer_;
   std::vector<Collider> colliders_;
   std::vector<Collider> posed_;  // colliders_ at time_, static: the same distances, cheaper
+  // how fast each collider's distance can change per unit moved (1: exact; a mesh's level set more)
+  std::vector<double> lipschitz_;
+  double steepest_ = 1.0;  // their largest
   double stiffness_ = 0.0;
   double time_ = 0.0;
   double diagonal_ = 0.0;  // control mesh, rest

@@ -62,7 +62,8 @@ inline constexpr auto kColliderShapeNames = name_table<pipeline::ColliderShape>(
     {{pipeline::ColliderShape::Plane, "plane"},
      {pipeline::ColliderShape::Sphere, "sphere"},
      {pipeline::ColliderShape::Box, "box"},
-     {pipeline::ColliderShape::Capsule, "capsule"}});
+     {pipeline::ColliderShape::Capsule, "capsule"},
+     {pipeline::ColliderShape::Mesh, "mesh"}});
 inline constexpr auto kHandleModeNames = name_table<interp::HandleMode>(
     {{interp::HandleMode::Hard, "hard"}, {interp::HandleMode::Soft, "soft"}});
 
