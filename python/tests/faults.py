@@ -14,7 +14,7 @@ method, names = sys.argv[1], sys.argv[2:]
 U, T = mbi.box_mesh(7, 7, 6)  # 1,764 tetrahedra
 P = np.random.default_rng(0).uniform(0.05, 0.95, (70_000 if "fresh" in names else 1000, 3))
 deformer = mbi.Deformer(U, T, P, method=method, threads=1)
-X, out, dX = U * 1.01, np.empty_like(P), np.empty_like(U)
+X, out, dX = U * 1.01, np.zeros_like(P), np.empty_like(U)  # out: also vjp's dL/dpositions
 B = deformer.bezier(X)
 solver, phong = mbi.ModifiedBI(U, T), mbi.Phong(U, T)
 M, Bout = np.empty((U.size, 3)), np.empty(B.shape)

@@ -95,6 +95,19 @@ Eigen::VectorXd gradient(const SurfaceContact& c, const Eigen::VectorXd& x) {
   return g;
 }
 
+// Central differences (step 1e-7) of the contact's gradient: its Hessian, column by column.
+Eigen::MatrixXd gradient_differences(const SurfaceContact& c, const Eigen::VectorXd& x) {
+  const Eigen::Index N = x.size();
+  Eigen::MatrixXd fd(N, N);
+  for (Eigen::Index k = 0; k < N; ++k) {
+    Eigen::VectorXd xp = x, xm = x;
+    xp(k) += 1e-7;
+    xm(k) -= 1e-7;
+    fd.col(k) = (gradient(c, xp) - gradient(c, xm)) / 2e-7;
+  }
+  return fd;
+}
+
 }  // namespace
 
 TEST_CASE("surface contact: force = finite differences of the energy through the pipeline, "
@@ -262,13 +275,7 @@ TEST_CASE("surface contact: the Hessian surrogate is PSD, inside the element pat
         Hf.block<3, 3>(3 * b.row, 3 * b.col) += b.value;
         if (b.row != b.col) Hf.block<3, 3>(3 * b.col, 3 * b.row) += b.value.transpose();
       }
-      Eigen::MatrixXd fdf(N, N);
-      for (Eigen::Index k = 0; k < N; ++k) {
-        Eigen::VectorXd xp = s.x, xm = s.x;
-        xp(k) += 1e-7;
-        xm(k) -= 1e-7;
-        fdf.col(k) = (gradient(flat, xp) - gradient(flat, xm)) / 2e-7;
-      }
+      const Eigen::MatrixXd fdf = gradient_differences(flat, s.x);
       CHECK(Hf.norm() > 0);
       CHECK((fdf - Hf).norm() <= 1e-5 * Hf.norm());
     }
@@ -295,13 +302,8 @@ TEST_CASE("surface contact: the Hessian product is W^T K W (finite differences o
     auto deformer = std::make_shared<Deformer>(s.mesh.U, s.mesh.T, s.points, opt);
     SurfaceContact flat(deformer, {colliders()[0]}, 1e4);
     const Eigen::MatrixXd H = product_matrix(flat, s.x);
-    Eigen::MatrixXd fd(N, N), S = Eigen::MatrixXd::Zero(N, N);
-    for (Eigen::Index k = 0; k < N; ++k) {
-      Eigen::VectorXd xp = s.x, xm = s.x;
-      xp(k) += 1e-7;
-      xm(k) -= 1e-7;
-      fd.col(k) = (gradient(flat, xp) - gradient(flat, xm)) / 2e-7;
-    }
+    const Eigen::MatrixXd fd = gradient_differences(flat, s.x);
+    Eigen::MatrixXd S = Eigen::MatrixXd::Zero(N, N);
     CHECK(H.norm() > 0);
     CHECK((fd - H).norm() <= 1e-5 * H.norm());
     std::vector<mbi::sim::NodeBlock> blocks;
