@@ -16,6 +16,7 @@
 #include "bench_common.hpp"
 
 #include <mbi/base/timer.hpp>
+#include <mbi/generate/procedural.hpp>
 #include <mbi/scenes/models.hpp>
 
 #include <benchmark/benchmark.h>
@@ -30,12 +31,13 @@ namespace {
 using mbi::pipeline::FramePipeline;
 using mbi::pipeline::SimulatorDriver;
 
-// N/m per contact point: soft enough that the plane sinks into the surface about as deep as it
-// rises past the ball's lowest point, so that about 5% of the surface touches; the guarded depth
-// (m) beyond that depth, so that the law is the penalty and not its barrier at the depth.
-constexpr double kStiffness = 300.0, kMaxDepth = 0.3;
+// N/m per contact point of the scene's 252,152 (the same per area for another number of points):
+// soft enough that the plane sinks into the surface about as deep as it rises past the ball's
+// lowest point, so that about 5% of the surface touches; the guarded depth (m) beyond that
+// depth, so that the law is the penalty and not its barrier at the depth.
+constexpr double kStiffness = 300.0, kMaxDepth = 0.3, kScenePoints = 252152;
 
-mbi::scenes::Scene large_scene(mbi::pipeline::Method method, bool contact, double lowest) {
+mbi::scenes::Scene large_scene(mbi::pipeline::Method method, bool contact, double lowest, double points) {
   mbi::scenes::Scene sc = mbi::scenes::load_scene(std::filesystem::path(MBI_SOURCE_DIR) / "scenes" / "large.toml");
   sc.interpolation.method = method;
   mbi::sim::Parameters& p = sc.simulation.parameters;
@@ -46,7 +48,7 @@ mbi::scenes::Scene large_scene(mbi::pipeline::Method method, bool contact, doubl
   sc.constraints[0].select.box_relative = std::make_pair(Eigen::Vector3d(0, 0.9, 0), Eigen::Vector3d(1, 1, 1));
   if (contact) {
     sc.simulation.contact = mbi::pipeline::ContactMode::Surface;
-    sc.simulation.contact_stiffness = kStiffness;
+    sc.simulation.contact_stiffness = kStiffness * kScenePoints / points;
     p.newton_iterations = mbi::scenes::kSurfaceNewtonIterations;
     mbi::pipeline::Collider plane = mbi::pipeline::Collider::plane({0, lowest, 0}, {0, 1, 0});
     plane.motion.velocity = {0, 0.5, 0};
@@ -86,11 +88,14 @@ struct Side {
   }
 };
 
-void BM_ContactFrame(benchmark::State& st, mbi::pipeline::Method method, bool blocks_only) {
-  const mbi::scenes::Scene plain_scene = large_scene(method, false, 0.0);
-  const mbi::scenes::SceneModels m = mbi::scenes::load_models(plain_scene);
+/// resolution: the bumpy sphere's (6 n^2 + 2 points; the scene's is 205), in the scene's own cage.
+void BM_ContactFrame(benchmark::State& st, mbi::pipeline::Method method, bool blocks_only, int resolution) {
+  const mbi::scenes::Scene plain_scene = large_scene(method, false, 0.0, 0.0);
+  mbi::scenes::SceneModels m = mbi::scenes::load_models(plain_scene);
+  mbi::generate::bumpy_sphere(1.0, resolution, 0.05, m.dense.V, m.dense.F);
+  m.dense.N.resize(0, 0);
   const double lowest = m.dense.V.col(1).minCoeff();
-  Side with{large_scene(method, true, lowest), nullptr}, without{plain_scene, nullptr};
+  Side with{large_scene(method, true, lowest, static_cast<double>(m.dense.V.rows())), nullptr}, without{plain_scene, nullptr};
   for (Side* s : {&with, &without})
     s->pipe = std::make_unique<FramePipeline>(
         mbi::scenes::make_pipeline(s->scene, m, mbi::interp::embed(m.U, m.T, m.dense.V)));
@@ -103,6 +108,7 @@ void BM_ContactFrame(benchmark::State& st, mbi::pipeline::Method method, bool bl
   with.ms = without.ms = 0;
   with.newton = without.newton = with.halvings = 0;
   long touching = 0;
+  with.driver().contact()->reset_counts();
   for (auto _ : st) {
     const double before = with.ms;
     if (!with.step() || !without.step()) return st.SkipWithError("a simulation step failed");
@@ -118,18 +124,33 @@ void BM_ContactFrame(benchmark::State& st, mbi::pipeline::Method method, bool bl
   st.counters["halvings_contact"] = static_cast<double>(with.halvings) / n;
   st.counters["touching"] = static_cast<double>(touching) / n;
   st.counters["touching_fraction"] = static_cast<double>(touching) / n / static_cast<double>(m.dense.V.rows());
+  st.counters["points"] = static_cast<double>(m.dense.V.rows());
+  // the broad phase per evaluation at a new x: its candidates, the points with a term among them
+  const mbi::pipeline::SurfaceContact::Counts& c = with.driver().contact()->counts();
+  const auto per = [](long long a, long long b) { return b > 0 ? static_cast<double>(a) / static_cast<double>(b) : 0.0; };
+  st.counters["candidates"] = per(c.candidates, c.evaluations);
+  st.counters["active"] = per(c.active, c.evaluations);
+  st.counters["candidates_per_active"] = per(c.candidates, c.active);
+  st.counters["move_candidates"] = per(c.move_candidates, c.moves);
+  st.counters["substep_points"] = per(c.substep_points, c.substeps);
 }
 
 // Not in quick mode (CI): the large scene's contact frames take seconds each.
 [[maybe_unused]] const bool registered = [] {
   if (mbi::bench::quick()) return true;
   using mbi::pipeline::Method;
+  const auto add = [](const std::string& size, int resolution, Method method, bool blocks_only) {
+    benchmark::RegisterBenchmark(("BM_ContactFrame/" + size + "/" + mbi::pipeline::method_name(method) +
+                                  (blocks_only ? "-blocks" : "")).c_str(),
+                                 BM_ContactFrame, method, blocks_only, resolution)
+        ->Unit(benchmark::kMillisecond)->UseManualTime()->Iterations(4);
+  };
   for (auto [method, blocks_only] : {std::pair(Method::ModifiedBI, false), std::pair(Method::ModifiedBI, true),
                                      std::pair(Method::BI, false)})
-    benchmark::RegisterBenchmark((std::string("BM_ContactFrame/large/") + mbi::pipeline::method_name(method) +
-                                  (blocks_only ? "-blocks" : "")).c_str(),
-                                 BM_ContactFrame, method, blocks_only)
-        ->Unit(benchmark::kMillisecond)->UseManualTime()->Iterations(4);
+    add("large", 205, method, blocks_only);
+  // the same scene with the surface resampled: 20,186 and 1,003,688 points
+  for (auto [size, resolution] : {std::pair("20K", 58), std::pair("1M", 409)})
+    for (Method method : {Method::ModifiedBI, Method::BI}) add(size, resolution, method, false);
   return true;
 }();
 

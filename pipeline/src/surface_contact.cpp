@@ -78,7 +78,14 @@ void SurfaceContact::index_points() {
   std::vector<int> next(element_start_.begin(), element_start_.end() - 1);
   for (Eigen::Index p = 0; p < emb.bary.rows(); ++p)
     if (in_hull(emb, p)) element_points_[next[emb.element(p)]++] = static_cast<int>(p);
-  marks_.assign(static_cast<size_t>(emb.bary.rows()), 0);
+  const size_t points = static_cast<size_t>(emb.bary.rows());
+  start_distance_.resize(element_points_.size());
+  element_distance_.resize(static_cast<size_t>(m));
+  exact_.assign(static_cast<size_t>(m), 0);
+  near_.assign(static_cast<size_t>(m), 0);
+  slip_first_.assign(points, -1);
+  row_of_.assign(points, -1);
+  unguarded_.assign(points * colliders_.size(), 0);
 }
 
 void SurfaceContact::set_time(double time) {
@@ -109,21 +116,49 @@ void SurfaceContact::begin_substep(double end_time, const Eigen::Ref<const Eigen
 }
 
 void SurfaceContact::begin_substep_at(double start_time, double end_time, const Eigen::Ref<const Eigen::VectorXd>& x,
-                                      const Eigen::Ref<const Eigen::VectorXd>&) {
+                                      const Eigen::Ref<const Eigen::VectorXd>& v) {
   if (!std::isfinite(start_time)) throw Error("contact time must be finite");
-  set_time(end_time);
+  check_size(x);
+  check_size(v);
+  set_time(end_time);  // no reference: the start's sample has every point of the elements it keeps
+  for (const Slip& s : slips_) slip_first_[static_cast<size_t>(s.point)] = -1;
   slips_.clear();
+  for (size_t k : unguarded_set_) unguarded_[k] = 0;
+  unguarded_set_.clear();
+  started_ = true;
   const size_t C = colliders_.size();
-  guarded_.assign(static_cast<size_t>(deformer_->points()) * C, 1);  // points away from every collider
-  const Sample& S = sample(x);
   const double h = end_time - start_time;
   smoothing_ = friction_velocity_ * h;
+  // The start's sample also takes the elements within twice the substep's move at the start
+  // velocities: their points get their own distances, the others their element's bound.
+  const int m = deformer_->elements();
+  Eigen::VectorXd band = Eigen::VectorXd::Zero(m);
+  if (h > 0) {
+    const interp::BezierPoints BV = deformer_->bezier(nodes(v));
+    const Eigen::Index K = BV.rows() / m;
+    for (int e = 0; e < m; ++e) {
+      const double move = 2 * h * BV.middleRows(e * K, K).rowwise().norm().maxCoeff();
+      band(e) = std::isfinite(move) ? move : 0.0;
+    }
+  }
+  Sample& S = at_;
+  S.B = deformer_->bezier(nodes(x));
+  gather(S.B, band, S.points);
+  select(S.points, S.embedding);
+  evaluate(S.B, S.embedding, S.P);
+  ++counts_.substeps;
+  counts_.substep_points += static_cast<long long>(S.points.size());
+  std::vector<double> least(S.points.size(), kInf);
   for (size_t i = 0; i < S.points.size(); ++i)
     for (size_t c = 0; c < C; ++c) {
       const Eigen::Index p = S.points[i];
       const Eigen::Vector3d q = S.P.row(static_cast<Eigen::Index>(i)).transpose();
       const Distance d = signed_distance(posed_[c], q, end_time);
-      guarded_[static_cast<size_t>(p) * C + c] = d.value > -max_depth_;
+      least[i] = std::min(least[i], d.value);
+      if (!(d.value > -max_depth_)) {
+        unguarded_[static_cast<size_t>(p) * C + c] = 1;
+        unguarded_set_.push_back(static_cast<size_t>(p) * C + c);
+      }
       if (d.value >= 0 || colliders_[c].friction == 0 || !(h > 0)) continue;
       const double force = -contact::normal_energy(d.value, stiffness_, depth(p, c)).slope;
       Slip s;
@@ -131,22 +166,45 @@ void SurfaceContact::begin_substep_at(double start_time, double end_time, const 
       s.weight = colliders_[c].friction * force;
       s.tangent = tangent_basis(d.normal);
       s.anchor = q + collider_displacement(colliders_[c], q, start_time, end_time);
-      if (s.weight > 0 && std::isfinite(s.weight)) slips_.push_back(s);
+      if (!(s.weight > 0 && std::isfinite(s.weight))) continue;
+      if (slip_first_[static_cast<size_t>(p)] < 0) slip_first_[static_cast<size_t>(p)] = static_cast<int>(slips_.size());
+      slips_.push_back(s);
     }
-  reference_B_ = S.B;
-  reference_distance_.assign(static_cast<size_t>(deformer_->points()), -kInf);
-  for (size_t i = 0; i < S.points.size(); ++i) {
-    double& d = reference_distance_[static_cast<size_t>(S.points[i])];
-    d = kInf;
-    for (size_t c = 0; c < C; ++c)
-      d = std::min(d, signed_distance(posed_[c], S.P.row(static_cast<Eigen::Index>(i)).transpose(), time_).value);
-  }
-  reference_ = true;
+  set_reference(S, least);
   forget();  // guards and slips changed; the slips' points are evaluated from now on
 }
 
+void SurfaceContact::set_reference(const Sample& S, const std::vector<double>& least) {
+  const int m = deformer_->elements();
+  const Eigen::Index K = S.B.rows() / m;
+  reference_B_ = S.B;
+  exact_ = near_;  // the elements the start's gather kept, with all their points
+  for (int e = 0; e < m; ++e) {
+    double d = kInf;
+    for (size_t k = 0; k < colliders_.size(); ++k) d = std::min(d, hull_lower(S.B.middleRows(e * K, K), k));
+    element_distance_[static_cast<size_t>(e)] = d;
+  }
+  for (size_t i = 0; i < S.points.size(); ++i) row_of_[static_cast<size_t>(S.points[i])] = static_cast<int>(i);
+  std::vector<std::pair<double, int>> order;
+  for (int e = 0; e < m; ++e) {
+    if (!exact_[static_cast<size_t>(e)]) continue;
+    order.clear();
+    for (int i = element_start_[e]; i < element_start_[e + 1]; ++i) {
+      const double d = least[static_cast<size_t>(row_of_[static_cast<size_t>(element_points_[i])])];
+      order.emplace_back(std::isnan(d) ? -kInf : d, element_points_[i]);  // NaN: always a candidate
+    }
+    std::sort(order.begin(), order.end());
+    for (int i = element_start_[e]; i < element_start_[e + 1]; ++i) {
+      start_distance_[static_cast<size_t>(i)] = order[static_cast<size_t>(i - element_start_[e])].first;
+      element_points_[static_cast<size_t>(i)] = order[static_cast<size_t>(i - element_start_[e])].second;
+    }
+  }
+  for (Eigen::Index p : S.points) row_of_[static_cast<size_t>(p)] = -1;
+  reference_ = true;
+}
+
 double SurfaceContact::depth(Eigen::Index point, size_t collider) const {
-  if (guarded_.empty() || !guarded_[static_cast<size_t>(point) * colliders_.size() + collider]) return kInf;
+  if (!started_ || unguarded_[static_cast<size_t>(point) * colliders_.size() + collider]) return kInf;
   return max_depth_;
 }
 
@@ -165,48 +223,55 @@ const Eigen::MatrixXd& SurfaceContact::nodes(const Eigen::Ref<const Eigen::Vecto
   return X_;
 }
 
+double SurfaceContact::hull_lower(const Eigen::Ref<const interp::BezierPoints>& Be, size_t k) const {
+  const Collider& col = posed_[k];
+  if (col.shape == ColliderShape::Plane) {  // linear: least at a Bezier point
+    double lower = kInf;
+    for (Eigen::Index j = 0; j < Be.rows(); ++j) lower = std::min(lower, signed_distance(col, Be.row(j).transpose(), time_).value);
+    return lower;
+  }
+  const Eigen::RowVector3d c = Be.colwise().mean();
+  const double r = (Be.rowwise() - c).rowwise().norm().maxCoeff();
+  return signed_distance(col, c.transpose(), time_).value - lipschitz_[k] * r;
+}
+
 void SurfaceContact::gather(const interp::BezierPoints& B, const Eigen::VectorXd& reach,
                             std::vector<Eigen::Index>& points) const {
   const int m = deformer_->elements();
   const Eigen::Index K = B.rows() / m;
+  points.clear();
+  std::fill(near_.begin(), near_.end(), 0);
   for (int e = 0; e < m; ++e) {
-    if (element_start_[e] == element_start_[e + 1]) continue;
+    const int first = element_start_[e], last = element_start_[e + 1];
+    if (first == last) continue;
     const auto Be = B.middleRows(e * K, K);
     const Eigen::RowVector3d c = Be.colwise().mean();
     const double r = (Be.rowwise() - c).rowwise().norm().maxCoeff();
     // far beyond round-off of the points' positions and of the per-point tests
     const double margin = 4e-6 * (diagonal_ + c.norm() + r + reach(e));
     bool near = false;
-    for (size_t k = 0; k < colliders_.size() && !near; ++k) {
-      // the least distance on the hull: at a Bezier point for a plane (linear), else the sphere's
-      const Collider& col = posed_[k];
-      double lower = kInf;
-      if (col.shape == ColliderShape::Plane) {
-        for (Eigen::Index j = 0; j < K; ++j)
-          lower = std::min(lower, signed_distance(col, Be.row(j).transpose(), time_).value);
-      } else {
-        lower = signed_distance(col, c.transpose(), time_).value - lipschitz_[k] * r;
-      }
-      near = lower < lipschitz_[k] * reach(e) + margin;
-    }
+    for (size_t k = 0; k < colliders_.size() && !near; ++k) near = hull_lower(Be, k) < lipschitz_[k] * reach(e) + margin;
     if (!near) continue;
-    // A point moved by at most its element's largest Bezier move since the substep's start,
-    // where its distance was measured (unknown: -infinity): its distance changed by at most
-    // steepest_ times that.
-    const double moved = reference_ ? (Be - reference_B_.middleRows(e * K, K)).rowwise().norm().maxCoeff() : 0.0;
-    for (int i = element_start_[e]; i < element_start_[e + 1]; ++i) {
-      const int p = element_points_[i];
-      if (!reference_ || reference_distance_[p] - steepest_ * (moved + reach(e)) < margin) marks_[p] = 1;
+    near_[static_cast<size_t>(e)] = 1;
+    double within = kInf;
+    if (reference_) {
+      // A point moved by at most its element's largest Bezier move since the substep's start:
+      // its distance fell by at most steepest_ times that.
+      const double moved = (Be - reference_B_.middleRows(e * K, K)).rowwise().norm().maxCoeff();
+      within = steepest_ * (moved + reach(e)) + margin;
+      if (!exact_[static_cast<size_t>(e)] && !(element_distance_[static_cast<size_t>(e)] < within)) continue;
     }
+    const bool ordered = reference_ && exact_[static_cast<size_t>(e)];  // by start distance: a prefix
+    for (int i = first; i < last && !(ordered && !(start_distance_[static_cast<size_t>(i)] < within)); ++i)
+      points.push_back(element_points_[static_cast<size_t>(i)]);
   }
-  for (Eigen::Index p : unbounded_) marks_[p] = 1;
-  for (const Slip& s : slips_) marks_[s.point] = 1;
-  points.clear();
-  for (size_t p = 0; p < marks_.size(); ++p)
-    if (marks_[p]) {
-      points.push_back(static_cast<Eigen::Index>(p));
-      marks_[p] = 0;
-    }
+  for (Eigen::Index p : unbounded_) points.push_back(p);
+  const interp::Embedding& emb = deformer_->embedding();
+  for (size_t i = 0; i < slips_.size(); ++i) {  // friction energy is never 0
+    const Eigen::Index p = slips_[i].point;
+    if (slip_first_[static_cast<size_t>(p)] == static_cast<int>(i) && in_hull(emb, p) && !near_[static_cast<size_t>(emb.element(p))])
+      points.push_back(p);
+  }
 }
 
 void SurfaceContact::select(const std::vector<Eigen::Index>& points, interp::Embedding& subset) const {
@@ -235,6 +300,8 @@ const SurfaceContact::Sample& SurfaceContact::sample(const Eigen::Ref<const Eige
   gather(at_.B, Eigen::VectorXd::Zero(deformer_->elements()), at_.points);
   select(at_.points, at_.embedding);
   evaluate(at_.B, at_.embedding, at_.P);
+  ++counts_.evaluations;
+  counts_.candidates += static_cast<long long>(at_.points.size());
   at_.x = x;
   at_.valid = true;
   return at_;
@@ -258,6 +325,8 @@ const SurfaceContact::Sample& SurfaceContact::sample(const Eigen::Ref<const Eige
   select(along_.points, along_.embedding);
   evaluate(BD, along_.embedding, along_.D);
   positions_at(x, along_.B, along_.points, along_.P);
+  ++counts_.moves;
+  counts_.move_candidates += static_cast<long long>(along_.points.size());
   along_.x = x;
   along_.dx = dx;
   along_.valid = true;
@@ -268,18 +337,21 @@ void SurfaceContact::positions_at(const Eigen::Ref<const Eigen::VectorXd>& x, co
                                   const std::vector<Eigen::Index>& points, Eigen::MatrixXd& P) const {
   // the rows at_ has at x (the same values: a point's evaluation is its own) are copied
   const bool kept = at_.valid && at_.x == x;
+  if (kept)
+    for (size_t j = 0; j < at_.points.size(); ++j) row_of_[static_cast<size_t>(at_.points[j])] = static_cast<int>(j);
   std::vector<Eigen::Index> missing, rows;
   P.resize(static_cast<Eigen::Index>(points.size()), 3);
-  size_t j = 0;
   for (size_t i = 0; i < points.size(); ++i) {
-    while (kept && j < at_.points.size() && at_.points[j] < points[i]) ++j;
-    if (kept && j < at_.points.size() && at_.points[j] == points[i]) {
-      P.row(static_cast<Eigen::Index>(i)) = at_.P.row(static_cast<Eigen::Index>(j));
+    const int j = kept ? row_of_[static_cast<size_t>(points[i])] : -1;
+    if (j >= 0) {
+      P.row(static_cast<Eigen::Index>(i)) = at_.P.row(j);
     } else {
       missing.push_back(points[i]);
       rows.push_back(static_cast<Eigen::Index>(i));
     }
   }
+  if (kept)
+    for (Eigen::Index p : at_.points) row_of_[static_cast<size_t>(p)] = -1;
   select(missing, subset_);
   Eigen::MatrixXd Q;
   evaluate(B, subset_, Q);
@@ -302,7 +374,7 @@ int SurfaceContact::touching(const Eigen::Ref<const Eigen::VectorXd>& x) const {
   return count;
 }
 
-SurfaceContact::Term SurfaceContact::term(Eigen::Index p, const Eigen::Vector3d& q, size_t& slip) const {
+SurfaceContact::Term SurfaceContact::term(Eigen::Index p, const Eigen::Vector3d& q) const {
   Term t;
   for (size_t c = 0; c < colliders_.size(); ++c) {
     const Distance d = signed_distance(posed_[c], q, time_);
@@ -313,8 +385,8 @@ SurfaceContact::Term SurfaceContact::term(Eigen::Index p, const Eigen::Vector3d&
     t.hessian.noalias() += law.curvature * d.normal * d.normal.transpose();
     t.active = true;
   }
-  while (slip < slips_.size() && slips_[slip].point < p) ++slip;
-  for (; slip < slips_.size() && slips_[slip].point == p; ++slip) {
+  for (size_t slip = static_cast<size_t>(std::max(slip_first_[static_cast<size_t>(p)], 0));
+       slip_first_[static_cast<size_t>(p)] >= 0 && slip < slips_.size() && slips_[slip].point == p; ++slip) {
     const Slip& s = slips_[slip];
     const Eigen::Vector2d u = s.tangent.transpose() * (q - s.anchor);
     const double y = u.norm();
@@ -330,13 +402,13 @@ const std::vector<SurfaceContact::Active>& SurfaceContact::terms(const Eigen::Re
   const Sample& S = sample(x);  // forgets the terms when x changes
   if (terms_valid_) return terms_;
   terms_.clear();
-  size_t slip = 0;
   for (size_t i = 0; i < S.points.size(); ++i) {
-    const Term t = term(S.points[i], S.P.row(static_cast<Eigen::Index>(i)).transpose(), slip);
+    const Term t = term(S.points[i], S.P.row(static_cast<Eigen::Index>(i)).transpose());
     if (t.active) terms_.push_back({S.points[i], t});
   }
   terms_valid_ = true;
   active_valid_ = false;
+  counts_.active += static_cast<long long>(terms_.size());
   return terms_;
 }
 
@@ -421,7 +493,7 @@ void SurfaceContact::hessian_blocks(const Eigen::Ref<const Eigen::VectorXd>& x,
 
 double SurfaceContact::max_step(const Eigen::Ref<const Eigen::VectorXd>& x,
                                 const Eigen::Ref<const Eigen::VectorXd>& dx) const {
-  if (guarded_.empty() || std::isinf(max_depth_)) return 1.0;
+  if (!started_ || std::isinf(max_depth_)) return 1.0;
   const Sample& S = sample(x, dx);  // p is linear in x: the points move by W dx
   double s = 1.0;
   for (size_t i = 0; i < S.points.size(); ++i)
@@ -438,11 +510,9 @@ void SurfaceContact::begin_line(const Eigen::Ref<const Eigen::VectorXd>& x, cons
   line_start_ = x;
   line_move_ = dx;
   line_points_.clear();
-  size_t slip = 0;
   for (size_t i = 0; i < S.points.size(); ++i) {
     const Eigen::Index p = S.points[i], r = static_cast<Eigen::Index>(i);
-    while (slip < slips_.size() && slips_[slip].point < p) ++slip;
-    bool near = slip < slips_.size() && slips_[slip].point == p;  // friction energy is never 0
+    bool near = slip_first_[static_cast<size_t>(p)] >= 0;  // friction energy is never 0
     // d(p + s D) >= d(p) - L |D| for s in [0, 1]; the margin covers W (x + s dx) != p + s W dx
     const double reach = S.D.row(r).norm() + 1e-6 * (diagonal_ + S.P.row(r).norm() + S.D.row(r).norm());
     for (size_t c = 0; c < colliders_.size() && !near; ++c)
@@ -457,9 +527,7 @@ double SurfaceContact::energy_along(double s) const {
   if (!(s >= 0 && s <= 1)) return energy(line_start_ + s * line_move_);
   const Sample& S = sample(line_start_, line_move_);  // kept from begin_line unless moved elsewhere
   double E = 0.0;
-  size_t slip = 0;
-  for (Eigen::Index r : line_points_)
-    E += term(S.points[static_cast<size_t>(r)], (S.P.row(r) + s * S.D.row(r)).transpose(), slip).energy;
+  for (Eigen::Index r : line_points_) E += term(S.points[static_cast<size_t>(r)], (S.P.row(r) + s * S.D.row(r)).transpose()).energy;
   return E;
 }
 

@@ -54,6 +54,10 @@ class SurfaceContact : public sim::Potential {
                         const Eigen::Ref<const Eigen::VectorXd>& v) override;
   double time() const { return time_; }
   const std::vector<Collider>& colliders() const { return colliders_; }
+  /// Replaces collider i (checked as the constructor's; no rest-overlap check) from the next
+  /// evaluation on: a collider moved between steps, as the viewer's drag does. Throws Error on
+  /// an index out of range or a bad collider.
+  void set_collider(size_t i, const Collider& collider);
   double stiffness() const { return stiffness_; }
 
   /// Depth (m, > 0) that guarded points never pass: their energy grows without bound there and
@@ -74,6 +78,17 @@ class SurfaceContact : public sim::Potential {
   long long contact_points() const { return deformer_->points(); }
   /// Number of contact points inside some collider (signed distance < 0) at x, at time().
   int touching(const Eigen::Ref<const Eigen::VectorXd>& x) const;
+
+  /// What the broad phase evaluated since construction or reset_counts() (method.md fact 16):
+  /// per new x (energy, gradient, Hessian) the candidate points and those with a term there;
+  /// per move (cap, line) the candidates; per substep start the points evaluated there.
+  struct Counts {
+    long long evaluations = 0, candidates = 0, active = 0;
+    long long moves = 0, move_candidates = 0;
+    long long substeps = 0, substep_points = 0;
+  };
+  const Counts& counts() const { return counts_; }
+  void reset_counts() { counts_ = {}; }
 
   double energy(const Eigen::Ref<const Eigen::VectorXd>& x) const override;
   void add_gradient(const Eigen::Ref<const Eigen::VectorXd>& x,
@@ -103,11 +118,12 @@ class SurfaceContact : public sim::Potential {
     Eigen::Vector3d anchor;                 ///< start position moved with the collider, m
   };
   /// The contact points that can matter at x (or on the move x -> x + dx), found from the
-  /// element Bezier points (a point lies in their convex hull), and their positions W x (and W dx).
+  /// element Bezier points (a point lies in their convex hull) and the substep's start, and their
+  /// positions W x (and W dx).
   struct Sample {
     Eigen::VectorXd x, dx;              // dx empty: positions only
     interp::BezierPoints B;             // at x
-    std::vector<Eigen::Index> points;   // increasing
+    std::vector<Eigen::Index> points;   // by element, then by distance at the substep's start
     interp::Embedding embedding;        // their rows of the deformer's embedding
     Eigen::MatrixXd P, D;               // W x and W dx at those points, rows as `points`
     bool valid = false;
@@ -116,9 +132,16 @@ class SurfaceContact : public sim::Potential {
   const Sample& sample(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& dx) const;
   void check_size(const Eigen::Ref<const Eigen::VectorXd>& x) const;
   const Eigen::MatrixXd& nodes(const Eigen::Ref<const Eigen::VectorXd>& x) const;  // n x 3 into X_
-  /// The points of the elements whose Bezier points come within `reach` (m, per element) of a
-  /// collider, the points outside every hull, and the points with friction; increasing.
+  /// The points that can come within `reach` (m, per element) of a collider: of the elements
+  /// whose Bezier points do, those whose distance at the substep's start is not farther than
+  /// their element's Bezier move since then (all of them without a start), and the points
+  /// outside every hull and with friction. Costs the elements and the points it keeps.
   void gather(const interp::BezierPoints& B, const Eigen::VectorXd& reach, std::vector<Eigen::Index>& points) const;
+  /// A lower bound of collider k's distance on the hull of an element's Bezier points Be.
+  double hull_lower(const Eigen::Ref<const interp::BezierPoints>& Be, size_t k) const;
+  /// The substep's start: each element's least hull distance, and for the elements sampled at
+  /// the start (S) their points ordered by their least distance there.
+  void set_reference(const Sample& S, const std::vector<double>& least);  // least: per row of S
   void index_points();                                          // element_start_ and the rest
   /// The rows `points` of the deformer's embedding.
   void select(const std::vector<Eigen::Index>& points, interp::Embedding& subset) const;
@@ -131,19 +154,20 @@ class SurfaceContact : public sim::Potential {
   void add_transpose(const interp::Embedding& subset, const Eigen::MatrixXd& G, Eigen::Ref<Eigen::VectorXd> out) const;
   double depth(Eigen::Index point, size_t collider) const;        // guarded depth or infinity
   /// One point's energy (J), gradient (N) and Hessian or PSD surrogate (N/m) at position q, all
-  /// colliders and its slips; `slip` walks slips_ (start at 0, points in increasing order).
+  /// colliders and its slips.
   struct Term {
     double energy = 0.0;
     Eigen::Vector3d gradient = Eigen::Vector3d::Zero();
     Eigen::Matrix3d hessian = Eigen::Matrix3d::Zero();
     bool active = false;
   };
-  Term term(Eigen::Index point, const Eigen::Vector3d& q, size_t& slip) const;
+  Term term(Eigen::Index point, const Eigen::Vector3d& q) const;
   struct Active {
     Eigen::Index point = 0;
     Term term;
   };
-  /// The active terms at x by increasing point (kept until x, the time or the substep changes).
+  /// The active terms at x, in the order of the sample's points (kept until x, the time or the
+  /// substep changes).
   const std::vector<Active>& terms(const Eigen::Ref<const Eigen::VectorXd>& x) const;
   /// The rows of the deformer's embedding at the points of terms(x), in their order.
   const interp::Embedding& active_embedding(const Eigen::Ref<const Eigen::VectorXd>& x) const;
@@ -161,16 +185,22 @@ class SurfaceContact : public sim::Potential {
   double max_depth_ = 0.0;
   double friction_velocity_ = 0.0;
   double smoothing_ = 0.0;        // eps_v h of the current substep, m
-  std::vector<char> guarded_;     // point-major, per collider; empty before the first substep
-  std::vector<Slip> slips_;       // by increasing point
+  bool started_ = false;          // a substep has begun: guards apply
+  std::vector<char> unguarded_;   // point-major, per collider: started the substep deeper than max_depth
+  std::vector<size_t> unguarded_set_;  // its entries that are 1
+  std::vector<Slip> slips_;       // a point's slips one after another
+  std::vector<int> slip_first_;   // per point, its first slip or -1
   std::vector<int> element_start_, element_points_;  // per element, its points inside the hull
   std::vector<Eigen::Index> unbounded_;              // points with a negative barycentric coordinate
-  // The substep's start (begin_substep_at): Bezier points and each point's least distance to the
-  // colliders (-infinity where not evaluated), so that gather skips points far from them.
+  // The substep's start (set_reference): Bezier points, each element's least hull distance to
+  // the colliders, and for the elements sampled there (`exact_`) their points in element_points_
+  // ordered by their least distance (`start_distance_`, aligned with element_points_).
   bool reference_ = false;
   interp::BezierPoints reference_B_;
-  std::vector<double> reference_distance_;
-  mutable std::vector<char> marks_;                   // per point, gather's scratch
+  std::vector<double> element_distance_, start_distance_;
+  std::vector<char> exact_;
+  mutable std::vector<char> near_;                    // per element, gather's last hull test
+  mutable std::vector<int> row_of_;                   // per point, a sample's row or -1 (scratch)
   mutable std::vector<int> element_block_;            // per element, hessian_blocks' scratch (-1)
   mutable Eigen::MatrixXd X_;
   mutable interp::Embedding subset_;   // rows of the deformer's embedding, for the vjp and positions_at
@@ -182,6 +212,7 @@ class SurfaceContact : public sim::Potential {
   Eigen::VectorXd line_start_, line_move_;  // begin_line's x and dx
   std::vector<Eigen::Index> line_points_;    // rows of along_ that can contribute along it
   bool line_valid_ = false;
+  mutable Counts counts_;
 };
 
 }  // namespace mbi::pipeline
