@@ -13,6 +13,7 @@
 
 #include "common/sanitizers.hpp"
 #include "common/temp_dir.hpp"
+#include "scenes/contact_ball.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -27,39 +28,9 @@ namespace fs = std::filesystem;
 using namespace mbi::scenes;
 using mbi::pipeline::ColliderShape;
 using mbi::pipeline::ContactMode;
+using mbi::test::ball_file;
 
 namespace {
-
-// A ball of radius 0.5 about the origin (a latitude-longitude sphere, 482 vertices), written once
-// per process: small enough for the sanitizer build.
-std::string ball_file() {
-  static const mbi::test::TempDir dir("contact-ball");
-  static const std::string file = [] {
-    const fs::path path = dir / "ball.obj";
-    std::ofstream out(path);
-    out.precision(17);
-    const int lat = 16, lon = 32;
-    const double pi = 3.14159265358979323846;
-    out << "v 0 -0.5 0\n";
-    for (int i = 1; i < lat; ++i)
-      for (int j = 0; j < lon; ++j) {
-        const double t = pi * i / lat, f = 2 * pi * j / lon;
-        out << "v " << 0.5 * std::sin(t) * std::cos(f) << " " << -0.5 * std::cos(t) << " " << 0.5 * std::sin(t) * std::sin(f)
-            << "\n";
-      }
-    out << "v 0 0.5 0\n";
-    auto ring = [&](int i, int j) { return 2 + (i - 1) * lon + j % lon; };  // 1-based
-    const int top = 2 + (lat - 1) * lon;
-    for (int j = 0; j < lon; ++j) out << "f 1 " << ring(1, j + 1) << " " << ring(1, j) << "\n";
-    for (int i = 1; i + 1 < lat; ++i)
-      for (int j = 0; j < lon; ++j)
-        out << "f " << ring(i, j) << " " << ring(i, j + 1) << " " << ring(i + 1, j + 1) << "\nf " << ring(i, j) << " "
-            << ring(i + 1, j + 1) << " " << ring(i + 1, j) << "\n";
-    for (int j = 0; j < lon; ++j) out << "f " << top << " " << ring(lat - 1, j) << " " << ring(lat - 1, j + 1) << "\n";
-    return path.string();
-  }();
-  return file;
-}
 
 // The ball in a generated cage with a margin, dropped from 0.3 m onto a ground at y = -0.8 (its
 // bottom is at y = -0.5), damped to rest.
@@ -239,8 +210,7 @@ TEST_CASE("contact keys and [[colliders]]: bad input is an error naming the key 
              contains("colliders[1].shape: unknown value \"cone\"") && contains("plane, sphere, box, capsule"));
   CHECK_THAT(error(base + "[[colliders]]\nshape = \"sphere\"\ncenter = [0, 0, 0]\n"),
              contains("s.toml:") && contains("colliders[0].radius: missing"));
-  CHECK_THAT(error(base + sphere + "[[colliders]]\nshape = \"mesh\"\n"),
-             contains("colliders[1].shape") && contains("mbi.Collider.mesh"));
+  CHECK_THAT(error(base + sphere + "[[colliders]]\nshape = \"mesh\"\n"), contains("s.toml:") && contains("colliders[1].path: missing"));
   CHECK_THAT(error(base + "[[colliders]]\nshape = \"capsule\"\na = [0, 0, 0]\nradius = 1\n"),
              contains("colliders[0].b: missing"));
   CHECK_THAT(error(base + sphere + "friction = nan\n"), contains("colliders[0].friction: must be finite"));

@@ -161,6 +161,9 @@ TEST_CASE("scene poke runs", "[runner]") { check_run("poke", 4); }
 TEST_CASE("scene drag runs", "[runner]") { check_run("drag", 4); }
 TEST_CASE("scene image-warp runs", "[runner]") { check_run("image-warp", 3); }
 TEST_CASE("scene large runs", "[runner][long]") { check_run("large", 2); }
+// the 252K-point bumpy sphere in contact: on the ground from frame 2, on the steps from frame 12
+TEST_CASE("scene squeeze runs", "[runner][long]") { check_run("squeeze", 3); }
+TEST_CASE("scene steps runs", "[runner][long]") { check_run("steps", 13); }
 
 TEST_CASE("outputs are not overwritten without force", "[runner]") {
   mbi::test::TempDir dir("run");

@@ -107,6 +107,8 @@ void add_surface_contact(const Scene& sc, const SceneModels& m, pipeline::Simula
   po.interp = sc.interpolation.options;
   pipeline::SurfaceContactOptions o;
   o.colliders = sc.colliders;
+  for (const ColliderMesh& mesh : sc.collider_meshes)  // a scene of parse_scene alone: read now
+    if (!o.colliders.at(mesh.index).level_set) o.colliders[mesh.index].level_set = read_collider_mesh(sc, mesh);
   o.stiffness = sc.simulation.contact_stiffness;
   o.max_depth = sc.simulation.contact_max_depth;
   o.friction_velocity = sc.simulation.contact_friction_velocity;

@@ -1,8 +1,6 @@
 #include <mbi/scenes/limits.hpp>
 #include <mbi/scenes/scene.hpp>
 
-#include <mbi/io/parse.hpp>
-
 #include <toml.hpp>
 
 #include <algorithm>
@@ -323,18 +321,6 @@ void check_nesting(std::string_view t, const std::string& fname) {
 
 }  // namespace
 
-Scene load_scene(const std::filesystem::path& file) {
-  std::error_code ec;
-  if (!std::filesystem::exists(file, ec)) throw Error(file.string() + ": no such scene file");
-  std::string text;
-  try {
-    text = io::read_bytes(file);  // regular files only: a FIFO or a device is refused, not read
-  } catch (const io::Error& e) {
-    throw Error(e.what());
-  }
-  return parse_scene(text, file);
-}
-
 namespace {
 
 // One function per table of the scene file, in the order parse_scene reads them.
@@ -576,16 +562,34 @@ Eigen::Matrix3d parse_axes(Table& t) {
   return A;
 }
 
-pipeline::Collider parse_collider(Table& t, std::size_t index) {
+// shape = "mesh": its file and level-set options (the level set is built from the file later,
+// read_collider_meshes) and its placement, the mesh's point v at point + axes v.
+ColliderMesh parse_mesh_keys(Table& t, pipeline::Collider& c) {
+  ColliderMesh m;
+  require(t, "path");
+  m.path = t.string("path", "");
+  if (m.path.empty()) t.fail("path", "must name a file (a closed triangle mesh: .obj, .off, .ply or .stl)");
+  m.where_path = m.where_voxel_size = t.where(t.at("path"));
+  if (t.has("voxel_size")) {
+    m.options.voxel_size = t.number("voxel_size", 0.0, 0, HUGE_VAL, true);
+    m.where_voxel_size = t.where(t.at("voxel_size"));
+  }
+  m.options.band_voxels = t.number("band_voxels", m.options.band_voxels, 1, 100);
+  c.point = t.vec("point", c.point);
+  if (t.has("axes")) c.axes = parse_axes(t);
+  return m;
+}
+
+pipeline::Collider parse_collider(Table& t, std::size_t index, Scene& sc) {
   using pipeline::ColliderShape;
   require(t, "shape");
   pipeline::Collider c;
   c.shape = t.choice("shape", ColliderShape::Plane, kColliderShapeNames);
-  if (c.shape == ColliderShape::Mesh)
-    t.fail("shape", "\"mesh\" colliders are made in Python (mbi.Collider.mesh) or C++ (Collider::mesh); "
-                    "scene files take plane, sphere, box or capsule");
   const double inf = HUGE_VAL;
-  if (c.shape == ColliderShape::Plane) {
+  if (c.shape == ColliderShape::Mesh) {
+    sc.collider_meshes.push_back(parse_mesh_keys(t, c));
+    sc.collider_meshes.back().index = index;
+  } else if (c.shape == ColliderShape::Plane) {
     c.point = t.vec("point", c.point);
     c.normal = t.vec("normal", c.normal);
   } else if (c.shape == ColliderShape::Capsule) {
@@ -610,8 +614,10 @@ pipeline::Collider parse_collider(Table& t, std::size_t index) {
   c.motion = sim::RigidMotion{.axis = Eigen::Vector3d::UnitZ(), .stop = 1e30};
   if (t.has("motion")) parse_motion(t.sub("motion"), c.motion);
   t.finish();
+  pipeline::Collider checked = c;
+  if (c.shape == ColliderShape::Mesh) checked.shape = ColliderShape::Box;  // no level set yet: a box's checks of the rest
   try {
-    pipeline::check_collider(c, "colliders[" + std::to_string(index) + "]");
+    pipeline::check_collider(checked, "colliders[" + std::to_string(index) + "]");
   } catch (const mbi::Error& e) {
     throw Error(t.where(t.value()) + ": " + e.what());
   }
@@ -689,7 +695,7 @@ Scene parse_scene(std::string_view text, const std::filesystem::path& file) {
   const bool surface = sc.simulation.contact == pipeline::ContactMode::Surface;
   if (!colliders.empty() && !surface)
     top.fail("colliders", "[[colliders]] need simulation.contact = \"surface\" (contact at the dense surface)");
-  for (std::size_t k = 0; k < colliders.size(); ++k) sc.colliders.push_back(parse_collider(colliders[k], k));
+  for (std::size_t k = 0; k < colliders.size(); ++k) sc.colliders.push_back(parse_collider(colliders[k], k, sc));
   if (ground) sc.colliders.push_back(pipeline::Collider::plane({0, *ground, 0}, {0, 1, 0}));
   if (surface && sc.colliders.empty())
     throw Error(fname + ":1: simulation.contact: \"surface\" needs [[colliders]] or simulation.ground (nothing to touch)");

@@ -15,6 +15,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -197,6 +198,17 @@ struct OutputSpec {
   Eigen::Vector3d up{0.0, 1.0, 0.0};  ///< 3D pictures: the direction shown upwards
 };
 
+/// A [[colliders]] entry with shape = "mesh": the file of its closed triangle mesh and the
+/// options of its level set. Scene::colliders[index] is that collider, placed and moving as the
+/// entry says; read_collider_meshes gives it the level set built from the file.
+struct ColliderMesh {
+  std::size_t index = 0;        ///< into Scene::colliders
+  std::filesystem::path path;   ///< as written: relative paths start at the scene file's folder
+  pipeline::MeshLevelSetOptions options;
+  std::string where_path;       ///< "<file>:<line>" of the entry's path, for messages
+  std::string where_voxel_size; ///< of its voxel_size (of path when not given)
+};
+
 struct Scene {
   std::filesystem::path file;  ///< the scene file itself
   std::string name;
@@ -213,6 +225,8 @@ struct Scene {
   std::vector<DragSpec> drags;
   /// [[colliders]] (contact = surface), then the ground plane when simulation.ground is given
   std::vector<pipeline::Collider> colliders;
+  /// the colliders with shape = "mesh" (their level sets built by read_collider_meshes)
+  std::vector<ColliderMesh> collider_meshes;
   InterpolationSpec interpolation;
   OutputSpec output;
 };
@@ -222,12 +236,22 @@ struct Scene {
 /// parser (recursive) runs.
 inline constexpr int kMaxSceneNesting = 16;
 
-/// Reads and checks a scene file (a regular file: a directory, FIFO or device is refused).
+/// Reads and checks a scene file (a regular file: a directory, FIFO or device is refused), and
+/// builds the level sets of its mesh colliders from the files they name (read_collider_meshes).
 /// Throws Error naming file, line and key.
 Scene load_scene(const std::filesystem::path& file);
-/// load_scene on the text of a scene; `file` names it in messages and is where relative paths
-/// of the scene start from. Nothing is read from disk.
+/// The scene of a text; `file` names it in messages and is where relative paths of the scene
+/// start from. Nothing is read from disk: mesh colliders are placed but have no level set until
+/// read_collider_meshes (make_pipeline reads those still missing).
 Scene parse_scene(std::string_view text, const std::filesystem::path& file);
+
+/// The level set of a mesh collider, built from its file (pipeline::MeshLevelSet: well under a
+/// second at the default voxel size). Throws Error "<file>:<line>: colliders[i].<key>: ..." for
+/// a file that cannot be read, a mesh that is not closed, a voxel size too small for the mesh;
+/// in a build without model files (the page) the refusal of model_files.hpp.
+std::shared_ptr<const pipeline::MeshLevelSet> read_collider_mesh(const Scene& scene, const ColliderMesh& mesh);
+/// Gives every mesh collider of the scene that has none its level set (read_collider_mesh).
+void read_collider_meshes(Scene& scene);
 
 /// A path of the scene (dense.path, control.path, ...): relative paths start at the scene file's
 /// folder.
