@@ -230,3 +230,21 @@ def test_with_contact_refuses_what_the_step_cannot_take(scene):
         mbi.FramePipeline.with_contact(scene["U"], scene["T"], scene["V"], sim, [], points=[10**6])
     with pytest.raises(mbi.Error, match="stiffness"):
         mbi.FramePipeline.with_contact(scene["U"], scene["T"], scene["V"], sim, [], stiffness=-1.0)
+
+
+def test_from_scene_with_a_mesh_collider_steps_as_mbi_run_writes(scene, tmp_path):
+    """The ground as a scene's mesh collider (shape = "mesh", a box mesh whose top is the ground):
+    from_scene reads the file as `mbi run` does, and the ball rests on the mesh's top face."""
+    bv, bf = box_mesh((1.0, 0.1, 1.0))
+    mbi.write_surface(str(tmp_path / "floor.obj"), bv + (0.5, GROUND - 0.1, 0.5), bf.astype(np.int32))
+    text = scene["path"].read_text().replace(f"ground = {GROUND!r}\n", "")
+    scene["path"].write_text(text + '[[colliders]]\nshape = "mesh"\npath = "floor.obj"\n')
+    run = mbi.run_scene(scene["path"], scene["out"])
+    assert not run["failed"]
+    written = np.asarray(mbi.read_point_cache(os.path.join(run["out_dir"], "dense.pc2")).frames)
+    positions, figures = run_frames(mbi.FramePipeline.from_scene(scene["path"]), 24)
+    size = np.linalg.norm(np.ptp(scene["V"], axis=0))
+    assert np.abs(positions - written).max() <= 1e-6 * size  # the point cache holds float32
+    assert [f["touching"] for f in figures] == [f["contact_points"] for f in run["metrics"]["frames"]]
+    assert figures[-1]["touching"] > 0
+    assert abs(positions[-1][:, 1].min() - GROUND) <= 1e-3 * size
