@@ -46,6 +46,7 @@ from ._mbi import (  # noqa: E402
     FrameResult,
     GivenDriver,
     HandleDriver,
+    HarmonicExtension,
     ModifiedBI,
     OutsideWarning,
     Phong,
@@ -97,7 +98,8 @@ METHODS: Tuple[Method, ...] = ("bi", "modified-bi", "phong")
 
 __all__ = [
     "Cage", "Collider", "ControlMesh", "Deformer", "DiscontinuityTable", "Embedding", "Error", "FastEvaluator",
-    "FileError", "FramePipeline", "FrameResult", "GivenDriver", "HandleDriver", "INTEGRATORS", "METHODS",
+    "FileError", "FramePipeline", "FrameResult", "GivenDriver", "HandleDriver", "HarmonicExtension", "INTEGRATORS",
+    "METHODS",
     "ModifiedBI", "OutsideWarning", "Phong", "PointCache", "SOLVERS", "Simulator", "StaticResult", "StepResult",
     "Summary", "Surface", "batch", "bezier_bi", "bezier_points", "bezier_transpose", "boundary_faces", "box_mesh",
     "cage", "cholmod_available", "default_alpha", "discontinuity_table", "embed", "embedded_positions", "evaluate",

@@ -1,7 +1,8 @@
-// Embedding, embed() and the control-mesh helpers.
+// Embedding, embed() and the control-mesh helpers (HarmonicExtension among them).
 #include "bindings.hpp"
 
 #include <mbi/interp/embed.hpp>
+#include <mbi/interp/harmonic.hpp>
 #include <mbi/interp/mesh.hpp>
 #include <mbi/interp/modified_bi.hpp>
 #include <mbi/interp/threads.hpp>
@@ -35,6 +36,8 @@ py::array outside_view(const py::object& self) {
   return readonly_view(py::dtype::of<int>(), {static_cast<py::ssize_t>(e.outside.size())}, {sizeof(int)},
                        e.outside.data(), self);
 }
+
+py::array node_array(const Eigen::VectorXi& v) { return py::array_t<int>(v.size(), v.data()); }
 
 }  // namespace
 
@@ -105,6 +108,46 @@ void bind_embedding(py::module_& m) {
         return to_numpy(without_gil([&] { return interp::boundary_faces(c.U.map, c.T); }));
       },
       "U"_a, "T"_a, "(B, d) int32: the boundary faces, oriented outward.");
+
+  py::class_<interp::HarmonicExtension>(
+      m, "HarmonicExtension",
+      "Moves a control mesh's free nodes with its fixed ones: the harmonic extension (P1 stiffness of the rest "
+      "elements) of the fixed nodes' displacement; at rest the identity, affine motions kept.")
+      .def(py::init([](const py::object& U, const py::object& T, const py::object& fixed) {
+             const Mesh c = control_mesh(U, T);
+             const std::vector<int> f = fixed.is_none() ? std::vector<int>{} : index_list(fixed, "fixed", c.U.map.rows());
+             return without_gil([&] {
+               Eigen::VectorXi nodes;
+               if (fixed.is_none()) {  // the boundary
+                 const Eigen::VectorXi on = interp::boundary_vertices(static_cast<int>(c.U.map.rows()), c.T);
+                 nodes.resize(on.sum());
+                 for (Eigen::Index v = 0, k = 0; v < on.size(); ++v)
+                   if (on[v]) nodes[k++] = static_cast<int>(v);
+               } else {
+                 nodes = Eigen::Map<const Eigen::VectorXi>(f.data(), static_cast<Eigen::Index>(f.size()));
+               }
+               return interp::HarmonicExtension(c.U.map, c.T, nodes);
+             });
+           }),
+           "U"_a, "T"_a, "fixed"_a = py::none(),
+           "fixed: the nodes whose positions are given (indices or a boolean mask); None: the boundary's nodes.")
+      .def(
+          "apply",
+          [](const interp::HarmonicExtension& h, const py::object& X) {
+            const Eigen::Index n = h.free_nodes().size() + h.fixed_nodes().size();
+            const Input x = float_matrix(X, "X");
+            Eigen::MatrixXd Y = x.map;
+            if (Y.rows() < n) throw interp::Error("X must have a row per node (" + std::to_string(n) + "), got " +
+                                                 std::to_string(Y.rows()));
+            without_gil([&] { h.apply(Y); });
+            return to_numpy(std::move(Y));
+          },
+          "X"_a, "(n, d) float64: X with the free nodes' rows replaced (X is not modified).")
+      .def_property_readonly("free_nodes", [](const interp::HarmonicExtension& h) { return node_array(h.free_nodes()); },
+                             "ascending int32")
+      .def_property_readonly("fixed_nodes", [](const interp::HarmonicExtension& h) { return node_array(h.fixed_nodes()); },
+                             "ascending int32")
+      .def_property_readonly("memory_bytes", &interp::HarmonicExtension::memory_bytes);
 
   m.def("default_alpha", &interp::default_alpha, "d"_a, "modified-BI's default alpha: 0.1 in 3D, 0.2 in 2D.");
   m.def("cholmod_available", &interp::cholmod_available, "True when this build factors with CHOLMOD.");

@@ -207,3 +207,37 @@ def test_box_mesh_fills_its_box_with_positive_tetrahedra():
     mbi.validate_mesh(U, T)
     with pytest.raises(ValueError, match="at least one cell"):
         mbi.box_mesh(0, 1, 1)
+
+
+def test_harmonic_extension_against_a_dense_dirichlet_solve(mesh):
+    U, T = mesh
+    d = U.shape[1]
+    h = mbi.HarmonicExtension(U, T)  # fixed: the boundary's nodes
+    boundary = np.unique(mbi.boundary_faces(U, T))
+    assert np.array_equal(h.fixed_nodes, boundary) and h.free_nodes.dtype == np.int32
+    free = np.setdiff1d(np.arange(len(U)), boundary)
+    assert np.array_equal(h.free_nodes, free) and len(free) > 0
+    K = np.zeros((len(U), len(U)))  # P1 stiffness from numpy's own element gradients
+    for t in T:
+        E = (U[t[1:]] - U[t[0]]).T
+        G = np.vstack([-np.linalg.inv(E).sum(0), np.linalg.inv(E)])
+        K[np.ix_(t, t)] += abs(np.linalg.det(E)) / np.prod(np.arange(1, d + 1)) * G @ G.T
+    X = meshes.pose(U)
+    X_before = X.copy()
+    D = X - U
+    D[free] = np.linalg.solve(K[np.ix_(free, free)], -K[np.ix_(free, boundary)] @ D[boundary])
+    assert np.abs(h.apply(X) - (U + D)).max() < 1e-12
+    assert np.array_equal(X, X_before)  # the input is not modified
+    mask = np.zeros(len(U), dtype=bool)
+    mask[boundary] = True
+    assert np.abs(mbi.HarmonicExtension(U, T, fixed=mask).apply(X) - (U + D)).max() < 1e-12
+
+
+def test_harmonic_extension_refuses_bad_fixed_sets(mesh):
+    U, T = mesh
+    with pytest.raises(mbi.Error, match="given twice"):
+        mbi.HarmonicExtension(U, T, fixed=[0, 0])
+    with pytest.raises(mbi.Error, match="fixed"):
+        mbi.HarmonicExtension(U, T, fixed=[len(U)])
+    with pytest.raises(mbi.Error, match="row per node"):
+        mbi.HarmonicExtension(U, T).apply(U[:2])

@@ -65,6 +65,10 @@ def core(tmp: str) -> None:
     assert summary.max >= 0 and mbi.face_discontinuity(U, T, U, M).shape[0] == len(mbi.interior_faces(T))
     faces: I32 = mbi.boundary_faces(U, T)
     assert faces.shape[1] == 3
+    interior = mbi.HarmonicExtension(U, T)
+    moved: F64 = interior.apply(U)
+    nodes: I32 = interior.free_nodes
+    assert moved.shape == U.shape and len(nodes) + len(interior.fixed_nodes) == len(U) and interior.memory_bytes >= 0
     mbi.validate_mesh(U, T)
     mbi.set_threads(0)
     assert mbi.threads() >= 1 and isinstance(mbi.threads_available(), bool)
