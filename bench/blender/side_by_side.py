@@ -18,7 +18,8 @@ Per frame: wall time of scene.frame_set (the cage's key, the deformation, the mo
 re-evaluation), median and min over --runs passes of --frames frames. Quality (models up to 200K
 vertices): the change of the dihedral angles at the model's edges at the full 90-degree bend against
 the same bend applied to the model itself, mean and 99th percentile, degrees. Memory: resident set size
-after the frames minus before the bind, each read after malloc_trim (live memory, not free heap). A method that takes over --limit s (default 300) is
+after the frames minus before the bind, each read after the allocators (glibc's, Blender's jemalloc)
+hand free pages back (live memory, not free heap). A method that takes over --limit s (default 300) is
 reported as skipped. Subdivision: Catmull-Clark (Blender's Subdivision Surface, applied).
 --processes N runs each (model, subdivision, method) in N fresh processes and reports the median of
 each figure.
@@ -40,15 +41,25 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 METHODS = ("floor", "mbi", "mbi-boundary", "meshdeform", "surfacedeform")
 
 
-def rss_mb():
-    """Resident set size, after a garbage collection and glibc handing free heap pages back
-    (malloc_trim), so that the figure is what is live and not what an allocator happens to keep;
-    done the same for every method."""
-    gc.collect()
+def release_free_heap():
+    """Hands free heap pages back to the system: glibc's (malloc_trim) and jemalloc's, which
+    Debian's Blender links and which otherwise keeps freed pages for seconds (its decay)."""
     try:
         ctypes.CDLL("libc.so.6").malloc_trim(0)
     except (OSError, AttributeError):
         pass
+    process = ctypes.CDLL(None)
+    if hasattr(process, "mallctl"):  # jemalloc: this thread's cache, then every arena's free pages
+        for name in (b"thread.tcache.flush", b"arena.4096.purge"):
+            process.mallctl(name, None, None, None, ctypes.c_size_t(0))
+
+
+def rss_mb():
+    """Resident set size after a garbage collection and the allocators handing free heap pages
+    back, so that the figure is what is live and not what an allocator happens to keep; done the
+    same for every method."""
+    gc.collect()
+    release_free_heap()
     with open("/proc/self/status") as f:
         for line in f:
             if line.startswith("VmRSS:"):

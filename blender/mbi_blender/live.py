@@ -39,7 +39,7 @@ def _extension(cage, tets_count):
     entry = _extensions.get(cage.name_full)
     if entry is None or entry[0] != key:
         tets = storage.tets(cage.data)
-        entry = _extensions[cage.name_full] = (key, harmonic.Extension(U, tets, module.load().boundary_faces(U, tets)))
+        entry = _extensions[cage.name_full] = (key, harmonic.Extension(U, tets))
     return entry[1]
 
 
