@@ -580,3 +580,154 @@ TEST_CASE("surface contact: the points of elements far from every collider are s
     }
   }
 }
+
+namespace {
+
+/// n points spread evenly on the sphere of radius 1 about centre (a golden-angle spiral).
+Eigen::MatrixXd sphere_points(int n, const Eigen::Vector3d& centre) {
+  Eigen::MatrixXd P(n, 3);
+  for (int i = 0; i < n; ++i) {
+    const double y = 1 - 2 * (i + 0.5) / n, r = std::sqrt(1 - y * y), phi = 2.399963229728653 * i;
+    P.row(i) = (centre + Eigen::Vector3d(r * std::cos(phi), y, r * std::sin(phi))).transpose();
+  }
+  return P;
+}
+
+/// A ball of points in a 4^3-cell cage [0, 2.2]^3 over the plane y = 0.1 (touching it at rest),
+/// with friction; x0: the cage moved 5 cm down into it (a cap of 2.5% of the ball's surface).
+struct Ball {
+  mbi::test::Mesh mesh = mbi::test::box_tet_mesh(4, 4, 4, Eigen::Vector3d::Constant(2.2));
+  std::shared_ptr<Deformer> deformer;
+  std::unique_ptr<SurfaceContact> contact;
+  Eigen::VectorXd x0;
+  explicit Ball(int points, Method method = Method::BI) {
+    DeformerOptions opt;
+    opt.method = method;
+    deformer = std::make_shared<Deformer>(mesh.U, mesh.T, sphere_points(points, Eigen::Vector3d::Constant(1.1)), opt);
+    Collider plane = Collider::plane({0, 0.1, 0}, {0, 1, 0}, 0.5);
+    plane.motion.velocity = Eigen::Vector3d(0.2, 0, 0.1);  // sliding under the ball: lagged friction
+    contact = std::make_unique<SurfaceContact>(deformer, std::vector<Collider>{plane}, 1e4);
+    contact->set_max_depth(0.2);
+    contact->set_friction_velocity(0.3);
+    x0.resize(3 * mesh.U.rows());
+    for (Eigen::Index i = 0; i < mesh.U.rows(); ++i) x0.segment<3>(3 * i) = mesh.U.row(i).transpose() - Eigen::Vector3d(0, 0.05, 0);
+  }
+};
+
+/// Adds to f the lagged friction of a substep from the start positions x0 (times t0 to the
+/// contact's time), from the laws alone: per point and collider inside at the start, mu lambda
+/// f0(|u|) with u the slip projected on the tangent plane (f0 depends on |u| only).
+template <typename Depth>
+void add_friction(const Deformer& deformer, const SurfaceContact& contact, const Eigen::VectorXd& x0, double t0,
+                  const Eigen::VectorXd& x, Depth depth, double eps, Full& f) {
+  const Eigen::MatrixXd P0 = contact.points(x0), P = contact.points(x);
+  const mbi::interp::Embedding& emb = deformer.embedding();
+  const Eigen::MatrixXi& T = deformer.elements_matrix();
+  const double t1 = contact.time();
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(P.rows(), 3);
+  for (Eigen::Index p = 0; p < P.rows(); ++p)
+    for (size_t c = 0; c < contact.colliders().size(); ++c) {
+      const Collider& col = contact.colliders()[c];
+      const Eigen::Vector3d q0 = P0.row(p).transpose();
+      const Distance d = signed_distance(col, q0, t1);
+      if (d.value >= 0 || col.friction == 0) continue;
+      const double w = -col.friction * contact::normal_energy(d.value, contact.stiffness(), depth(p, c)).slope;
+      Eigen::Matrix<double, 3, 2> B;
+      B.col(0) = d.normal.unitOrthogonal();
+      B.col(1) = d.normal.cross(B.col(0));
+      const Eigen::Vector2d u = B.transpose() * (P.row(p).transpose() - q0 - collider_displacement(col, q0, t0, t1));
+      f.energy += w * contact::friction_f0(u.norm(), eps);
+      G.row(p) += (w * contact::friction_f1_over_y(u.norm(), eps) * (B * u)).transpose();
+      const Eigen::Matrix3d K = B * (w * contact::friction_hessian(u, eps)) * B.transpose();
+      for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b)
+          f.hessian.block<3, 3>(3 * T(emb.element(p), a), 3 * T(emb.element(p), b)) += emb.bary(p, a) * emb.bary(p, b) * K;
+    }
+  const Eigen::MatrixXd GX = deformer.vjp(G);
+  for (Eigen::Index i = 0; i < GX.rows(); ++i) f.gradient.segment<3>(3 * i) += GX.row(i).transpose();
+}
+
+}  // namespace
+
+TEST_CASE("surface contact: the broad phase's candidates give the contact of every point, with friction, "
+          "over two substeps of Newton-like iterates", "[pipeline][contact]") {
+  // A ball of points 5 cm into a sliding plane: the start, then moves (the cage sinking 4 mm
+  // with a random 1 mm), one that lifts the ball 0.3 m off the plane (its friction points then lie in
+  // elements far from the plane) and back, in two substeps.
+  for (Method m : {Method::BI, Method::ModifiedBI}) {
+    Ball ball(3000, m);
+    SurfaceContact& contact = *ball.contact;
+    std::mt19937 rng(31);
+    std::uniform_real_distribution<double> w(-1e-3, 1e-3);
+    Eigen::VectorXd sink(ball.x0.size()), lift = Eigen::VectorXd::Zero(ball.x0.size());
+    for (Eigen::Index k = 0; k < sink.size(); ++k) sink(k) = w(rng) + (k % 3 == 1 ? -4e-3 : 0.0);
+    for (Eigen::Index k = 1; k < lift.size(); k += 3) lift(k) = 0.3;
+    Eigen::VectorXd start = ball.x0;
+    for (double t0 : {0.0, 0.01}) {
+      INFO("method " << static_cast<int>(m) << ", substep from " << t0 << " s");
+      contact.begin_substep_at(t0, t0 + 0.01, start, sink / 0.01);
+      REQUIRE(contact.friction_pairs() > 20);
+      const Eigen::MatrixXd P0 = contact.points(start);
+      const auto depth = [&](Eigen::Index p, size_t c) {
+        return signed_distance(contact.colliders()[c], P0.row(p).transpose(), contact.time()).value > -0.2
+                   ? 0.2 : std::numeric_limits<double>::infinity();
+      };
+      for (const Eigen::VectorXd& x : {Eigen::VectorXd(start), Eigen::VectorXd(start + sink),
+                                       Eigen::VectorXd(start + 0.5 * sink + lift), Eigen::VectorXd(start + 2 * sink)}) {
+        Full f = full_contact(*ball.deformer, contact, x, depth);
+        add_friction(*ball.deformer, contact, start, t0, x, depth, 0.3 * 0.01, f);
+        CHECK(contact.touching(x) == f.touching);
+        CHECK(std::abs(contact.energy(x) - f.energy) <= 1e-12 * f.energy);
+        CHECK((gradient(contact, x) - f.gradient).norm() <= 1e-12 * f.gradient.norm());
+        CHECK((dense_hessian(contact, x) - f.hessian).norm() <= 1e-12 * f.hessian.norm());
+      }
+      // the line and the cap on the move start -> start + 2 sink
+      contact.begin_line(start, 2 * sink);
+      for (double s : {1.0, 0.5}) {
+        Full f = full_contact(*ball.deformer, contact, start + 2 * s * sink, depth);
+        add_friction(*ball.deformer, contact, start, t0, start + 2 * s * sink, depth, 0.3 * 0.01, f);
+        CHECK(std::abs(contact.energy_along(s) - f.energy) <= 1e-12 * f.energy);
+      }
+      const Eigen::MatrixXd P = contact.points(start), D = contact.points(2 * sink) - contact.points(Eigen::VectorXd::Zero(sink.size()));
+      double cap = 1.0;
+      for (Eigen::Index p = 0; p < P.rows(); ++p)
+        if (!std::isinf(depth(p, 0)))
+          cap = std::min(cap, contact::advance(contact.colliders()[0], P.row(p).transpose(), D.row(p).transpose(), contact.time(), 0.2));
+      CHECK(std::abs(contact.max_step(start, 2 * sink) - cap) <= 1e-12 * cap);
+      start += sink;
+    }
+  }
+}
+
+TEST_CASE("surface contact: on a resting contact the candidates are at most twice the points with a term, "
+          "and grow with them, at 3,000 and 12,000 points", "[pipeline][contact]") {
+  // A Newton-like substep of the ball 5 cm into the plane: iterates 1 mm apart.
+  std::vector<double> candidates;
+  for (int points : {3000, 12000}) {
+    Ball ball(points);
+    SurfaceContact& contact = *ball.contact;
+    std::mt19937 rng(37);
+    std::uniform_real_distribution<double> w(-1e-3, 1e-3);
+    Eigen::VectorXd step(ball.x0.size());
+    for (Eigen::Index k = 0; k < step.size(); ++k) step(k) = w(rng);
+    contact.begin_substep_at(0.0, 0.01, ball.x0, Eigen::VectorXd::Zero(ball.x0.size()));
+    contact.reset_counts();
+    Eigen::VectorXd x = ball.x0;
+    for (int iteration = 0; iteration < 3; ++iteration, x += step) {
+      contact.max_step(x, step);
+      contact.begin_line(x, step);
+      Eigen::VectorXd g = gradient(contact, x);
+      (void)g;
+    }
+    const SurfaceContact::Counts& c = contact.counts();
+    INFO(points << " points: " << c.candidates << " candidates, " << c.active << " with a term in "
+                << c.evaluations << " evaluations; " << c.move_candidates << " candidates in " << c.moves << " moves");
+    CHECK(c.evaluations == 3);
+    CHECK(c.moves == 3);
+    CHECK(c.active >= 3 * 0.02 * points);  // about 2.5% of the surface is inside the plane
+    CHECK(c.candidates <= 2 * c.active);
+    CHECK(c.move_candidates <= 2 * c.active);
+    candidates.push_back(static_cast<double>(c.candidates));
+  }
+  CHECK(candidates[1] / candidates[0] == Approx(4).epsilon(0.15));  // linear in the points that touch
+}
