@@ -1,0 +1,58 @@
+#pragma once
+// Colliders under the mouse: a rigid collider of surface contact (pipeline/colliders.hpp) as
+// triangles at its pose, to draw it and to pick it with cast(), and the motion that carries a
+// grabbed collider to the cursor within one step, so that the contact solve sees its velocity.
+//
+//   ColliderMesh m = collider_mesh(ball, time, {.plane_half = 2, .plane_center = middle});
+//   std::optional<ColliderHit> h = pick_collider(ray, colliders, time);   // planes never
+//   contact.set_collider(h->collider, dragged(colliders[h->collider], time, to - from, dt));
+#include <mbi/interact/pick.hpp>
+#include <mbi/pipeline/colliders.hpp>
+
+#include <Eigen/Core>
+
+#include <optional>
+#include <vector>
+
+namespace mbi::interact {
+
+/// A collider's surface: triangles with an outward unit normal per vertex (flat faces have their
+/// own vertices), world units (m).
+struct ColliderMesh {
+  Eigen::MatrixXd V;  ///< n x 3
+  Eigen::MatrixXd N;  ///< n x 3
+  Eigen::MatrixXi F;  ///< t x 3, counter-clockwise seen from outside
+};
+
+/// A plane is infinite: it is drawn as a square of half side `plane_half` (m) about the point of
+/// the plane nearest `plane_center`.
+struct ColliderMeshOptions {
+  double plane_half = 1.0;
+  Eigen::Vector3d plane_center = Eigen::Vector3d::Zero();
+};
+
+/// The surface of `collider` at `time` (s): a sphere or a capsule as a 32 x 16 latitude-longitude
+/// mesh (vertices on the exact surface), a box's six faces, a mesh collider's bounding box at its
+/// pose (its level set keeps no triangles), a plane as the square of `options`. Throws Error
+/// on a plane_half <= 0 or not finite, or a non-finite plane_center.
+ColliderMesh collider_mesh(const pipeline::Collider& collider, double time, const ColliderMeshOptions& options = {});
+
+struct ColliderHit {
+  int collider = -1;  ///< index into the colliders given
+  Hit hit;            ///< on its collider_mesh (face, t, point)
+};
+
+/// The collider whose collider_mesh at `time` the ray meets first (cast(), ties to the lower
+/// index); planes are never picked (a click on the floor orbits). nullopt on a miss. Throws
+/// Error as cast() on a bad ray. O(colliders x 1,000 triangles).
+std::optional<ColliderHit> pick_collider(const Ray& ray, const std::vector<pipeline::Collider>& colliders, double time);
+
+/// `collider` as it is at `time`, carried by `displacement` (m): with dt > 0 (s) at constant
+/// velocity displacement / dt from `time` to `time + dt` and at rest after (its motion), so that
+/// contact sees a moving collider (friction, advancement); with dt = 0 moved at once (no step
+/// follows: the simulation is paused). Its scripted motion, if any, ends at `time`. Throws Error
+/// on a non-finite displacement, a dt < 0 or not finite, a non-finite time.
+pipeline::Collider dragged(const pipeline::Collider& collider, double time, const Eigen::Vector3d& displacement,
+                           double dt);
+
+}  // namespace mbi::interact
