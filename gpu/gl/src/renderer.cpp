@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <set>
+#include <string>
 #include <utility>
 
 namespace mbi::gpu {
@@ -74,6 +75,8 @@ Renderer::Renderer(Context& context) : context_(context) {
 Renderer::~Renderer() {
   if (line_buffer_) glDeleteBuffers(1, &line_buffer_);
   if (line_vao_) glDeleteVertexArrays(1, &line_vao_);
+  if (mesh_buffers_[0]) glDeleteBuffers(3, mesh_buffers_);
+  if (mesh_vao_) glDeleteVertexArrays(1, &mesh_vao_);
   if (fbo_) glDeleteFramebuffers(1, &fbo_);
   const GLuint rbs[] = {color_, depth_};
   for (GLuint r : rbs)
@@ -190,6 +193,50 @@ void Renderer::draw_textured(const GpuEvaluator& ev, const Eigen::Matrix4d& view
   surface_.draw(ev, {.normals = false});
   glUseProgram(0);
   detail::check("Renderer::draw_textured");
+}
+
+void Renderer::draw_mesh(const Eigen::MatrixXd& V, const Eigen::MatrixXd& N, const Eigen::MatrixXi& F,
+                         const Eigen::Matrix4d& view_projection, const Eigen::Vector3d& eye_direction,
+                         const Eigen::Vector3d& color) {
+  if (V.cols() != 3 || N.rows() != V.rows() || N.cols() != 3 || F.cols() != 3)
+    throw Error("Renderer::draw_mesh: V and N need n x 3, F t x 3");
+  if (F.size() > 0 && (F.minCoeff() < 0 || F.maxCoeff() >= V.rows()))
+    throw Error("Renderer::draw_mesh: F indexes vertices outside V's " + std::to_string(V.rows()) + " rows");
+  if (F.rows() == 0) return;
+  if (!mesh_vao_) {
+    glGenVertexArrays(1, &mesh_vao_);
+    glGenBuffers(3, mesh_buffers_);
+  }
+  const Eigen::Vector3d origin = V.colwise().mean().transpose();
+  const Eigen::MatrixXf P = (V.rowwise() - origin.transpose()).cast<float>().transpose();  // 3 x n: rows of floats
+  const Eigen::MatrixXf Nf = N.cast<float>().transpose();
+  const Eigen::Matrix<unsigned, Eigen::Dynamic, Eigen::Dynamic> I = F.cast<unsigned>().transpose();
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  const Eigen::Matrix4f vp = relative_to(view_projection, origin);
+  const Eigen::Vector3f eye = eye_direction.normalized().cast<float>();
+  glUseProgram(mesh_program_);
+  glUniformMatrix4fv(glGetUniformLocation(mesh_program_, "view_projection"), 1, GL_FALSE, vp.data());
+  glUniform3f(glGetUniformLocation(mesh_program_, "eye_direction"), eye.x(), eye.y(), eye.z());
+  glUniform3f(glGetUniformLocation(mesh_program_, "color"), static_cast<float>(color.x()),
+              static_cast<float>(color.y()), static_cast<float>(color.z()));
+  glBindVertexArray(mesh_vao_);
+  const float* arrays[2] = {P.data(), Nf.data()};
+  for (int k = 0; k < 2; ++k) {  // locations 0 (rest) and 2 (normal); the displacement stays 0
+    glBindBuffer(GL_ARRAY_BUFFER, mesh_buffers_[k]);
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(V.size() * sizeof(float)), arrays[k], GL_STREAM_DRAW);
+    glEnableVertexAttribArray(static_cast<GLuint>(2 * k));
+    glVertexAttribPointer(static_cast<GLuint>(2 * k), 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+  }
+  glDisableVertexAttribArray(1);
+  glVertexAttrib3f(1, 0.0f, 0.0f, 0.0f);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, mesh_buffers_[2]);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(F.size() * sizeof(unsigned)), I.data(), GL_STREAM_DRAW);
+  glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(F.size()), GL_UNSIGNED_INT, nullptr);
+  glBindVertexArray(0);
+  glUseProgram(0);
+  glDisable(GL_DEPTH_TEST);
+  detail::check("Renderer::draw_mesh");
 }
 
 void Renderer::draw_points(const Eigen::MatrixXd& points, const Eigen::Matrix4d& view_projection,

@@ -69,6 +69,12 @@ class Renderer {
   /// slightly in front of a surface that draw() drew there; the depth test stays on.
   void draw_material(const GpuEvaluator& evaluator, const Eigen::Matrix4d& view_projection,
                      const Eigen::Matrix3d& view_rotation, const Eigen::Vector3d& color);
+  /// Draws a triangle mesh given on the CPU (V n x 3 world, N n x 3 unit normals, F t x 3 rows
+  /// of V) shaded as draw() shades the surface, in `color`; depth test on, as draw(). Throws
+  /// Error on shapes that disagree or an index outside V.
+  void draw_mesh(const Eigen::MatrixXd& V, const Eigen::MatrixXd& N, const Eigen::MatrixXi& F,
+                 const Eigen::Matrix4d& view_projection, const Eigen::Vector3d& eye_direction,
+                 const Eigen::Vector3d& color);
   /// Draws points (k x 3, world) as squares of `size` pixels in a flat colour, over everything.
   void draw_points(const Eigen::MatrixXd& points, const Eigen::Matrix4d& view_projection,
                    const Eigen::Vector3d& color, float size);
@@ -83,6 +89,7 @@ class Renderer {
   Surface surface_;
   unsigned mesh_program_ = 0, line_program_ = 0, colors_program_ = 0;
   unsigned line_vao_ = 0, line_buffer_ = 0;
+  unsigned mesh_vao_ = 0, mesh_buffers_[3] = {0, 0, 0};  // draw_mesh: positions, normals, indices
   unsigned fbo_ = 0, color_ = 0, depth_ = 0;
   unsigned texture_program_ = 0, texture_ = 0;
   unsigned material_program_ = 0, ground_program_ = 0, ground_vao_ = 0, ground_corners_ = 0;
