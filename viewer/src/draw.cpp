@@ -1,5 +1,6 @@
 #include "draw.hpp"
 
+#include "colliders.hpp"
 #include "crease_layer.hpp"
 #include "scenery.hpp"
 
@@ -45,6 +46,7 @@ void draw_views(gpu::Renderer& renderer, Stage& stage, const Interaction& in, co
   if (scenery && !stage.ground) stage.ground = std::make_shared<Ground>(ground_at_rest(stage.U, stage.rest_dense, options.up));
   Ground ground = scenery ? *stage.ground : Ground{};
   if (scenery) cast_shadow(ground, X3);
+  const CollidersNow colliders = colliders_now(stage, scenery ? &ground : nullptr, options.up);
   const int n = static_cast<int>(stage.views.size());
   double gpu_ms = 0;
   for (int k = 0; k < n; ++k) {
@@ -64,6 +66,7 @@ void draw_views(gpu::Renderer& renderer, Stage& stage, const Interaction& in, co
       renderer.draw_colors(stage.gpu, vp, camera.direction(), stage.creases->views()[static_cast<size_t>(k)].rgb);
     if (stage.d == 2)
       renderer.draw_textured(stage.gpu, vp, *stage.image);
+    if (stage.d == 3) draw_colliders(renderer, colliders, in.grabbed_collider(), vp, camera.direction());
     draw_markers(renderer, in, options, X3, vp);
   }
   gpu::viewport(0, 0, fb_width, fb_height);

@@ -1,6 +1,6 @@
 #pragma once
-// Drawing a frame (internal): every view from the GPU evaluator's buffers, with the control
-// wireframe, handle and poke markers; the frame's times.
+// Drawing a frame (internal): every view from the GPU evaluator's buffers, with the colliders of
+// surface contact, the control wireframe, handle and poke markers; the frame's times.
 #include "interaction.hpp"
 
 #include <mbi/gpu/renderer.hpp>

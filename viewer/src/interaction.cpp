@@ -1,5 +1,6 @@
 #include "interaction.hpp"
 
+#include <mbi/interact/collider.hpp>
 #include <mbi/interp/control.hpp>
 
 #include <algorithm>
@@ -28,7 +29,7 @@ void Interaction::press(double x, double y, int button, const WindowSize& window
   if (direct_) {
     if (grab_handle(nearest_control_vertex(x, y, view, window))) return;
   } else if (stage_.simulation() && stage_.d == 3) {
-    if (start_poke(x, y, view, window)) return;
+    if (grab_under(x, y, view, window)) return;
   }
   drag_ = stage_.d == 2 ? Drag::Pan : Drag::Orbit;
 }
@@ -43,6 +44,8 @@ void Interaction::move(double x, double y, const WindowSize& window) {
         poke_target(ray_at(x, y, view_of_drag_, window), poke_.point, camera_.direction(), 0.5 * stage_.size);
     stage_.simulation()->simulator().set_poke_target(poke_.handle, poke_.target);
   }
+  if (drag_ == Drag::Collider)  // as far as a poke's target may go, but from the collider's grab
+    collider_target_ = poke_target(ray_at(x, y, view_of_drag_, window), collider_grab_, camera_.direction(), 2 * stage_.size);
   if (drag_ == Drag::Handle && dragged_handle_ >= 0 && dragged_handle_ < static_cast<int>(handles_.size())) {
     const Eigen::Index k = dragged_handle_;
     const Eigen::Vector3d from = pad3(handle_targets_.row(k));
@@ -64,6 +67,7 @@ void Interaction::scroll(double dy) { camera_.zoom(dy); }
 void Interaction::set_direct(bool on) {
   if (on == direct_) return;
   release_poke();
+  if (drag_ == Drag::Collider) drag_ = Drag::None;
   direct_ = on;
   if (on) {
     handles_.clear();
@@ -82,9 +86,21 @@ void Interaction::release_poke() {
   poke_.handle = -1;
 }
 
+void Interaction::carry_collider(double dt) {
+  pipeline::SurfaceContact* contact = stage_.contact();
+  if (drag_ != Drag::Collider || !contact) return;
+  const size_t i = static_cast<size_t>(grabbed_collider_);
+  contact->set_collider(i, interact::dragged(contact->colliders()[i], stage_.time(), collider_target_ - collider_carried_, dt));
+  collider_carried_ = collider_target_;
+}
+
 void Interaction::reset() {
   release_poke();
+  if (drag_ == Drag::Collider) drag_ = Drag::None;
   stage_.pipe.reset();
+  pipeline::SurfaceContact* contact = stage_.contact();
+  if (contact && contact->colliders().size() == stage_.scene_colliders.size())
+    for (size_t i = 0; i < stage_.scene_colliders.size(); ++i) contact->set_collider(i, stage_.scene_colliders[i]);
   stage_.pipe.step(false);
 }
 
@@ -136,23 +152,37 @@ bool Interaction::grab_handle(int vertex) {
   return true;
 }
 
-bool Interaction::start_poke(double x, double y, int view, const WindowSize& window) {
+bool Interaction::grab_under(double x, double y, int view, const WindowSize& window) {
   const Ray ray = ray_at(x, y, view, window);
   if (!ray.origin.allFinite()) return false;  // a cursor far outside the window picks nothing
   Eigen::MatrixXd V;
   stage_.pipe.evaluate_with(stage_.views[static_cast<size_t>(view)], V);
-  const std::optional<Hit> hit = cast(ray, V, stage_.F);
-  if (!hit) return false;
+  const std::optional<Hit> model = cast(ray, V, stage_.F);
+  const pipeline::SurfaceContact* contact = stage_.contact();
+  const std::optional<interact::ColliderHit> collider =
+      contact ? interact::pick_collider(ray, contact->colliders(), stage_.time()) : std::nullopt;
+  if (collider && (!model || collider->hit.t < model->t)) {
+    release_poke();
+    grabbed_collider_ = collider->collider;
+    collider_grab_ = collider_target_ = collider_carried_ = collider->hit.point;
+    drag_ = Drag::Collider;
+    return true;
+  }
+  if (!model) return false;
+  start_poke(*model);
+  return true;
+}
+
+void Interaction::start_poke(const Hit& hit) {
   sim::Simulator& sim = stage_.simulation()->simulator();
   Poke p;
   static_cast<interact::Grab&>(p) =
-      interact::grab(*hit, stage_.rest_dense, stage_.F, stage_.U, stage_.T, sim.masses(), opt_.poke_response);
+      interact::grab(hit, stage_.rest_dense, stage_.F, stage_.U, stage_.T, sim.masses(), opt_.poke_response);
   p.target = p.point;
   release_poke();
   p.handle = sim.add_poke(p.element, p.bary, p.target, p.stiffness);
   poke_ = p;
   drag_ = Drag::Poke;
-  return true;
 }
 
 void Interaction::use_handles() {

@@ -14,6 +14,7 @@ namespace {
 const char* kHelp =
     "Mouse (left button):\n"
     "  on the model      poke: grab the surface, a spring pulls it to the cursor\n"
+    "  on a collider     drag it: it follows the cursor and pushes the model\n"
     "  direct mode       click a control vertex: it becomes a handle; drag it\n"
     "  on the background orbit (2D: pan)\n"
     "  right drag        pan; right click on a handle removes it\n"
@@ -22,6 +23,7 @@ const char* kHelp =
     "Keys:\n"
     "  space  play / pause      n  one step        r  reset\n"
     "  d      direct mode on/off (drag handles, no physics)\n"
+    "  t      contact on/off (surface contact scenes)\n"
     "  m      next method       s  split view (BI | method)\n"
     "  w      control wireframe h  handle markers\n"
     "  g      creases in colour (the gradient jump at the control faces)\n"
@@ -105,6 +107,16 @@ void material(Stage& stage, Interaction& in) {
   in.reset();
 }
 
+// Surface contact on or off, the points touching a collider; the colliders are dragged in the views.
+void contact(Stage& stage, const pipeline::SimulatorDriver& sd) {
+  const pipeline::SurfaceContact* c = stage.contact();
+  if (!c) return;
+  bool on = stage.contact_on();
+  if (ImGui::Checkbox("contact (t)", &on)) stage.set_contact(on);
+  ImGui::Text("touching: %d of %lld points", sd.touching_points(), c->contact_points());
+  ImGui::TextDisabled("colliders: %zu (drag one to push)", c->colliders().size());
+}
+
 void simulation(Stage& stage, Interaction& in, ViewerOptions& options, Controls& controls) {
   pipeline::SimulatorDriver* sd = stage.simulation();
   if (!sd) return;
@@ -113,6 +125,7 @@ void simulation(Stage& stage, Interaction& in, ViewerOptions& options, Controls&
   float response = static_cast<float>(options.poke_response);
   if (ImGui::SliderFloat("poke response (s)", &response, 0.02f, 1.0f, "%.2f")) options.poke_response = response;
   if (in.poke().handle >= 0) ImGui::Text("poke: stiffness %.3g N/m", in.poke().stiffness);
+  contact(stage, *sd);
 }
 
 // Docked at the left edge, the layout's width and the window's height; its arrow folds it.

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <utility>
 
 namespace mbi::viewer {
@@ -180,6 +181,41 @@ nlohmann::json creases_report(const CreaseLayer& creases, const Stage& stage) {
   return {{"top", creases.top()}, {"legend", {l.x, l.y, l.w, l.h}}, {"views", views}};
 }
 
+// Surface contact now: on or off, the points touching (the driver's count), the contact
+// points' mean position and each collider's pose, its window position in the last view and
+// its gap (the least signed distance of a contact point to it, m: negative is a penetration).
+nlohmann::json contact_report(const Stage& stage, const Interaction& in, const pipeline::SurfaceContact& contact,
+                              const Camera& camera, const WindowSize& window) {
+  const Eigen::MatrixXd X = stage.pipe.control_positions().transpose();  // 3 x n: x y z of each node
+  const Eigen::MatrixXd P = contact.points(Eigen::Map<const Eigen::VectorXd>(X.data(), X.size()));
+  const Rect& r = stage.layout.views.back();
+  nlohmann::json cs = nlohmann::json::array();
+  double deepest = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < contact.colliders().size(); ++i) {
+    const pipeline::Collider c = pipeline::posed(contact.colliders()[i], stage.time());
+    double gap = std::numeric_limits<double>::infinity();
+    for (Eigen::Index p = 0; p < P.rows(); ++p) gap = std::min(gap, pipeline::signed_distance(c, P.row(p).transpose(), 0).value);
+    deepest = std::min(deepest, gap);
+    const Eigen::Vector2d q = camera.project(c.point, static_cast<int>(std::lround(r.w)), window.height);
+    cs.push_back({{"shape", scenes::kColliderShapeNames.name(c.shape)},
+                  {"point", xyz(c.point)},
+                  {"window", {q.x() + r.x, q.y()}},
+                  {"gap", gap},
+                  {"grabbed", in.grabbed_collider() == static_cast<int>(i)}});
+  }
+  const pipeline::SimulatorDriver* sd = stage.simulation();
+  nlohmann::json j = {{"on", stage.contact_on()},
+                      {"touching", sd ? sd->touching_points() : 0},
+                      {"points", contact.contact_points()},
+                      {"points_mean", xyz(P.colwise().mean().transpose())},
+                      {"max_depth", contact.max_depth()},
+                      {"deepest", deepest},
+                      {"colliders", cs}};
+  if (in.grabbed_collider() >= 0)
+    j["drag"] = {{"collider", in.grabbed_collider()}, {"grab", xyz(in.collider_grab())}, {"target", xyz(in.collider_target())}};
+  return j;
+}
+
 }  // namespace
 
 nlohmann::json frame_report(const Stage& stage, const Interaction& in, const FrameTimes& times,
@@ -234,6 +270,8 @@ nlohmann::json frame_report(const Stage& stage, const Interaction& in, const Fra
     fr["control_window"] = cs;
   }
   if (stage.creases && stage.creases->shown) fr["creases"] = creases_report(*stage.creases, stage);
+  if (const pipeline::SurfaceContact* c = stage.contact(); c && stage.d == 3)
+    fr["contact"] = contact_report(stage, in, *c, camera, window);
   return fr;
 }
 }  // namespace mbi::viewer

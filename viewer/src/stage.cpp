@@ -42,6 +42,7 @@ Stage::Stage(const Shown& shown)
   hi.head(d) = U.colwise().maxCoeff().transpose();
   size = (hi - lo).norm();
   alpha = interp::resolve_alpha(pipe.options().interp, d);
+  if (const pipeline::SurfaceContact* c = contact()) scene_colliders = c->colliders();
 }
 
 void Stage::set_views(bool split) {
@@ -75,6 +76,34 @@ void Stage::frame(Camera& camera, const Eigen::Vector3d& up) const {
 
 pipeline::SimulatorDriver* Stage::simulation() const {
   return dynamic_cast<pipeline::SimulatorDriver*>(&pipe.driver());
+}
+
+pipeline::SurfaceContact* Stage::contact() const {
+  const pipeline::SimulatorDriver* sd = simulation();
+  if (!sd) return nullptr;
+  return sd->contact() ? sd->contact().get() : parked.get();
+}
+
+bool Stage::contact_on() const {
+  const pipeline::SimulatorDriver* sd = simulation();
+  return sd && sd->contact();
+}
+
+void Stage::set_contact(bool on) {
+  pipeline::SimulatorDriver* sd = simulation();
+  if (!sd || on == contact_on() || !contact()) return;
+  if (on) {
+    sd->set_contact(parked);
+    parked.reset();
+  } else {
+    parked = sd->contact();
+    sd->set_contact(nullptr);
+  }
+}
+
+double Stage::time() const {
+  const pipeline::SimulatorDriver* sd = simulation();
+  return sd ? sd->simulator().time() : 0.0;
 }
 
 Eigen::MatrixXd Stage::control_positions_3d() const {

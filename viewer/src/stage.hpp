@@ -78,6 +78,15 @@ struct Stage {
   void frame(Camera& camera, const Eigen::Vector3d& up) const;
   /// The pipeline's driver when it is a simulation, else nullptr.
   pipeline::SimulatorDriver* simulation() const;
+  /// The simulation's surface contact, on or switched off (kept in `parked`); else nullptr.
+  pipeline::SurfaceContact* contact() const;
+  bool contact_on() const;
+  /// Contact on or off from the next step on (a simulation with surface contact; else nothing).
+  void set_contact(bool on);
+  /// The simulation's time (s; 0 without one): the colliders' pose drawn and dragged.
+  double time() const;
+  std::vector<pipeline::Collider> scene_colliders;  ///< as the scene gave them: reset puts them back
+  std::shared_ptr<pipeline::SurfaceContact> parked;  ///< the contact while switched off
   /// The current control positions, n x 3 (z = 0 in 2D).
   Eigen::MatrixXd control_positions_3d() const;
   Layout layout;  ///< this frame's: the panel and the views (the Viewer sets it)

@@ -248,6 +248,7 @@ void Viewer::Impl::key(const std::string& k, Stage& stage, Interaction& in) {
   else if (k == "n") controls.step_once = true;
   else if (k == "r") in.reset();
   else if (k == "d") in.set_direct(!in.direct());
+  else if (k == "t") stage.set_contact(!stage.contact_on());
   else if (k == "m") {
     const auto& all = pipeline::all_methods();
     auto it = std::find(all.begin(), all.end(), stage.pipe.method());
@@ -287,13 +288,17 @@ void Viewer::Impl::snapshot() {
 }
 
 // One step when playing or asked to; direct mode has no time: it follows the handles every frame.
+// A dragged collider moves to the cursor within the step (at once when paused).
 void Viewer::Impl::advance(Stage& stage, Interaction& in) {
-  if (!(opt.playing || controls.step_once || in.direct())) return;
+  const bool stepping = opt.playing || controls.step_once || in.direct();
+  const pipeline::SimulatorDriver* sd = stage.simulation();
+  in.carry_collider(stepping && sd ? sd->simulator().params().dt : 0.0);
+  if (!stepping) return;
   const pipeline::FrameResult r = stage.pipe.step(false);
   if (!r.ok) {
     controls.message = "step failed: " + r.message + " (paused; r resets)";
     opt.playing = false;
-    in.release_poke();
+    in.release();
   }
   controls.step_once = false;
 }

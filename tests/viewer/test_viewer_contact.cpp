@@ -1,0 +1,140 @@
+// Contact in the viewer: a ball resting on a ground plane with a sphere collider beside it; a
+// scripted mouse drag carries the sphere into the ball. The sphere follows the cursor on the
+// plane facing the camera, the ball is pushed away, points touch while it pushes, and no dense
+// point goes deeper into a collider than the contact's max depth (the depth guarded points never
+// pass). Checked through the per-frame report under Xvfb.
+#include <catch2/catch.hpp>
+
+#include <mbi/viewer/camera.hpp>
+
+#include "viewer_run.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace fs = std::filesystem;
+using mbi::test::TempDir;
+
+namespace {
+
+Eigen::Vector3d vec(const nlohmann::json& j) { return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()}; }
+
+// A ball of radius 0.5 about the origin, 16 latitudes x 32 longitudes (482 vertices).
+void write_ball(const fs::path& path) {
+  std::ofstream out(path);
+  out.precision(17);
+  const int lat = 16, lon = 32;
+  const double pi = std::acos(-1.0);
+  out << "v 0 -0.5 0\n";
+  for (int i = 1; i < lat; ++i)
+    for (int j = 0; j < lon; ++j) {
+      const double t = pi * i / lat, f = 2 * pi * j / lon;
+      out << "v " << 0.5 * std::sin(t) * std::cos(f) << " " << -0.5 * std::cos(t) << " " << 0.5 * std::sin(t) * std::sin(f) << "\n";
+    }
+  out << "v 0 0.5 0\n";
+  auto ring = [&](int i, int j) { return 2 + (i - 1) * lon + j % lon; };  // 1-based
+  const int top = 2 + (lat - 1) * lon;
+  for (int j = 0; j < lon; ++j) out << "f 1 " << ring(1, j + 1) << " " << ring(1, j) << "\n";
+  for (int i = 1; i + 1 < lat; ++i)
+    for (int j = 0; j < lon; ++j)
+      out << "f " << ring(i, j) << " " << ring(i, j + 1) << " " << ring(i + 1, j + 1) << "\nf " << ring(i, j) << " "
+          << ring(i + 1, j + 1) << " " << ring(i + 1, j) << "\n";
+  for (int j = 0; j < lon; ++j) out << "f " << top << " " << ring(lat - 1, j) << " " << ring(lat - 1, j + 1) << "\n";
+}
+
+// The ball on the ground y = -0.5 (frictionless), a sphere of radius 0.3 beside it (0.2 m away).
+fs::path write_scene(const TempDir& dir) {
+  write_ball(dir / "ball.obj");
+  const fs::path scene = dir / "push.toml";
+  std::ofstream(scene) << "name = \"push\"\n[dense]\npath = \"ball.obj\"\n[control]\ngenerate_vertices = 60\n"
+                          "[material]\nyoung = 2e4\npoisson = 0.3\ndensity = 100\n"
+                          "[simulation]\ndt = 0.0333333\ngravity = [0, -9.81, 0]\ndamping_mass = 2.0\n"
+                          "ground = -0.5\ncontact = \"surface\"\n"
+                          "[[colliders]]\nshape = \"sphere\"\ncenter = [1.0, 0.0, 0.0]\nradius = 0.3\n"
+                          "[interpolation]\nmethod = \"bi\"\n";
+  return scene;
+}
+
+// The report's camera and the window position of world point p in the last view.
+Eigen::Vector2d window_of(const nlohmann::json& frame, const Eigen::Vector3d& p) {
+  mbi::viewer::Camera cam;
+  cam.target = vec(frame["camera"]["target"]);
+  cam.radius = frame["camera"]["radius"].get<double>();
+  cam.yaw = frame["camera"]["yaw"].get<double>();
+  cam.pitch = frame["camera"]["pitch"].get<double>();
+  const nlohmann::json& r = frame["layout"]["views"].back()["rect"];
+  const int height = frame["layout"]["window"][1].get<int>();
+  const Eigen::Vector2d q = cam.project(p, static_cast<int>(std::lround(r[2].get<double>())), height);
+  return {q.x() + r[0].get<double>(), q.y()};
+}
+
+}  // namespace
+
+TEST_CASE("mbi view: a sphere collider dragged with the mouse pushes the model, touching it without penetrating",
+          "[viewer][xvfb][contact]") {
+  TempDir dir("view-contact");
+  const fs::path scene = write_scene(dir);
+  const std::string common = mbi::test::quoted(scene) + " --width 900 --height 600 --no-split --report ";
+  // where the sphere is on screen (the camera frames the control mesh)
+  const mbi::test::ViewRun probe = view(common + mbi::test::quoted(dir / "probe.json") + " --frames 1", dir);
+  INFO(probe.err);
+  REQUIRE(probe.code == 0);
+  const nlohmann::json first = mbi::test::read_report(dir / "probe.json").at(0);
+  REQUIRE(first.contains("contact"));
+  // the [[colliders]], then the ground
+  REQUIRE(first["contact"]["colliders"].size() == 2);
+  CHECK(first["contact"]["colliders"][0]["shape"] == "sphere");
+  CHECK(first["contact"]["colliders"][1]["shape"] == "plane");
+  const Eigen::Vector3d center0 = vec(first["contact"]["colliders"][0]["point"]);
+  // drag the sphere 0.5 m toward the ball (-x), over 20 frames (1.5 m/s), then let go
+  const Eigen::Vector3d push(-0.5, 0, 0);
+  const Eigen::Vector2d from = window_of(first, center0), to = window_of(first, center0 + push);
+  const int press = 10, last_move = 30, release = 40, frames = 50;
+  std::ostringstream script;
+  script.precision(10);
+  script << press << " press " << from.x() << " " << from.y() << " 0\n";
+  for (int f = press + 1; f <= last_move; ++f) {
+    const Eigen::Vector2d p = from + (to - from) * double(f - press) / (last_move - press);
+    script << f << " move " << p.x() << " " << p.y() << "\n";
+  }
+  script << release << " release " << to.x() << " " << to.y() << " 0\n";
+  std::ofstream(dir / "drag.txt") << script.str();
+  const mbi::test::ViewRun run = view(common + mbi::test::quoted(dir / "drag.json") + " --frames " + std::to_string(frames) +
+                                          " --script " + mbi::test::quoted(dir / "drag.txt"),
+                                      dir);
+  INFO(run.err);
+  REQUIRE(run.code == 0);
+  const nlohmann::json rep = mbi::test::read_report(dir / "drag.json");
+  REQUIRE(rep.size() == static_cast<size_t>(frames));
+  // the cursor's move on the plane facing the camera: the push less its part along the view
+  mbi::viewer::Camera cam;
+  cam.yaw = first["camera"]["yaw"].get<double>(), cam.pitch = first["camera"]["pitch"].get<double>();
+  const Eigen::Vector3d along = push - push.dot(cam.direction()) * cam.direction();
+  const double pixel = 2 * first["camera"]["radius"].get<double>() / first["layout"]["window"][1].get<double>();
+  const double max_depth = first["contact"]["max_depth"].get<double>();
+  const Eigen::Vector3d mean_before = vec(rep.at(press)["contact"]["points_mean"]);
+  int touching_frames = 0, grabbed_frames = 0;
+  for (const auto& fr : rep) {
+    const nlohmann::json& c = fr["contact"];
+    CHECK(fr["finite"].get<bool>());
+    CHECK(c["on"].get<bool>());
+    grabbed_frames += c["colliders"][0]["grabbed"].get<bool>();
+    const int frame = fr["frame"].get<int>();
+    if (frame > press + 5 && frame <= release) touching_frames += c["colliders"][0]["gap"].get<double>() <= 0;
+    INFO("frame " << frame << ": deepest " << c["deepest"].get<double>() << " m, max depth " << max_depth << " m");
+    CHECK(c["deepest"].get<double>() >= -max_depth);  // no dense point deeper in the ground or the sphere
+  }
+  CHECK(grabbed_frames == release - press);
+  CHECK(touching_frames >= 5);  // the sphere touched the ball while pushing it
+  int pushing = 0;  // the driver's count (the panel's "touching") while the sphere pushes
+  for (int f = press + 10; f <= last_move; ++f) pushing += rep.at(f)["contact"]["touching"].get<int>() > 0;
+  CHECK(pushing >= 5);
+  const Eigen::Vector3d center1 = vec(rep.back()["contact"]["colliders"][0]["point"]);
+  INFO("sphere moved " << (center1 - center0).transpose() << ", the cursor asked " << along.transpose());
+  CHECK((center1 - center0 - along).norm() < 2 * pixel);  // followed the cursor to a pixel or two
+  const Eigen::Vector3d mean_after = vec(rep.back()["contact"]["points_mean"]);
+  INFO("the ball's points' mean moved " << (mean_after - mean_before).transpose());
+  CHECK(mean_after.x() - mean_before.x() < -0.1);  // pushed along the drag, away from the sphere
+  CHECK(rep.back()["contact"]["colliders"][0]["gap"].get<double>() >= -max_depth);
+}
