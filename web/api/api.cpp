@@ -97,6 +97,20 @@ int mbi_load_scene(int scene) {
   return 0;
 }
 
+int mbi_load_scene_text(const char* text, int bytes, const char* name) {
+  g_error.clear();
+  try {
+    const mbi::scenes::Scene s =
+        mbi::scenes::parse_scene(std::string_view(text, static_cast<std::size_t>(bytes)), name);
+    loaded(PageModel::scene(s));
+    std::copy(s.output.up.data(), s.output.up.data() + 3, g_up);
+    return 1;
+  } catch (const std::exception& e) {
+    g_error = e.what();
+  }
+  return 0;
+}
+
 const double* mbi_up(void) { return g_up; }
 
 int mbi_load_obj(const char* text, int bytes, int control_vertices) {
@@ -174,6 +188,19 @@ const float* mbi_positions(int view) {
   return guarded([view] { return g_model->positions(view_of(view)).data(); }, static_cast<const float*>(nullptr));
 }
 const double* mbi_times(void) { return g_times; }
+
+int mbi_touching_points(void) { return g_model ? g_model->touching_points() : 0; }
+int mbi_collider_count(void) { return g_model ? g_model->colliders() : 0; }
+
+int mbi_collider_mesh(void) {
+  return guarded([] { return static_cast<int>(g_model->update_collider_mesh().positions.size() / 3); }, 0);
+}
+
+const float* mbi_collider_positions(void) { return g_model ? g_model->collider_mesh().positions.data() : nullptr; }
+const int* mbi_collider_triangles(void) { return g_model ? g_model->collider_mesh().indices.data() : nullptr; }
+int mbi_collider_triangle_count(void) {
+  return g_model ? static_cast<int>(g_model->collider_mesh().indices.size() / 3) : 0;
+}
 
 int mbi_set_cpu_evaluation(int on) {
   return guarded([on] { return g_model->set_cpu_evaluation(on != 0), 1; }, 0);

@@ -16,6 +16,10 @@ const char* mbi_scene_name(int scene);
 const char* mbi_scene_problem(int scene);
 /// Loads a scene file at frame 0; 1 on success.
 int mbi_load_scene(int scene);
+/// Loads a scene file given as text (`bytes` long; the page's file input) at frame 0, parsed as
+/// scenes/*.toml are, its messages naming `name`; 1 on success. A scene the page cannot run is
+/// refused with the reason (mbi_scene_problem's).
+int mbi_load_scene_text(const char* text, int bytes, const char* name);
 /// The loaded scene's up direction (x, y, z: its output.up; y for an OBJ).
 const double* mbi_up(void);
 /// Loads an OBJ model from its text (`bytes` long) in a generated voxel cage of about
@@ -52,6 +56,19 @@ const float* mbi_positions(int view);
 /// Milliseconds of the last frame: drive (simulation), solve, Bezier, evaluate (the
 /// pipeline's method), then the other view's evaluation.
 const double* mbi_times(void);
+
+/// Contact at the dense surface (contact = "surface"): the dense vertices inside a collider at
+/// the current frame, as `mbi run` counts them; 0 without contact.
+int mbi_touching_points(void);
+/// The colliders (the scene's [[colliders]], then its ground plane with contact = "surface").
+int mbi_collider_count(void);
+/// Builds the colliders' triangles as they stand at the current frame (a plane as a square twice
+/// the model's size); their number of vertices.
+int mbi_collider_mesh(void);
+/// After mbi_collider_mesh: x y z floats per vertex, 3 vertex indices per triangle.
+const float* mbi_collider_positions(void);
+const int* mbi_collider_triangles(void);
+int mbi_collider_triangle_count(void);
 
 /// 1: mbi_step evaluates the dense points on the CPU (at first); 0: the page evaluates them on
 /// the GPU from mbi_bezier_texels, and mbi_positions evaluates a view on the CPU when asked.

@@ -1,5 +1,6 @@
 // A view drawn with WebGL2: the dense triangles, flat-shaded from screen-space derivatives
-// (creases show as they are), lit from the camera, in the view's tint or the crease colours.
+// (creases show as they are), lit from the camera, in the view's tint or the crease colours;
+// the contact's colliders, when there are any, in translucent grey over them.
 // Positions are rest + displacement: from script (the CPU path: the positions, no displacement)
 // or from the GPU pass's buffers (gpu_evaluator.js), which stay on the GPU.
 import { GpuEvaluator } from './gpu_evaluator.js';
@@ -20,6 +21,7 @@ void main() {
 const FS = `#version 300 es
 precision highp float;
 uniform vec3 eye;
+uniform float opacity;
 in vec3 world;
 in vec3 tint;
 out vec4 color;
@@ -27,7 +29,7 @@ void main() {
   vec3 n = normalize(cross(dFdx(world), dFdy(world)));
   vec3 l = normalize(eye - world);
   float d = abs(dot(n, l));
-  color = vec4(tint * (0.2 + 0.8 * d) + vec3(0.25) * pow(d, 40.0), 1.0);
+  color = vec4(tint * (0.2 + 0.8 * d) + vec3(0.25) * pow(d, 40.0), opacity);
 }`;
 
 export class GlView {
@@ -47,6 +49,7 @@ export class GlView {
     this.indices = gl.createBuffer();
     this.count = 0;
     this.gpu = null;
+    this.colliders = { vao: gl.createVertexArray(), positions: gl.createBuffer(), indices: gl.createBuffer(), count: 0 };
   }
 
   // The GPU pass in this view's context from the pass's GLSL body; '' or why it failed.
@@ -75,8 +78,23 @@ export class GlView {
     this.count = triangles.length;
   }
 
+  // The colliders' triangles: x y z floats per vertex, 3 indices each (none: empty arrays).
+  setColliders(positions, indices) {
+    const gl = this.gl, c = this.colliders;
+    gl.bindVertexArray(c.vao);
+    gl.bindBuffer(gl.ARRAY_BUFFER, c.positions);
+    gl.bufferData(gl.ARRAY_BUFFER, positions, gl.DYNAMIC_DRAW);
+    gl.enableVertexAttribArray(0);
+    gl.vertexAttribPointer(0, 3, gl.FLOAT, false, 0, 0);
+    gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, c.indices);
+    gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, new Uint32Array(indices), gl.DYNAMIC_DRAW);
+    gl.bindVertexArray(null);
+    gl.bindBuffer(gl.ARRAY_BUFFER, null);
+    c.count = indices.length;
+  }
+
   // frame: { positions } (CPU: x y z floats per vertex) or { gpu: true } (the pass's buffers),
-  // and colors (RGB floats per vertex) or null for the tint.
+  // colors (RGB floats per vertex) or null for the tint, colliders: whether to draw them.
   draw(frame, camera) {
     const gl = this.gl, c = gl.canvas;
     gl.viewport(0, 0, c.width, c.height);
@@ -105,9 +123,26 @@ export class GlView {
     }
     gl.uniformMatrix4fv(gl.getUniformLocation(this.program, 'mvp'), false, camera.matrix(c.width, c.height));
     gl.uniform3fv(gl.getUniformLocation(this.program, 'eye'), camera.eye());
+    gl.uniform1f(gl.getUniformLocation(this.program, 'opacity'), 1);
     gl.drawElements(gl.TRIANGLES, this.count, gl.UNSIGNED_INT, 0);
+    if (frame.colliders && this.colliders.count) this.drawColliders();
     gl.bindVertexArray(null);
     gl.bindBuffer(gl.ARRAY_BUFFER, null);
+  }
+
+  // Translucent over the model, depth tested against it but not hiding one another.
+  drawColliders() {
+    const gl = this.gl;
+    gl.bindVertexArray(this.colliders.vao);
+    gl.vertexAttrib3f(1, 0, 0, 0);
+    gl.vertexAttrib3f(2, 0.55, 0.57, 0.6);
+    gl.uniform1f(gl.getUniformLocation(this.program, 'opacity'), 0.45);
+    gl.enable(gl.BLEND);
+    gl.blendFunc(gl.SRC_ALPHA, gl.ONE_MINUS_SRC_ALPHA);
+    gl.depthMask(false);
+    gl.drawElements(gl.TRIANGLES, this.colliders.count, gl.UNSIGNED_INT, 0);
+    gl.depthMask(true);
+    gl.disable(gl.BLEND);
   }
 
   attribute(loc, buffer) {

@@ -1,5 +1,7 @@
 // The page: the WebAssembly module (mbi-web.js, the C API of web/api/api.h), two views (BI,
 // modified-BI) drawn with WebGL2 or, without it, a 2D canvas, mouse pokes and the controls.
+// Scenes with contact at the dense surface run the module's contact (the frame pipeline's, as
+// `mbi run`); the page draws their colliders and says how many dense vertices touch.
 // The dense points are evaluated on the GPU (WebGL2 transform feedback, gpu_evaluator.js) where
 // the pass builds, else (or when asked: ?eval=cpu, the evaluator switch) on the CPU in wasm.
 // window.mbiPage exposes the state to the browser test (web/test).
@@ -26,6 +28,8 @@ const api = {
   setCpuEvaluation: call('set_cpu_evaluation', 'number', 1),
   alpha: M.cwrap('mbi_alpha', 'number', []), error: M.cwrap('mbi_error', 'string', []), description: M.cwrap('mbi_description', 'string', []),
   sceneName: M.cwrap('mbi_scene_name', 'string', ['number']), sceneProblem: M.cwrap('mbi_scene_problem', 'string', ['number']),
+  loadSceneText: M.cwrap('mbi_load_scene_text', 'number', ['number', 'number', 'string']),
+  touching: () => M._mbi_touching_points(), colliders: () => M._mbi_collider_count(),
 };
 
 // The scene list: the scene files of scenes/ built into the module; those the page cannot run
@@ -55,7 +59,7 @@ const gpuAvailable = gpuProblem === '';
 const state = { playing: params.get('play') !== '0', dirty: true, camera: null, up: [0, 0, 1],
                 poking: false, drag: null, frame: 0, wasm: [], phases: null, fps: 0, drawn: [],
                 sums: [0, 0, 0, 0, 0], steps: 0, gpu: false, gpuMs: 0, creases: false, creaseTop: 0,
-                table: null };
+                table: null, colliders: true };
 
 function positions(view) {
   const n = 3 * M._mbi_vertex_count();
@@ -81,9 +85,18 @@ function table() {
   return { bi: t[0], biMax: t[1], modifiedBi: t[2], modifiedBiMax: t[3], faces: t[4] };
 }
 
-// After a new frame: the GPU pass, the crease colours, the table, a redraw.
+// The colliders as they stand at the current frame, to both views (none: empty).
+function updateColliders() {
+  const n = api.colliders() ? M._mbi_collider_mesh() : 0, t = n ? M._mbi_collider_triangle_count() : 0;
+  const p = n ? floats(M._mbi_collider_positions(), 3 * n) : new Float32Array(0);
+  const i = t ? new Int32Array(M.HEAP32.buffer, M._mbi_collider_triangles(), 3 * t) : new Int32Array(0);
+  views.forEach((v) => v.setColliders(p, i));
+}
+
+// After a new frame: the GPU pass, the crease colours, the colliders, the table, a redraw.
 function frameChanged() {
   if (state.gpu) runGpu();
+  updateColliders();
   if (state.creases) state.creaseTop = M._mbi_update_creases();
   state.table = table();
   state.dirty = true;
@@ -137,6 +150,20 @@ function loadScene(scene) {
   loaded();
 }
 
+// A scene file given to the page, run as those of scenes/ are (its messages name the file).
+function loadSceneText(text, name) {
+  const bytes = new TextEncoder().encode(text);
+  const ptr = M._malloc(bytes.length);
+  M.HEAPU8.set(bytes, ptr);
+  const ok = api.loadSceneText(ptr, bytes.length, name);
+  M._free(ptr);
+  journal.push('load_scene_text ' + name);
+  if (!ok) return show('could not load the scene: ' + api.error());
+  $('scene').value = '';
+  show('');
+  loaded();
+}
+
 function loadObj(text) {
   const bytes = new TextEncoder().encode(text);
   const ptr = M._malloc(bytes.length);
@@ -166,7 +193,7 @@ function step() {
 
 function draw() {
   views.forEach((v, k) => v.draw({
-    gpu: state.gpu, positions: state.gpu ? null : positions(k),
+    gpu: state.gpu, positions: state.gpu ? null : positions(k), colliders: state.colliders,
     colors: state.creases ? floats(M._mbi_crease_colors(k), 3 * M._mbi_vertex_count()) : null,
   }, state.camera));
   state.dirty = false;
@@ -187,7 +214,14 @@ function status() {
     (p ? `last frame in wasm: simulation ${ms(p[0])}, solve ${ms(p[1])}, Bezier ${ms(p[2])}, ` +
          `evaluation ${state.gpu ? 'on the GPU' : ms(p[3])} (sum ${ms(p[0] + p[1] + p[2] + p[3])}); ` +
          `the other view ${state.gpu ? 'on the GPU' : ms(p[4])}\n` : '') +
-    `mean step in wasm over the last ${state.wasm.length} frames (both views): ${ms(mean)}` + tableLine();
+    `mean step in wasm over the last ${state.wasm.length} frames (both views): ${ms(mean)}` + contactLine() + tableLine();
+}
+
+// Contact at the dense surface, as `mbi run` reports it: the vertices inside a collider.
+function contactLine() {
+  const n = api.colliders();
+  return n ? `\ncontact at the dense surface: ${api.touching()} dense vertices touching, ${n} collider${n > 1 ? 's' : ''}` +
+    (state.colliders ? ' (drawn in grey)' : '') : '';
 }
 
 // The paper's Table 2, as `mbi run` prints it: how much BI creases that modified-BI does not.
@@ -248,6 +282,7 @@ $('step').onclick = () => { setPlaying(false); step(); };
 $('reset').onclick = () => { api.reset(); restart(); };
 $('evaluator').onchange = (e) => setEvaluator(e.target.value === 'gpu');
 $('creases').onchange = (e) => { state.creases = e.target.checked; frameChanged(); };
+$('colliders').onchange = (e) => { state.colliders = e.target.checked; state.dirty = true; };
 $('scene').onchange = (e) => loadScene(Number(e.target.value));
 $('method').onchange = (e) => { if (!api.setMethod(Number(e.target.value))) show(api.error()); };
 $('alpha').onchange = (e) => { if (!api.setAlpha(Number(e.target.value))) show(api.error()); else show(''); };
@@ -259,14 +294,15 @@ document.addEventListener('keydown', (e) => {
   else return;
   e.preventDefault();
 });
-const readObj = (file) => file && file.text().then(loadObj);
-$('file').onchange = (e) => readObj(e.target.files[0]);
+// A file given to the page: a scene file (.toml) or a model (OBJ).
+const readFile = (file) => file && file.text().then((text) => (/\.toml$/i.test(file.name) ? loadSceneText(text, file.name) : loadObj(text)));
+$('file').onchange = (e) => readFile(e.target.files[0]);
 document.addEventListener('dragover', (e) => { e.preventDefault(); document.body.classList.add('dragging'); });
 document.addEventListener('dragleave', () => document.body.classList.remove('dragging'));
 document.addEventListener('drop', (e) => {
   e.preventDefault();
   document.body.classList.remove('dragging');
-  readObj(e.dataTransfer.files[0]);
+  readFile(e.dataTransfer.files[0]);
 });
 
 // A view's canvas as RGBA bytes, drawn first if a frame is waiting.
@@ -319,6 +355,8 @@ window.mbiPage = {
   evaluator: () => (state.gpu ? 'gpu' : 'cpu'),
   setEvaluator: (name) => setEvaluator(name === 'gpu'),
   setCreases: (on) => { $('creases').checked = on; state.creases = on; frameChanged(); },
+  setColliders: (on) => { $('colliders').checked = on; state.colliders = on; state.dirty = true; },
+  note: () => note,
   status: () => status(),
   renderer: drawPath === 'WebGL2' ? views[0].renderer() : '',
   benchSolve: (repeats) => M._mbi_bench_solve(repeats),

@@ -3,6 +3,7 @@
 
 #include <mbi/base/timer.hpp>
 #include <mbi/error.hpp>
+#include <mbi/interact/collider.hpp>
 #include <mbi/interact/pick.hpp>
 #include <mbi/interact/poke.hpp>
 #include <mbi/interp/embed.hpp>
@@ -131,6 +132,27 @@ void PageModel::publish(View view, const Eigen::MatrixXd& P) {
   out.resize(static_cast<std::size_t>(3 * P.rows()));
   for (Eigen::Index i = 0; i < P.rows(); ++i)
     for (int c = 0; c < 3; ++c) out[static_cast<std::size_t>(3 * i + c)] = static_cast<float>(P(i, c));
+}
+
+int PageModel::colliders() const {
+  return sim_->contact() ? static_cast<int>(sim_->contact()->colliders().size()) : 0;
+}
+
+const Triangles& PageModel::update_collider_mesh() {
+  collider_mesh_ = {};
+  if (!sim_->contact()) return collider_mesh_;
+  interact::ColliderMeshOptions o;
+  o.plane_half = size_;
+  o.plane_center = 0.5 * (rest_.V.colwise().minCoeff() + rest_.V.colwise().maxCoeff()).transpose();
+  for (const pipeline::Collider& c : sim_->contact()->colliders()) {
+    const interact::ColliderMesh m = interact::collider_mesh(c, sim_->simulator().time(), o);
+    const int first = static_cast<int>(collider_mesh_.positions.size() / 3);
+    for (Eigen::Index i = 0; i < m.V.rows(); ++i)
+      for (int k = 0; k < 3; ++k) collider_mesh_.positions.push_back(static_cast<float>(m.V(i, k)));
+    for (Eigen::Index f = 0; f < m.F.rows(); ++f)
+      for (int k = 0; k < 3; ++k) collider_mesh_.indices.push_back(first + m.F(f, k));
+  }
+  return collider_mesh_;
 }
 
 void PageModel::reset() {

@@ -30,6 +30,10 @@ std::string page_problem(const scenes::Scene& s) {
     return "it is 2D (a picture warped in its plane), and the page draws surfaces in 3D";
   if (s.mode != scenes::Mode::Simulate)
     return "its handles are dragged by keyframes, and the page's pokes pull on a simulation";
+  for (std::size_t k = 0; k < s.colliders.size(); ++k)
+    if (s.colliders[k].shape == pipeline::ColliderShape::Mesh)
+      return "colliders[" + std::to_string(k) + "].shape = \"mesh\": a mesh collider's distances are an OpenVDB level "
+             "set, and the page's build has no OpenVDB (planes, spheres, boxes and capsules run here)";
   return "";
 }
 

@@ -2,7 +2,7 @@
 // built page from a local http server, pokes the twisting bar (scenes/twist-bar.toml) with
 // scripted mouse events and checks that
 //   - the page's scene list is scenes/*.toml, those it cannot run greyed with the reason (the
-//     scenes that drag handles by keyframes);
+//     scenes that drag handles by keyframes, and those with a mesh collider, the key named);
 //   - the picture changes where the poked bar moves;
 //   - BI creases and modified-BI does not (the largest change of a dihedral angle between
 //     neighbouring dense triangles, against the rest shape, is several times larger for BI), the
@@ -13,6 +13,11 @@
 //     the poked bar, and on every other scene the page runs after a few frames;
 //   - the other draw path draws too (the 2D canvas fallback when WebGL2 ran);
 //   - an OBJ file given to the page loads in a control mesh generated there, and runs;
+//   - contact at the dense surface: a scene file given to the page (tests/data/scenes/
+//     page-contact.toml: a sphere, a capsule, a box, a ground plane) runs the module's contact,
+//     its positions and touching count the native build's after 12 frames (which equal `mbi
+//     run`'s: tests/web's test_page_scenes), the count shown (> 0), the colliders drawn; a scene
+//     with a mesh collider (scenes/steps.toml) given to the page is refused, naming the key;
 //   - with WebGL2: the GPU evaluator (transform feedback, read back) gives the CPU's positions
 //     to float round-off on the bar and on scenes/large.toml's sphere of 252,152 points, poked; the
 //     switch to the CPU evaluator works.
@@ -184,6 +189,8 @@ async function main() {
     check(loadedObj[1] === 3, `an OBJ given to the page runs: ${loadedObj[0]}, frame ${loadedObj[1]}`);
     await own.close();
 
+    await contact(browser, base);
+
     // every other scene the page runs, a few frames on, against the native build
     for (const name of runs.filter((s) => s !== 'twist-bar')) {
       const p = await open(browser, `${base}?scene=${name}&play=0`);
@@ -202,7 +209,8 @@ async function main() {
 }
 
 // The page's scene list against scenes/*.toml: every file listed by its name; greyed with a
-// reason exactly for the scenes that drag handles by keyframes (the page pokes simulations).
+// reason exactly for the scenes that drag handles by keyframes (the page pokes simulations) and
+// those with a mesh collider (no OpenVDB in the page; the reason names the collider's key).
 // The names of the scenes the page runs.
 async function sceneList(page) {
   const folder = fileURLToPath(new URL('../../scenes/', import.meta.url));
@@ -212,20 +220,23 @@ async function sceneList(page) {
   check(listed.map((s) => s.name).join() === files.map((f) => basename(f, '.toml')).join(),
         `the page lists the scene files of scenes/: ${listed.map((s) => s.name).join(', ')}`);
   for (const [k, f] of files.entries()) {
-    const drags = /^mode\s*=\s*"drag"/m.test(readFileSync(join(folder, f), 'utf8'));
+    const text = readFileSync(join(folder, f), 'utf8');
+    const drags = /^mode\s*=\s*"drag"/m.test(text), mesh = /^shape\s*=\s*"mesh"/m.test(text), refused = drags || mesh;
     const s = listed[k] || { name: f, problem: '' };
-    check(drags === (s.problem !== '') && options[k]?.[1] === drags && (!drags || options[k][0].includes(s.problem)),
-          `scenes/${f}: ${drags ? 'greyed: ' + s.problem : 'the page runs it'}`);
+    const named = !mesh || (/colliders\[\d+\]\.shape = "mesh"/.test(s.problem) && s.problem.includes('OpenVDB'));
+    check(refused === (s.problem !== '') && options[k]?.[1] === refused && (!refused || options[k][0].includes(s.problem)) && named,
+          `scenes/${f}: ${refused ? 'greyed: ' + s.problem : 'the page runs it'}`);
   }
   return listed.filter((s) => !s.problem).map((s) => s.name);
 }
 
-// The page's journal replayed in the native build (mbi-web-twin): both views' positions equal
-// to float round-off, the discontinuity table to 1e-9 (both compute it in double).
-async function againstTwin(page, what) {
+// The page's journal replayed in the native build (mbi-web-twin; the scene files given to the
+// page read from `folder`): both views' positions equal to float round-off, the discontinuity
+// table to 1e-9 (both compute it in double), the touching points equal.
+async function againstTwin(page, what, folder = '.') {
   const journal = await page.evaluate(() => mbiPage.journal.join('\n') + '\n');
   writeFileSync(join(out, `journal-${what}.txt`), journal);
-  const said = execFileSync(twin, ['replay', join(out, `journal-${what}.txt`), join(out, `native-${what}.bin`)],
+  const said = execFileSync(twin, ['replay', join(out, `journal-${what}.txt`), join(out, `native-${what}.bin`), folder],
                             { encoding: 'utf8', stdio: ['ignore', 'pipe', 'inherit'] });
   process.stdout.write(said);
   const bytes = readFileSync(join(out, `native-${what}.bin`));
@@ -240,11 +251,46 @@ async function againstTwin(page, what) {
   check(native.length === 2 * n && worst <= 1e-5 * size,
         `${what}: page vs native positions after ${journal.split('\n').length - 1} calls: largest difference ` +
         `${worst.toExponential(2)} m (model size ${size.toFixed(1)} m; float round-off allowed: 1e-5 of it)`);
+  // contact's Newton stops at a tolerance: the builds' round-off reaches the positions (1e-6 m
+  // measured), and E_F, a sum of squared jumps, far more than in double alone
+  const contact = await page.evaluate(() => mbiPage.api.colliders() > 0), relative = contact ? 1e-4 : 1e-9;
   const m = said.match(/table: BI mean (\S+) modified-BI mean (\S+)/), tp = await page.evaluate(() => mbiPage.table());
-  const close = (a, b) => Math.abs(a - b) <= 1e-9 * Math.abs(b);
+  const close = (a, b) => Math.abs(a - b) <= relative * Math.abs(b);
   check(m && tp && close(tp.bi, Number(m[1])) && close(tp.modifiedBi, Number(m[2])),
         `${what}: page vs native discontinuity table: BI ${tp?.bi.toExponential(6)} vs ${m && Number(m[1]).toExponential(6)}, ` +
-        `modified-BI ${tp?.modifiedBi.toExponential(6)} vs ${m && Number(m[2]).toExponential(6)} (relative 1e-9)`);
+        `modified-BI ${tp?.modifiedBi.toExponential(6)} vs ${m && Number(m[2]).toExponential(6)} (relative ${relative})`);
+  const touching = Number(said.match(/touching: (\d+)/)?.[1]), shown = await page.evaluate(() => mbiPage.api.touching());
+  check(touching === shown, `${what}: page vs native touching points: ${shown} vs ${touching}`);
+}
+
+// Contact at the dense surface: a scene file with colliders given to the page runs as natively
+// and as `mbi run` (positions, touching count), its colliders drawn; a mesh collider refused.
+async function contact(browser, base) {
+  const data = fileURLToPath(new URL('../../tests/data/scenes/', import.meta.url));
+  const page = await open(browser, base + '?scene=poke&play=0');
+  await page.setInputFiles('#file', join(data, 'page-contact.toml'));
+  await page.waitForFunction(() => mbiPage.api.description().startsWith('page-contact:'), null, { timeout: 30000 });
+  for (let k = 0; k < 12; ++k) await page.keyboard.press('s');
+  const [frame, touching, status] = await page.evaluate(() => [mbiPage.state.frame, mbiPage.api.touching(), mbiPage.status()]);
+  const line = status.split('\n').find((l) => l.startsWith('contact at the dense surface')) || '(no contact line)';
+  check(frame === 12 && touching > 0 && line.includes(`${touching} dense vertices touching, 4 colliders`),
+        `page-contact.toml given to the page, frame ${frame}: the status says "${line}" (touching > 0)`);
+  await againstTwin(page, 'page-contact', data);
+  const drawn = await page.evaluate(() => mbiPage.pixels(1));
+  await page.screenshot({ path: join(out, 'web-contact.png') });
+  await page.evaluate(() => mbiPage.setColliders(false));
+  const hidden = await page.evaluate(() => mbiPage.pixels(1));
+  const share = changed(drawn, hidden);
+  check(share > 0.02, `the colliders are drawn: hiding them changes ${(100 * share).toFixed(1)} % of the modified-BI view`);
+
+  const scenes = fileURLToPath(new URL('../../scenes/', import.meta.url));
+  await page.setInputFiles('#file', join(scenes, 'steps.toml'));
+  await page.waitForFunction(() => mbiPage.note() !== '', null, { timeout: 30000 });
+  const refusal = await page.evaluate(() => [mbiPage.note(), mbiPage.api.description()]);
+  check(/steps\.toml: the page cannot run this scene: colliders\[0\]\.shape = "mesh"/.test(refusal[0]) &&
+        refusal[0].includes('OpenVDB') && refusal[1].startsWith('page-contact:'),
+        `scenes/steps.toml (a mesh collider) given to the page is refused, the scene before kept: "${refusal[0]}"`);
+  await page.close();
 }
 
 // GPU == CPU at the current frame (both views), the GPU's positions read back from the

@@ -4,6 +4,8 @@
 // Plain C++ without Emscripten: the page's module and its native twin compile the same code
 // (web/api). Scenes: the scene files the page can run (scenes/*.toml, embedded at build time:
 // web/include/mbi/web/scene_files.hpp) and a user's surface in a generated control mesh.
+// Contact at the dense surface is the pipeline's, as in `mbi run`; the page counts the touching
+// vertices and draws the colliders (interact::collider_mesh).
 //
 // Two evaluators of the dense points: the CPU (here, double) and the page's WebGL2 pass
 // (web/page/gpu_evaluator.js) from bezier_texels(); with the GPU one, step() leaves the CPU
@@ -26,6 +28,12 @@ namespace mbi::web {
 
 /// A half-line in model coordinates (m); direction need not be unit length.
 using interact::Ray;
+
+/// Triangles to draw (the colliders): x, y, z floats per vertex (m), 3 vertex indices each.
+struct Triangles {
+  std::vector<float> positions;
+  std::vector<int> indices;
+};
 
 /// The two views: BI (left) and modified-BI (right).
 enum class View { BI = 0, ModifiedBI = 1 };
@@ -96,6 +104,17 @@ class PageModel {
   /// The paper's Table 2 for the current frame, as `mbi run` prints it: the face discontinuity
   /// energies E_F of BI against modified-BI. Throws interp::OverflowError (positions too large).
   interp::DiscontinuityTable discontinuity();
+  /// Contact at the dense surface (a scene with contact = "surface"): the dense vertices inside a
+  /// collider at the current frame, as `mbi run` counts them (metrics.json's contact_points); 0
+  /// without contact.
+  int touching_points() const { return sim_->touching_points(); }
+  /// The number of colliders (the scene's [[colliders]], then its ground plane).
+  int colliders() const;
+  /// Builds the colliders as they stand at the current frame as triangles (collider_mesh(); the
+  /// viewer's, interact::collider_mesh): a plane as a square twice the model's size about the
+  /// point nearest the model's rest centre.
+  const Triangles& update_collider_mesh();
+  const Triangles& collider_mesh() const { return collider_mesh_; }
   /// Control positions (n x 3) of the current frame.
   const Eigen::MatrixXd& control_positions() const { return pipe_->control_positions(); }
   const Eigen::MatrixXi& control_elements() const { return pipe_->elements(); }
@@ -137,6 +156,7 @@ class PageModel {
   GpuInputs gpu_;
   std::unique_ptr<pipeline::Creases> creases_;  // built on first use
   std::vector<float> colors_[2];
+  Triangles collider_mesh_;
   std::string message_, description_;
 };
 

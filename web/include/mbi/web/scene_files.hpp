@@ -23,8 +23,9 @@ std::span<const SceneFile> scene_files();
 scenes::Scene parse(const SceneFile& file);
 
 /// Why the page cannot run `scene`, "" when it can: it names a model file (the page has no file
-/// system), it is 2D (the page draws surfaces in 3D) or its handles are dragged by keyframes
-/// (the page's pokes pull on a simulation).
+/// system), it is 2D (the page draws surfaces in 3D), its handles are dragged by keyframes
+/// (the page's pokes pull on a simulation) or it has a mesh collider (no OpenVDB in the page's
+/// build), named by its key.
 std::string page_problem(const scenes::Scene& scene);
 
 }  // namespace mbi::web
