@@ -84,6 +84,28 @@ ColliderMesh box(const Eigen::Vector3d& center, const Eigen::Vector3d& half, con
   return m;
 }
 
+// A mesh collider's triangles at its pose (world = point + axes local), a vertex a corner with
+// its triangle's normal (flat faces; the winding's side, which for a level set's mesh may be in).
+ColliderMesh placed(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, const Eigen::Vector3d& point,
+                    const Eigen::Matrix3d& axes) {
+  ColliderMesh m;
+  m.V.resize(3 * F.rows(), 3);
+  m.N.resize(3 * F.rows(), 3);
+  m.F.resize(F.rows(), 3);
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    Eigen::Vector3d p[3];
+    for (int k = 0; k < 3; ++k) p[k] = point + axes * V.row(F(f, k)).transpose();
+    Eigen::Vector3d n = (p[1] - p[0]).cross(p[2] - p[0]).normalized();
+    if (!n.allFinite()) n = Eigen::Vector3d::UnitZ();  // a degenerate triangle
+    for (int k = 0; k < 3; ++k) {
+      m.V.row(3 * f + k) = p[k].transpose();
+      m.N.row(3 * f + k) = n.transpose();
+      m.F(f, k) = static_cast<int>(3 * f + k);
+    }
+  }
+  return m;
+}
+
 ColliderMesh square(const Collider& c, const ColliderMeshOptions& o) {
   const Eigen::Vector3d n = c.normal.normalized();
   const Eigen::Vector3d mid = o.plane_center - n.dot(o.plane_center - c.point) * n;
@@ -112,11 +134,9 @@ ColliderMesh collider_mesh(const Collider& collider, double time, const Collider
     case ColliderShape::Sphere: return rounded(c.point, c.point, c.radius);
     case ColliderShape::Capsule: return rounded(c.point, c.end, c.radius);
     case ColliderShape::Box: return box(c.point, c.half_extents, c.axes);
-    case ColliderShape::Mesh: {
+    case ColliderShape::Mesh:
       if (!c.level_set) throw Error("collider_mesh: a mesh collider without a level set");
-      const Eigen::AlignedBox3d& b = c.level_set->bounds();
-      return box(c.point + c.axes * b.center(), 0.5 * b.sizes(), c.axes);
-    }
+      return placed(c.level_set->vertices(), c.level_set->triangles(), c.point, c.axes);
   }
   throw Error("collider_mesh: unknown collider shape");
 }

@@ -84,6 +84,8 @@ Eigen::AlignedBox3d bounding_box(const Eigen::Ref<const Eigen::MatrixXd>& V) {
 struct MeshLevelSet::Grid {
   openvdb::FloatGrid::Ptr grid;
   Eigen::AlignedBox3d bounds;  // m, the mesh's frame; the grid's origin is bounds.min()
+  Eigen::MatrixXd vertices;    // the mesh as given, for drawing
+  Eigen::MatrixXi triangles;
   double h = 0.0;
   double band_voxels = 0.0;
   Eigen::Vector3d lo, hi;  // index coordinates beyond which no voxel is resolved
@@ -135,6 +137,8 @@ MeshLevelSet::MeshLevelSet(const Eigen::Ref<const Eigen::MatrixXd>& vertices,
   check_closed(triangles);
   auto g = std::make_shared<Grid>();
   g->bounds = bounding_box(vertices);
+  g->vertices = vertices;
+  g->triangles = triangles;
   const Eigen::Vector3d extent = g->bounds.diagonal();
   if (extent.norm() == 0) bad("vertices: the mesh has zero extent (all vertices coincide)");
   g->h = checked_voxel_size(options, extent, extent.norm() / 128.0);
@@ -223,6 +227,8 @@ LevelSetSample MeshLevelSet::sample(const Eigen::Vector3d& p, const sim::RigidMo
 double MeshLevelSet::voxel_size() const { return grid_->h; }
 double MeshLevelSet::band() const { return grid_->band_voxels * grid_->h; }
 const Eigen::AlignedBox3d& MeshLevelSet::bounds() const { return grid_->bounds; }
+const Eigen::MatrixXd& MeshLevelSet::vertices() const { return grid_->vertices; }
+const Eigen::MatrixXi& MeshLevelSet::triangles() const { return grid_->triangles; }
 long MeshLevelSet::active_voxels() const { return long(grid_->grid->activeVoxelCount()); }
 double MeshLevelSet::lipschitz() const { return grid_->lipschitz; }
 

@@ -7,6 +7,8 @@ namespace mbi::pipeline {
 
 struct MeshLevelSet::Grid {
   Eigen::AlignedBox3d bounds;
+  Eigen::MatrixXd vertices;
+  Eigen::MatrixXi triangles;
 };
 
 namespace {
@@ -25,6 +27,8 @@ LevelSetSample MeshLevelSet::sample(const Eigen::Vector3d&, const sim::RigidMoti
 double MeshLevelSet::voxel_size() const { unavailable(); }
 double MeshLevelSet::band() const { unavailable(); }
 const Eigen::AlignedBox3d& MeshLevelSet::bounds() const { return grid_->bounds; }
+const Eigen::MatrixXd& MeshLevelSet::vertices() const { return grid_->vertices; }
+const Eigen::MatrixXi& MeshLevelSet::triangles() const { return grid_->triangles; }
 long MeshLevelSet::active_voxels() const { unavailable(); }
 double MeshLevelSet::lipschitz() const { unavailable(); }
 

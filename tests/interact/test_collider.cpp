@@ -6,9 +6,13 @@
 #include <mbi/interact/collider.hpp>
 #include <mbi/interact/error.hpp>
 
+#include "common/skip.hpp"
+
 #include <Eigen/Geometry>
 
 #include <cmath>
+#include <memory>
+#include <optional>
 #include <vector>
 
 using namespace mbi::interact;
@@ -93,4 +97,34 @@ TEST_CASE("dragged: the collider moves by the displacement within dt at constant
   }
   CHECK_THROWS_AS(dragged(shapes()[0], 0, {NAN, 0, 0}, 0.1), Error);
   CHECK_THROWS_AS(dragged(shapes()[0], 0, {0, 0, 0}, -0.1), Error);
+}
+
+TEST_CASE("a mesh collider is drawn by its own triangles at its pose, on its level set's zero within a voxel",
+          "[interact][collider]") {
+  Eigen::MatrixXd V(8, 3);
+  for (int i = 0; i < 8; ++i) V.row(i) << (i & 1) * 0.6, ((i >> 1) & 1) * 0.4, ((i >> 2) & 1) * 0.5;
+  Eigen::MatrixXi F(12, 3);
+  F << 0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5;
+  std::shared_ptr<const mbi::pipeline::MeshLevelSet> level_set;
+  try {
+    level_set = std::make_shared<const mbi::pipeline::MeshLevelSet>(V, F);
+  } catch (const mbi::Error& e) {
+    mbi::test::skip(e.what());  // a build without OpenVDB
+  }
+  Collider c = Collider::mesh(level_set);
+  c.point = {1, -2, 0.5};
+  c.axes = Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  c.motion.velocity = {0, 1, 0};
+  const ColliderMesh m = collider_mesh(c, 2.0);
+  REQUIRE(m.F.rows() == F.rows());
+  const Eigen::Vector3d shift = c.point + Eigen::Vector3d(0, 2, 0);  // moved 2 m up by t = 2 s
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d expected = shift + c.axes * V.row(F(f, k)).transpose();
+      CHECK((m.V.row(m.F(f, k)).transpose() - expected).norm() < 1e-12);
+      CHECK(std::abs(mbi::pipeline::signed_distance(c, expected, 2.0).value) <= level_set->voxel_size());
+    }
+  const std::optional<ColliderHit> h = pick_collider({shift + Eigen::Vector3d(0.2, 5, 0.2), {0, -1, 0}}, {c}, 2.0);
+  REQUIRE(h);
+  CHECK(h->hit.point.y() == Approx(shift.y() + 0.4));  // the top face
 }

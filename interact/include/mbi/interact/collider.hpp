@@ -16,8 +16,8 @@
 
 namespace mbi::interact {
 
-/// A collider's surface: triangles with an outward unit normal per vertex (flat faces have their
-/// own vertices), world units (m).
+/// A collider's surface: triangles with a unit normal per vertex, outward (a mesh collider's: on
+/// its triangles' winding side), flat faces with their own vertices; world units (m).
 struct ColliderMesh {
   Eigen::MatrixXd V;  ///< n x 3
   Eigen::MatrixXd N;  ///< n x 3
@@ -32,8 +32,8 @@ struct ColliderMeshOptions {
 };
 
 /// The surface of `collider` at `time` (s): a sphere or a capsule as a 32 x 16 latitude-longitude
-/// mesh (vertices on the exact surface), a box's six faces, a mesh collider's bounding box at its
-/// pose (its level set keeps no triangles), a plane as the square of `options`. Throws Error
+/// mesh (vertices on the exact surface), a box's six faces, a mesh collider's triangles (those
+/// its level set was built from) at its pose, a plane as the square of `options`. Throws Error
 /// on a plane_half <= 0 or not finite, or a non-finite plane_center.
 ColliderMesh collider_mesh(const pipeline::Collider& collider, double time, const ColliderMeshOptions& options = {});
 
@@ -44,7 +44,7 @@ struct ColliderHit {
 
 /// The collider whose collider_mesh at `time` the ray meets first (cast(), ties to the lower
 /// index); planes are never picked (a click on the floor orbits). nullopt on a miss. Throws
-/// Error as cast() on a bad ray. O(colliders x 1,000 triangles).
+/// Error as cast() on a bad ray. O(triangles of the colliders: about 1,000 per analytic shape).
 std::optional<ColliderHit> pick_collider(const Ray& ray, const std::vector<pipeline::Collider>& colliders, double time);
 
 /// `collider` as it is at `time`, carried by `displacement` (m): with dt > 0 (s) at constant

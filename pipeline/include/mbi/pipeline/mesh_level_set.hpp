@@ -71,6 +71,8 @@ class MeshLevelSet {
   double voxel_size() const;  ///< h, m
   double band() const;        ///< exterior band width, m (band_voxels h)
   const Eigen::AlignedBox3d& bounds() const;  ///< the mesh's bounding box, m
+  const Eigen::MatrixXd& vertices() const;     ///< the mesh as given (m, its frame): to draw it
+  const Eigen::MatrixXi& triangles() const;    ///< as given
   long active_voxels() const;  ///< voxels with a resolved distance (memory: 8 to 17 bytes each)
   /// A bound (>= 1) on |gradient| of sample()'s value everywhere: the value changes by at most
   /// lipschitz() |dp| along any segment dp. The stored distances are approximate, so the
