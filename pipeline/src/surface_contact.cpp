@@ -81,6 +81,8 @@ void SurfaceContact::index_points() {
   const size_t points = static_cast<size_t>(emb.bary.rows());
   start_distance_.resize(element_points_.size());
   element_distance_.resize(static_cast<size_t>(m));
+  offset_.assign(static_cast<size_t>(m), 0.0);
+  shift_.assign(static_cast<size_t>(m), 0.0);
   exact_.assign(static_cast<size_t>(m), 0);
   near_.assign(static_cast<size_t>(m), 0);
   slip_first_.assign(points, -1);
@@ -120,7 +122,11 @@ void SurfaceContact::begin_substep_at(double start_time, double end_time, const 
   if (!std::isfinite(start_time)) throw Error("contact time must be finite");
   check_size(x);
   check_size(v);
-  set_time(end_time);  // no reference: the start's sample has every point of the elements it keeps
+  // The last substep's start distances still bound this one's (carried), unless the time was set
+  // or a collider replaced since.
+  const bool carry = reference_;
+  const double previous = time_;
+  set_time(end_time);
   for (const Slip& s : slips_) slip_first_[static_cast<size_t>(s.point)] = -1;
   slips_.clear();
   for (size_t k : unguarded_set_) unguarded_[k] = 0;
@@ -143,6 +149,7 @@ void SurfaceContact::begin_substep_at(double start_time, double end_time, const 
   }
   Sample& S = at_;
   S.B = deformer_->bezier(nodes(x));
+  if (carry) carry_reference(S.B, previous);
   gather(S.B, band, S.points);
   select(S.points, S.embedding);
   evaluate(S.B, S.embedding, S.P);
@@ -170,36 +177,74 @@ void SurfaceContact::begin_substep_at(double start_time, double end_time, const 
       if (slip_first_[static_cast<size_t>(p)] < 0) slip_first_[static_cast<size_t>(p)] = static_cast<int>(slips_.size());
       slips_.push_back(s);
     }
-  set_reference(S, least);
+  set_reference(S, least, carry);
   forget();  // guards and slips changed; the slips' points are evaluated from now on
 }
 
-void SurfaceContact::set_reference(const Sample& S, const std::vector<double>& least) {
+void SurfaceContact::carry_reference(const interp::BezierPoints& B, double previous) {
+  // A collider's distance at this pose is its distance at the last one at the material point's
+  // place then: the points of an element moved relative to it by at most the largest such move
+  // of its Bezier points (the move is affine in the point), and the distance by lipschitz times that.
+  const int m = deformer_->elements();
+  const Eigen::Index K = B.rows() / m;
+  for (int e = 0; e < m; ++e) {
+    double shift = 0.0;
+    for (size_t k = 0; k < colliders_.size(); ++k)
+      for (Eigen::Index j = 0; j < K; ++j)
+        shift = std::max(shift, lipschitz_[k] * collider_displacement(colliders_[k], B.row(e * K + j).transpose(),
+                                                                      time_, previous).norm());
+    shift_[static_cast<size_t>(e)] = shift;
+  }
+  reference_ = true;
+}
+
+void SurfaceContact::set_reference(const Sample& S, const std::vector<double>& least, bool carry) {
   const int m = deformer_->elements();
   const Eigen::Index K = S.B.rows() / m;
-  reference_B_ = S.B;
-  exact_ = near_;  // the elements the start's gather kept, with all their points
-  for (int e = 0; e < m; ++e) {
-    double d = kInf;
-    for (size_t k = 0; k < colliders_.size(); ++k) d = std::min(d, hull_lower(S.B.middleRows(e * K, K), k));
-    element_distance_[static_cast<size_t>(e)] = d;
-  }
   for (size_t i = 0; i < S.points.size(); ++i) row_of_[static_cast<size_t>(S.points[i])] = static_cast<int>(i);
+  const auto distance = [&](int p) {  // NaN: always a candidate
+    const double d = least[static_cast<size_t>(row_of_[static_cast<size_t>(p)])];
+    return std::isnan(d) ? -kInf : d;
+  };
   std::vector<std::pair<double, int>> order;
   for (int e = 0; e < m; ++e) {
-    if (!exact_[static_cast<size_t>(e)]) continue;
-    order.clear();
-    for (int i = element_start_[e]; i < element_start_[e + 1]; ++i) {
-      const double d = least[static_cast<size_t>(row_of_[static_cast<size_t>(element_points_[i])])];
-      order.emplace_back(std::isnan(d) ? -kInf : d, element_points_[i]);  // NaN: always a candidate
+    const size_t u = static_cast<size_t>(e);
+    const int first = element_start_[e], last = element_start_[e + 1];
+    const auto Be = S.B.middleRows(e * K, K);
+    if (!near_[u]) {  // no point evaluated: the hull's bound for all
+      double d = kInf;
+      for (size_t k = 0; k < colliders_.size(); ++k) d = std::min(d, hull_lower(Be, k));
+      element_distance_[u] = d;
+      exact_[u] = 0;
+      offset_[u] = 0.0;
+      continue;
     }
-    std::sort(order.begin(), order.end());
-    for (int i = element_start_[e]; i < element_start_[e + 1]; ++i) {
-      start_distance_[static_cast<size_t>(i)] = order[static_cast<size_t>(i - element_start_[e])].first;
-      element_points_[static_cast<size_t>(i)] = order[static_cast<size_t>(i - element_start_[e])].second;
+    order.clear();
+    if (carry && exact_[u]) {
+      // the evaluated prefix gets its distances, the rest keeps its bounds less the move since
+      const double moved = (Be - reference_B_.middleRows(e * K, K)).rowwise().norm().maxCoeff();
+      offset_[u] += steepest_ * moved + shift_[u];
+      int i = first;
+      for (; i < last && row_of_[static_cast<size_t>(element_points_[i])] >= 0; ++i)
+        order.emplace_back(distance(element_points_[i]) + offset_[u], element_points_[i]);
+      std::sort(order.begin(), order.end());
+      const size_t evaluated = order.size();
+      for (; i < last; ++i) order.emplace_back(start_distance_[static_cast<size_t>(i)], element_points_[i]);
+      std::inplace_merge(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(evaluated), order.end());
+    } else {  // every point evaluated
+      for (int i = first; i < last; ++i) order.emplace_back(distance(element_points_[i]), element_points_[i]);
+      std::sort(order.begin(), order.end());
+      offset_[u] = 0.0;
+      exact_[u] = 1;
+    }
+    for (int i = first; i < last; ++i) {
+      start_distance_[static_cast<size_t>(i)] = order[static_cast<size_t>(i - first)].first;
+      element_points_[static_cast<size_t>(i)] = order[static_cast<size_t>(i - first)].second;
     }
   }
   for (Eigen::Index p : S.points) row_of_[static_cast<size_t>(p)] = -1;
+  std::fill(shift_.begin(), shift_.end(), 0.0);  // the colliders stay posed within the substep
+  reference_B_ = S.B;
   reference_ = true;
 }
 
@@ -252,15 +297,16 @@ void SurfaceContact::gather(const interp::BezierPoints& B, const Eigen::VectorXd
     bool near = false;
     for (size_t k = 0; k < colliders_.size() && !near; ++k) near = hull_lower(Be, k) < lipschitz_[k] * reach(e) + margin;
     if (!near) continue;
-    near_[static_cast<size_t>(e)] = 1;
     double within = kInf;
     if (reference_) {
       // A point moved by at most its element's largest Bezier move since the substep's start:
       // its distance fell by at most steepest_ times that.
       const double moved = (Be - reference_B_.middleRows(e * K, K)).rowwise().norm().maxCoeff();
-      within = steepest_ * (moved + reach(e)) + margin;
+      within = steepest_ * (moved + reach(e)) + shift_[static_cast<size_t>(e)] + margin;
       if (!exact_[static_cast<size_t>(e)] && !(element_distance_[static_cast<size_t>(e)] < within)) continue;
+      within += offset_[static_cast<size_t>(e)];  // the element's stored bounds are its points' plus that
     }
+    near_[static_cast<size_t>(e)] = 1;  // its points are taken by the rules below
     const bool ordered = reference_ && exact_[static_cast<size_t>(e)];  // by start distance: a prefix
     for (int i = first; i < last && !(ordered && !(start_distance_[static_cast<size_t>(i)] < within)); ++i)
       points.push_back(element_points_[static_cast<size_t>(i)]);

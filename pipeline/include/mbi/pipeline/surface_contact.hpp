@@ -139,9 +139,13 @@ class SurfaceContact : public sim::Potential {
   void gather(const interp::BezierPoints& B, const Eigen::VectorXd& reach, std::vector<Eigen::Index>& points) const;
   /// A lower bound of collider k's distance on the hull of an element's Bezier points Be.
   double hull_lower(const Eigen::Ref<const interp::BezierPoints>& Be, size_t k) const;
-  /// The substep's start: each element's least hull distance, and for the elements sampled at
-  /// the start (S) their points ordered by their least distance there.
-  void set_reference(const Sample& S, const std::vector<double>& least);  // least: per row of S
+  /// The last substep's start bounds this one's: per element, how far a collider moved relative
+  /// to its points from the last pose (`previous`, s) to time() (shift_), B: the new start.
+  void carry_reference(const interp::BezierPoints& B, double previous);
+  /// The substep's start (S: its sample, least: per row of S the least distance there): per
+  /// element the hull's bound, or (the elements S sampled) its points ordered by a lower bound of
+  /// their distance: their own where evaluated, else (carried) the last one less the move since.
+  void set_reference(const Sample& S, const std::vector<double>& least, bool carry);
   void index_points();                                          // element_start_ and the rest
   /// The rows `points` of the deformer's embedding.
   void select(const std::vector<Eigen::Index>& points, interp::Embedding& subset) const;
@@ -192,12 +196,13 @@ class SurfaceContact : public sim::Potential {
   std::vector<int> slip_first_;   // per point, its first slip or -1
   std::vector<int> element_start_, element_points_;  // per element, its points inside the hull
   std::vector<Eigen::Index> unbounded_;              // points with a negative barycentric coordinate
-  // The substep's start (set_reference): Bezier points, each element's least hull distance to
-  // the colliders, and for the elements sampled there (`exact_`) their points in element_points_
-  // ordered by their least distance (`start_distance_`, aligned with element_points_).
+  // The substep's start (set_reference): Bezier points; per element (`exact_` 0) its hull's least
+  // distance to the colliders, or (`exact_` 1) its points in element_points_ ordered by a lower
+  // bound of their least distance, that bound plus offset_ in start_distance_ (aligned with it).
   bool reference_ = false;
   interp::BezierPoints reference_B_;
-  std::vector<double> element_distance_, start_distance_;
+  std::vector<double> element_distance_, start_distance_, offset_;
+  std::vector<double> shift_;  // per element, carry_reference's collider move, m (0 within a substep)
   std::vector<char> exact_;
   mutable std::vector<char> near_;                    // per element, gather's last hull test
   mutable std::vector<int> row_of_;                   // per point, a sample's row or -1 (scratch)
