@@ -181,15 +181,17 @@ CholeskyFactor eigen_factor(const Eigen::SparseMatrix<double>& A) {
 // Flops above which the factorization runs BLAS on the library's threads (about 10,000 control
 // vertices and up; below it one thread is as fast, docs/performance.md "Threads").
 constexpr double kParallelFactorFlops = 4e9;
+// Unknowns from which METIS's ordering is tried beside AMD's (bench/results/blender.md, "Ordering").
+constexpr Eigen::Index kMetisMinUnknowns = 10000;
 
 CholeskyFactor factor_with_cholmod(const Eigen::SparseMatrix<double>& A) {
   cholmod_common c;
   cholmod_start(&c);
   c.supernodal = CHOLMOD_SUPERNODAL;
   c.print = 0;
-  // Nested dissection (METIS) gives far less fill than AMD on these volume meshes; CHOLMOD
-  // keeps the better of the two.
-  c.nmethods = 2;
+  // Nested dissection (METIS) gives less fill than AMD on these volume meshes, and CHOLMOD keeps
+  // the better of the two; below kMetisMinUnknowns METIS's ordering costs more time than it saves.
+  c.nmethods = A.rows() < kMetisMinUnknowns ? 1 : 2;
   c.method[0].ordering = CHOLMOD_AMD;
   c.method[1].ordering = CHOLMOD_METIS;
   c.postorder = 1;
