@@ -16,8 +16,9 @@
 // lagged, smoothed Coulomb friction. Its Hessian W^T K W is dense for modified-BI; the step gets
 // the surrogate (b b^T) (x) K_p per touching point, with b the point's BI weights in its own
 // element and K_p the point's 3x3 Hessian: positive semi-definite and inside the FEM's pattern.
-// Only the points of elements whose Bezier points come near a collider are evaluated (a point
-// lies in the convex hull of its element's Bezier points): the others add exactly nothing.
+// Only the points that can touch are evaluated (broad phase, method.md fact 16): a point lies in
+// the convex hull of its element's Bezier points and moves by at most their move, so its distance
+// at a substep's start less L times that move bounds it; the others add exactly nothing.
 //
 // Units: stiffness k in N/m per point; positions and depths in m; friction velocity in m/s;
 // energy in J. One SurfaceContact is not for several threads at once (it keeps scratch).
