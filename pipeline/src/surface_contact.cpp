@@ -121,7 +121,7 @@ void SurfaceContact::begin_substep_at(double start_time, double end_time, const 
                                       const Eigen::Ref<const Eigen::VectorXd>& v) {
   if (!std::isfinite(start_time)) throw Error("contact time must be finite");
   check_size(x);
-  check_size(v);
+  check_size(v, "node velocities");
   // The last substep's start distances still bound this one's (carried), unless the time was set
   // or a collider replaced since.
   const bool carry = reference_;
@@ -253,10 +253,10 @@ double SurfaceContact::depth(Eigen::Index point, size_t collider) const {
   return max_depth_;
 }
 
-void SurfaceContact::check_size(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+void SurfaceContact::check_size(const Eigen::Ref<const Eigen::VectorXd>& x, const char* what) const {
   const int n = deformer_->vertices();
   if (x.size() != 3 * n)
-    throw Error("contact: node positions must have " + std::to_string(3 * n) + " entries, got " +
+    throw Error(std::string("contact: ") + what + " must have " + std::to_string(3 * n) + " entries, got " +
                 std::to_string(x.size()));
 }
 

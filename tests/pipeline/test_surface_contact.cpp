@@ -343,6 +343,8 @@ TEST_CASE("surface contact: bad input is an Error naming what is wrong", "[pipel
   CHECK_THROWS_WITH(ok.energy(Eigen::VectorXd::Zero(5)), Catch::Contains("node positions must have"));
   CHECK_THROWS_WITH(ok.set_time(nan), Catch::Contains("time must be finite"));
   CHECK_THROWS_WITH(ok.begin_substep_at(nan, 1.0, s.x, s.x), Catch::Contains("time must be finite"));
+  CHECK_THROWS_WITH(ok.begin_substep_at(0.0, 0.01, s.x, Eigen::VectorXd::Zero(3)),
+                    Catch::Contains("contact: node velocities must have " + std::to_string(s.x.size()) + " entries, got 3"));
   bad = colliders();
   bad[0].friction = -0.1;
   CHECK_THROWS_WITH(SurfaceContact(deformer, bad, 1e4), Catch::StartsWith("collider 0: friction must be finite and >= 0"));

@@ -50,7 +50,8 @@ class SurfaceContact : public sim::Potential {
   /// Poses the colliders at end_time and, from the start positions x (3 n): which point and
   /// collider pairs are guarded (signed distance > -max_depth()), and per touching pair with
   /// friction the lagged normal force, tangent basis and anchor (method.md fact 17). With
-  /// end_time <= start_time there is no friction in the substep.
+  /// end_time <= start_time there is no friction in the substep. The start velocities v (3 n)
+  /// set how far from the colliders the start evaluates points (fact 16); Error on a size other than 3 n.
   void begin_substep_at(double start_time, double end_time, const Eigen::Ref<const Eigen::VectorXd>& x,
                         const Eigen::Ref<const Eigen::VectorXd>& v) override;
   double time() const { return time_; }
@@ -131,7 +132,7 @@ class SurfaceContact : public sim::Potential {
   };
   const Sample& sample(const Eigen::Ref<const Eigen::VectorXd>& x) const;
   const Sample& sample(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& dx) const;
-  void check_size(const Eigen::Ref<const Eigen::VectorXd>& x) const;
+  void check_size(const Eigen::Ref<const Eigen::VectorXd>& x, const char* what = "node positions") const;
   const Eigen::MatrixXd& nodes(const Eigen::Ref<const Eigen::VectorXd>& x) const;  // n x 3 into X_
   /// The points that can come within `reach` (m, per element) of a collider: of the elements
   /// whose Bezier points do, those whose distance at the substep's start is not farther than
