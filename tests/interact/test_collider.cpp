@@ -58,7 +58,7 @@ TEST_CASE("collider meshes lie on the collider's surface at its pose, each trian
   const ColliderMesh plane = collider_mesh(Collider::plane({0, 2, 0}, {0, 1, 0}), 0, {.plane_half = 5, .plane_center = {1, 7, 1}});
   CHECK((plane.V.colwise().mean().transpose() - Eigen::Vector3d(1, 2, 1)).norm() < 1e-12);
   CHECK((plane.V.colwise().maxCoeff() - plane.V.colwise().minCoeff()).maxCoeff() == Approx(10));
-  CHECK_THROWS_AS(collider_mesh(shapes()[0], 0, {.plane_half = 0}), Error);
+  CHECK_THROWS_AS(collider_mesh(shapes()[0], 0, {.plane_half = 0}), mbi::Error);  // pipeline's
 }
 
 TEST_CASE("pick_collider: the nearest collider under the ray, never a plane", "[interact][collider]") {

@@ -1,12 +1,14 @@
 #pragma once
 // Colliders under the mouse: a rigid collider of surface contact (pipeline/colliders.hpp) as
-// triangles at its pose, to draw it and to pick it with cast(), and the motion that carries a
-// grabbed collider to the cursor within one step, so that the contact solve sees its velocity.
+// triangles at its pose (pipeline::collider_mesh), to draw it and to pick it with cast(), and the
+// motion that carries a grabbed collider to the cursor within one step, so that the contact
+// solve sees its velocity.
 //
 //   ColliderMesh m = collider_mesh(ball, time, {.plane_half = 2, .plane_center = middle});
 //   std::optional<ColliderHit> h = pick_collider(ray, colliders, time);   // planes never
 //   contact.set_collider(h->collider, dragged(colliders[h->collider], time, to - from, dt));
 #include <mbi/interact/pick.hpp>
+#include <mbi/pipeline/collider_mesh.hpp>
 #include <mbi/pipeline/colliders.hpp>
 
 #include <Eigen/Core>
@@ -16,26 +18,10 @@
 
 namespace mbi::interact {
 
-/// A collider's surface: triangles with a unit normal per vertex, outward (a mesh collider's: on
-/// its triangles' winding side), flat faces with their own vertices; world units (m).
-struct ColliderMesh {
-  Eigen::MatrixXd V;  ///< n x 3
-  Eigen::MatrixXd N;  ///< n x 3
-  Eigen::MatrixXi F;  ///< t x 3, counter-clockwise seen from outside
-};
-
-/// A plane is infinite: it is drawn as a square of half side `plane_half` (m) about the point of
-/// the plane nearest `plane_center`.
-struct ColliderMeshOptions {
-  double plane_half = 1.0;
-  Eigen::Vector3d plane_center = Eigen::Vector3d::Zero();
-};
-
-/// The surface of `collider` at `time` (s): a sphere or a capsule as a 32 x 16 latitude-longitude
-/// mesh (vertices on the exact surface), a box's six faces, a mesh collider's triangles (those
-/// its level set was built from) at its pose, a plane as the square of `options`. Throws Error
-/// on a plane_half <= 0 or not finite, or a non-finite plane_center.
-ColliderMesh collider_mesh(const pipeline::Collider& collider, double time, const ColliderMeshOptions& options = {});
+/// A collider as triangles at its pose (pipeline's: what mbi run's pictures draw too).
+using pipeline::ColliderMesh;
+using pipeline::ColliderMeshOptions;
+using pipeline::collider_mesh;
 
 struct ColliderHit {
   int collider = -1;  ///< index into the colliders given
