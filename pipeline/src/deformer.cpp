@@ -5,8 +5,10 @@
 #include <mbi/pipeline/deformer.hpp>
 #include <mbi/pipeline/precompute.hpp>
 
+#include <exception>
 #include <mutex>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -122,14 +124,49 @@ struct Deformer::Impl {
 
 Deformer::Deformer(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
                    const Eigen::Ref<const Eigen::MatrixXd>& P, const DeformerOptions& options,
-                   const Eigen::MatrixXd& rest_normals)
-    : Deformer(U, T, interp::embed(U, T, P), options, rest_normals) {}
+                   const Eigen::MatrixXd& rest_normals) {
+  interp::check_threads(options.threads);
+  // The precompute does not depend on the points: it runs on a thread of its own while this one
+  // embeds (the embedding's threads share the cores poorly), unless one thread was asked for.
+  std::unique_ptr<Impl> impl;
+  std::exception_ptr failed;
+  auto precompute = [&] {
+    try {
+      impl = std::make_unique<Impl>(U, T, options);
+    } catch (...) {
+      failed = std::current_exception();
+    }
+  };
+  interp::Embedding embedding;
+  if (options.threads != 1 && interp::threads() > 1) {
+    std::thread beside(precompute);
+    try {
+      embedding = interp::embed(U, T, P);
+    } catch (...) {
+      beside.join();
+      throw;  // the embedding's error first, as when the two run one after the other
+    }
+    beside.join();
+  } else {
+    embedding = interp::embed(U, T, P);
+    precompute();
+  }
+  if (failed) std::rethrow_exception(failed);
+  impl_ = std::move(impl);
+  attach(std::move(embedding), rest_normals);
+}
 
 Deformer::Deformer(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
                    interp::Embedding embedding, const DeformerOptions& options,
                    const Eigen::MatrixXd& rest_normals)
     : impl_(std::make_unique<Impl>(U, T, options)) {
-  const int d = static_cast<int>(U.cols());
+  attach(std::move(embedding), rest_normals);
+}
+
+void Deformer::attach(interp::Embedding embedding, const Eigen::MatrixXd& rest_normals) {
+  const Eigen::Index d = impl_->pre.dim();
+  const DeformerOptions& options = impl_->options;
+  const Eigen::MatrixXi& T = impl_->pre.elements();
   if (embedding.dim() != d || embedding.bary.rows() != embedding.element.size())
     throw Error("the embedding must have " + std::to_string(d + 1) + " barycentric coordinates a point");
   for (Eigen::Index p = 0; p < embedding.size(); ++p)

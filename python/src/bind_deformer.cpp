@@ -26,9 +26,9 @@ std::unique_ptr<Bound> make_deformer(const py::object& U, const py::object& T, c
   o.threads = threads;
   Eigen::MatrixXd normals;
   if (!rest_normals.is_none()) normals = float_matrix(rest_normals, "rest_normals", {p.map.rows(), p.map.cols()}).map;
-  interp::Embedding emb = without_gil([&] { return interp::embed(c.U.map, c.T, p.map); });
-  report_outside(emb, p, max_outside);
-  return without_gil([&] { return std::make_unique<Bound>(c.U.map, c.T, std::move(emb), o, normals); });
+  auto bound = without_gil([&] { return std::make_unique<Bound>(c.U.map, c.T, p.map, o, normals); });
+  report_outside(bound->object.embedding(), p, max_outside);
+  return bound;
 }
 
 // float32 results (the fast kernel) when out is float32 or dtype asks for it; float64 otherwise

@@ -42,7 +42,7 @@ struct DeformerOptions {
 class Deformer {
  public:
   /// Embeds the dense rest points P (p x d) in the rest control mesh (U, T) and precomputes the
-  /// method. rest_normals: p x d unit normals for the deform() calls with normals, or empty.
+  /// method, the two at once on two threads unless options.threads is 1. rest_normals: p x d unit normals for the deform() calls with normals, or empty.
   /// Throws mbi::Error on an invalid mesh, point, option or size.
   Deformer(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
            const Eigen::Ref<const Eigen::MatrixXd>& P, const DeformerOptions& options = {},
@@ -101,6 +101,7 @@ class Deformer {
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
+  void attach(interp::Embedding embedding, const Eigen::MatrixXd& rest_normals);  // checked, after the precompute
 };
 
 }  // namespace mbi::pipeline
