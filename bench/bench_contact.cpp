@@ -10,7 +10,11 @@
 // surrogate is exact against a plane; and modified-BI with Newton on that surrogate alone
 // (`modified-bi-blocks`: the contact without its exact Hessian product). Counters: ms of each frame, their ratio, Newton
 // iterations per frame of each, the contact frame's line-search halvings, the contact points
-// inside the plane and their fraction of the surface.
+// inside the plane and their fraction of the surface, and the broad phase's counts
+// (SurfaceContact::counts: candidates and points with a term per evaluation at a new x,
+// candidates per move, points evaluated per substep start). Also at 20K and 1M points: the
+// scene's bumpy sphere resampled in the scene's cage, the stiffness per point scaled to the same
+// per area, so that the same fraction touches.
 //
 //   build/release/mbi-bench --benchmark_filter=ContactFrame
 #include "bench_common.hpp"
