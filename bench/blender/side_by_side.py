@@ -13,7 +13,8 @@ key (a bend growing over the frames; the boundary cage gets the same motion of i
   mbi            the add-on: bind operator (embedding, precompute, first write), live attribute
   mbi-boundary   the same with only the cage's boundary animated (the interior by the harmonic extension)
   meshdeform     Mesh Deform modifier, precision 5, bind operator plus its evaluation
-  surfacedeform  Surface Deform modifier, bind operator plus its evaluation
+  surfacedeform  Surface Deform modifier, bind operator plus its evaluation (it refuses an edge of more
+                 than two faces: the faces on such an edge get their own copies of their vertices)
 Per frame: wall time of scene.frame_set (the cage's key, the deformation, the model's
 re-evaluation), median and min over --runs passes of --frames frames. Quality (models up to 200K
 vertices): the change of the dihedral angles at the model's edges at the full 90-degree bend against
@@ -149,7 +150,10 @@ def bind(method, mbi, model, U, T, frames):
     used = np.unique(faces)
     index = np.full(len(U), -1)
     index[used] = np.arange(len(used))
-    cage = cage_object("cage", U[used], index[faces], frames)
+    nodes, faces = U[used], index[faces]
+    if method == "surfacedeform":  # it refuses edges of more than two faces: those faces get their own vertices
+        nodes, faces = unshared_crowded_edges(nodes, faces)
+    cage = cage_object("cage", nodes, faces, frames)
     kind = "MESH_DEFORM" if method == "meshdeform" else "SURFACE_DEFORM"
     modifier = model.modifiers.new("deform", kind)
     if method == "meshdeform":
@@ -171,10 +175,27 @@ def bind(method, mbi, model, U, T, frames):
     return seconds, seconds
 
 
+def edge_counts(faces):
+    """Each face's three edges (f, 3, 2 sorted pairs), and per face edge how many faces share it."""
+    edges = np.sort(np.stack([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]], axis=1), axis=2)
+    _, inverse, counts = np.unique(edges.reshape(-1, 2), axis=0, return_inverse=True, return_counts=True)
+    return counts[inverse.ravel()].reshape(-1, 3)
+
+
 def crowded_edges(faces):
     edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
     _, counts = np.unique(edges, axis=0, return_counts=True)
     return int(np.sum(counts > 2))
+
+
+def unshared_crowded_edges(nodes, faces):
+    """The same surface with every face on an edge of more than two faces given its own copies of its
+    three vertices (same positions, so the same motion): no edge is shared by more than two faces."""
+    crowded = np.flatnonzero((edge_counts(faces) > 2).any(axis=1))
+    faces = faces.copy()
+    copies = nodes[faces[crowded]].reshape(-1, 3)
+    faces[crowded] = len(nodes) + np.arange(len(copies)).reshape(-1, 3)
+    return np.vstack([nodes, copies]), faces
 
 
 def positions(mesh):
