@@ -2,7 +2,7 @@
 // scripted mouse drag carries the sphere into the ball. The sphere follows the cursor on the
 // plane facing the camera, the ball is pushed away, points touch while it pushes, and no dense
 // point goes deeper into a collider than the contact's max depth (the depth guarded points never
-// pass). Checked through the per-frame report under Xvfb.
+// pass); the t key switches contact off. Checked through the per-frame report under Xvfb.
 #include <catch2/catch.hpp>
 
 #include <mbi/viewer/camera.hpp>
@@ -90,7 +90,7 @@ TEST_CASE("mbi view: a sphere collider dragged with the mouse pushes the model, 
   // drag the sphere 0.7 m toward the ball (-x), over 20 frames (2.1 m/s), then let go
   const Eigen::Vector3d push(-0.7, 0, 0);
   const Eigen::Vector2d from = window_of(first, center0), to = window_of(first, center0 + push);
-  const int press = 10, last_move = 30, release = 40, frames = 50;
+  const int press = 10, last_move = 30, release = 40, off = 45, frames = 50;
   std::ostringstream script;
   script.precision(10);
   script << press << " press " << from.x() << " " << from.y() << " 0\n";
@@ -99,6 +99,7 @@ TEST_CASE("mbi view: a sphere collider dragged with the mouse pushes the model, 
     script << f << " move " << p.x() << " " << p.y() << "\n";
   }
   script << release << " release " << to.x() << " " << to.y() << " 0\n";
+  script << off << " key t\n";  // contact off
   std::ofstream(dir / "drag.txt") << script.str();
   const mbi::test::ViewRun run = view(common + mbi::test::quoted(dir / "drag.json") + " --frames " + std::to_string(frames) +
                                           " --script " + mbi::test::quoted(dir / "drag.txt"),
@@ -118,12 +119,13 @@ TEST_CASE("mbi view: a sphere collider dragged with the mouse pushes the model, 
   for (const auto& fr : rep) {
     const nlohmann::json& c = fr["contact"];
     CHECK(fr["finite"].get<bool>());
-    CHECK(c["on"].get<bool>());
-    grabbed_frames += c["colliders"][0]["grabbed"].get<bool>();
     const int frame = fr["frame"].get<int>();
+    CHECK(c["on"].get<bool>() == (frame < off));
+    if (frame >= off) CHECK(c["touching"].get<int>() == 0);  // no contact solved: none counted
+    grabbed_frames += c["colliders"][0]["grabbed"].get<bool>();
     if (frame > press + 5 && frame <= release) touching_frames += c["colliders"][0]["gap"].get<double>() <= 0;
     INFO("frame " << frame << ": deepest " << c["deepest"].get<double>() << " m, max depth " << max_depth << " m");
-    CHECK(c["deepest"].get<double>() >= -max_depth);  // no dense point deeper in the ground or the sphere
+    if (frame < off) CHECK(c["deepest"].get<double>() >= -max_depth);  // no dense point deeper in the ground or the sphere
   }
   CHECK(grabbed_frames == release - press);
   CHECK(touching_frames >= 5);  // the sphere touched the ball while pushing it
@@ -133,12 +135,12 @@ TEST_CASE("mbi view: a sphere collider dragged with the mouse pushes the model, 
   const Eigen::Vector3d center1 = vec(rep.back()["contact"]["colliders"][0]["point"]);
   INFO("sphere moved " << (center1 - center0).transpose() << ", the cursor asked " << along.transpose());
   CHECK((center1 - center0 - along).norm() < 2 * pixel);  // followed the cursor to a pixel or two
-  const Eigen::Vector3d mean_after = vec(rep.back()["contact"]["points_mean"]);
+  const Eigen::Vector3d mean_after = vec(rep.at(off - 1)["contact"]["points_mean"]);
   INFO("the ball's points' mean moved " << (mean_after - mean_before).transpose());
   CHECK(mean_after.x() - mean_before.x() < -0.1);  // pushed along the drag, away from the sphere
   // where the sphere was left it would hold the ball as it was before the push over 0.1 m deep,
   // yet no point is inside it: the points near it moved out of its way
   INFO("the sphere's centre ends " << (center1 - mean_before).norm() << " m from the ball's before the push");
   CHECK((center1 - mean_before).norm() < 0.5 + 0.3 - 0.1);
-  CHECK(rep.back()["contact"]["colliders"][0]["gap"].get<double>() >= -max_depth);
+  CHECK(rep.at(off - 1)["contact"]["colliders"][0]["gap"].get<double>() >= -max_depth);
 }
