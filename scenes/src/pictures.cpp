@@ -1,6 +1,7 @@
 #include "pictures.hpp"
 
 #include "crease_pictures.hpp"
+#include "picture_colliders.hpp"
 
 #include <mbi/gpu/context.hpp>
 #include <mbi/gpu/evaluator.hpp>
@@ -18,6 +19,11 @@
 namespace fs = std::filesystem;
 
 namespace mbi::scenes {
+namespace {
+
+const Eigen::Vector3d kModelColor{0.85, 0.62, 0.35};  // the renderers' default
+
+}  // namespace
 
 std::vector<pipeline::Method> picture_methods(pipeline::Method method) {
   std::vector<pipeline::Method> panels{pipeline::Method::BI, pipeline::Method::ModifiedBI};
@@ -69,11 +75,14 @@ void Pictures3D::add(int f, pipeline::FramePipeline& pipe, const std::vector<int
   if (creases_)
     for (pipeline::Method k : picture_methods(pipe.method())) jumps.push_back(creases_->face_jumps(pipe, k));
   if (!stored_) stored_ = std::make_unique<io::ScratchFile>(dir_, "pictures");
-  // one record: frame, panel count, then each panel's rows, columns and values
+  // one record: frame, panel count, the time (the colliders' pose), then each panel's rows,
+  // columns and values
   const long at = stored_->size();
+  const double time = picture_time(pipe);
   try {
     const std::int64_t head[2] = {f, static_cast<std::int64_t>(panels.size())};
     stored_->append(head, sizeof head);
+    stored_->append(&time, sizeof time);
     for (size_t k = 0; k < panels.size(); ++k) {
       const interp::BezierPoints& B = panels[k];
       const std::int64_t shape[2] = {B.rows(), B.cols()};
@@ -89,10 +98,12 @@ void Pictures3D::add(int f, pipeline::FramePipeline& pipe, const std::vector<int
   lo_before_ = lo_;
   hi_before_ = hi_;
   top_before_ = top_;
+  near_before_ = near_;
   for (const Eigen::VectorXd& j : jumps)
     if (j.size()) top_ = std::max(top_, j.maxCoeff());
   lo_ = lo_.cwiseMin(X.colwise().minCoeff().transpose());
   hi_ = hi_.cwiseMax(X.colwise().maxCoeff().transpose());
+  near_.extend(near_bounds(picture_colliders(pipe), time, Eigen::AlignedBox3d(lo_, hi_)));
 }
 
 void Pictures3D::discard_last() {
@@ -101,13 +112,16 @@ void Pictures3D::discard_last() {
   lo_ = lo_before_;
   hi_ = hi_before_;
   top_ = top_before_;
+  near_ = near_before_;
 }
 
-int Pictures3D::read_frame(long& at, std::vector<interp::BezierPoints>& panels,
+int Pictures3D::read_frame(long& at, double& time, std::vector<interp::BezierPoints>& panels,
                            std::vector<Eigen::VectorXd>& jumps) const {
   std::int64_t head[2];
   stored_->read(at, head, sizeof head);
   at += sizeof head;
+  stored_->read(at, &time, sizeof time);
+  at += sizeof time;
   panels.resize(static_cast<std::size_t>(head[1]));
   jumps.resize(creases_ ? panels.size() : 0);
   for (size_t k = 0; k < panels.size(); ++k) {
@@ -135,21 +149,28 @@ void Pictures3D::write(pipeline::FramePipeline& pipe) {
   if (side.norm() < 0.5) side = up.cross(Eigen::Vector3d::UnitY());
   side.normalize();
   const Eigen::Vector3d front = side.cross(up);
+  // the model over the run, and the colliders near it (a collider far around it or a plane does
+  // not move the camera)
+  Eigen::AlignedBox3d framed(lo_, hi_);
+  if (!near_.isEmpty()) framed.extend(near_);
   Eigen::MatrixXd corners(2, 3);
-  corners.row(0) = lo_.transpose();
-  corners.row(1) = hi_.transpose();
+  corners.row(0) = framed.min().transpose();
+  corners.row(1) = framed.max().transpose();
   raster::View view = raster::frame_points(corners, -(0.75 * front + 0.6 * side + 0.45 * up), up);
-  view.bounds_min = lo_;
-  view.bounds_max = hi_;
+  view.bounds_min = framed.min();
+  view.bounds_max = framed.max();
   const int h = 480;
   const int w = std::clamp(static_cast<int>(h * raster::view_aspect(view)), 160, 960);
   // the GPU renderer draws from the evaluator's buffers: the run's evaluator is the GPU's
   auto* gpu = renderer_ ? dynamic_cast<gpu::GpuEvaluator*>(&pipe.evaluator()) : nullptr;
+  const std::vector<pipeline::Collider> colliders = picture_colliders(pipe);
   Eigen::MatrixXd V;
   std::vector<interp::BezierPoints> frame;
   std::vector<Eigen::VectorXd> jumps;
   for (long at = 0; at < stored_->size();) {
-    const int f = read_frame(at, frame, jumps);
+    double time = 0;
+    const int f = read_frame(at, time, frame, jumps);
+    const std::vector<raster::Solid> solids = picture_solids(colliders, time, view);
     std::vector<io::Image> panels;
     for (size_t k = 0; k < frame.size(); ++k) {
       const interp::BezierPoints& B = frame[k];
@@ -157,10 +178,10 @@ void Pictures3D::write(pipeline::FramePipeline& pipe) {
         panels.push_back(crease_panel(pipe, B, jumps[k], view, w, h));
       } else if (gpu) {
         gpu->evaluate(B, true);
-        panels.push_back(renderer_->render(*gpu, view, w, h));
+        panels.push_back(renderer_->render(*gpu, view, w, h, kModelColor, nullptr, nullptr, solids));
       } else {
         interp::evaluate<double>(B, pipe.embedding(), V);
-        panels.push_back(raster::render_mesh(V, m_.dense.F, view, w, h));
+        panels.push_back(raster::render_mesh(V, m_.dense.F, view, w, h, kModelColor, solids));
       }
     }
     io::Image picture = raster::side_by_side(panels);

@@ -11,6 +11,7 @@
 #include <mbi/scenes/runner.hpp>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include <filesystem>
 #include <memory>
@@ -34,7 +35,9 @@ void check_picture_size(const Scene& sc, const SceneModels& m);
 /// The 3D pictures of a run: the Bezier points of each written frame's panels wait in a scratch
 /// file in the output folder (io::ScratchFile: about 240 bytes a tetrahedron a panel, on disk,
 /// so memory stays the same however many frames run), and the pictures are drawn at the end,
-/// all the same size, with one camera that frames the control mesh over the whole run.
+/// all the same size, with one camera that frames the control mesh over the whole run and the
+/// colliders near it. Each picture shows the run's colliders at that frame's pose (grey-blue)
+/// and its ground (a grey checked square); a run without them draws the model alone.
 class Pictures3D {
  public:
   /// `context`: the run's GPU evaluator's, whose buffers the pictures are drawn from; null: the
@@ -57,9 +60,10 @@ class Pictures3D {
   void write(pipeline::FramePipeline& pipe);
 
  private:
-  /// The frame stored at byte `at` of the scratch file, its panels' face jumps (output.creases);
-  /// `at` moves past it.
-  int read_frame(long& at, std::vector<interp::BezierPoints>& panels, std::vector<Eigen::VectorXd>& jumps) const;
+  /// The frame stored at byte `at` of the scratch file, its time, its panels' face jumps
+  /// (output.creases); `at` moves past it.
+  int read_frame(long& at, double& time, std::vector<interp::BezierPoints>& panels,
+                 std::vector<Eigen::VectorXd>& jumps) const;
   /// One panel coloured by its creases (CPU), on the run's shared scale.
   io::Image crease_panel(pipeline::FramePipeline& pipe, const interp::BezierPoints& B, const Eigen::VectorXd& jumps,
                          const raster::View& view, int w, int h) const;
@@ -74,6 +78,7 @@ class Pictures3D {
   long last_at_ = 0;                                 // where the last frame stored starts
   std::unique_ptr<pipeline::Creases> creases_;                 // output.creases only
   double top_ = 0, top_before_ = 0;                  // the largest face jump stored, and before the last add()
+  Eigen::AlignedBox3d near_, near_before_;           // the colliders near the model, and before the last add()
 };
 
 }  // namespace mbi::scenes

@@ -265,7 +265,7 @@ void Renderer::draw_points(const Eigen::MatrixXd& points, const Eigen::Matrix4d&
 
 io::Image Renderer::render(const GpuEvaluator& ev, const raster::View& view, int width, int height,
                            const Eigen::Vector3d& color, const Eigen::MatrixXd* wire_X,
-                           const Eigen::MatrixXi* wire_T) {
+                           const Eigen::MatrixXi* wire_T, const std::vector<raster::Solid>& solids) {
   if (width < 1 || height < 1 || width > 16384 || height > 16384)
     throw Error("Renderer: picture size " + std::to_string(width) + " x " + std::to_string(height) +
                   " out of range [1, 16384]");
@@ -274,7 +274,13 @@ io::Image Renderer::render(const GpuEvaluator& ev, const raster::View& view, int
   glViewport(0, 0, width, height);
   glClearColor(1, 1, 1, 1);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-  draw(ev, ortho_view(view, width, height), view.direction, color, wire_X, wire_T);
+  const Eigen::Matrix4d vp = ortho_view(view, width, height);
+  draw(ev, vp, view.direction, color, wire_X, wire_T);
+  for (const raster::Solid& s : solids) {  // unlit: normals toward the eye give the colour itself
+    const Eigen::MatrixXd N = s.shaded ? raster::vertex_normals(s.V, s.F)
+                                       : Eigen::MatrixXd(view.direction.normalized().transpose().replicate(s.V.rows(), 1));
+    draw_mesh(s.V, N, s.F, vp, view.direction, s.color);
+  }
   io::Image img = read_picture(width, height);
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   detail::check("Renderer::render");

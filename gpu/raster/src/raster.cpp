@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <stdexcept>
 #include <string>
 
 namespace mbi::raster {
@@ -88,27 +89,35 @@ View frame_points(const Eigen::Ref<const Eigen::MatrixXd>& V, const Eigen::Vecto
   return v;
 }
 
-Image render_mesh(const Eigen::Ref<const Eigen::MatrixXd>& V,
-                  const Eigen::Ref<const Eigen::MatrixXi>& F, const View& view, int width,
-                  int height, const Eigen::Vector3d& color) {
-  if (V.cols() != 3 || F.cols() != 3) throw std::invalid_argument("the mesh to render needs n x 3, f x 3");
-  Image img(width, height, {255, 255, 255});
-  const Projector proj(view, width, height);
-  // area-weighted vertex normals
+Eigen::MatrixXd vertex_normals(const Eigen::Ref<const Eigen::MatrixXd>& V, const Eigen::Ref<const Eigen::MatrixXi>& F) {
   Eigen::MatrixXd N = Eigen::MatrixXd::Zero(V.rows(), 3);
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
     const Eigen::Vector3d a = V.row(F(f, 0)), b = V.row(F(f, 1)), c = V.row(F(f, 2));
     const Eigen::Vector3d n = (b - a).cross(c - a);
     for (int k = 0; k < 3; ++k) N.row(F(f, k)) += n.transpose();
   }
-  Eigen::MatrixXd S(V.rows(), 3);  // screen coordinates
   for (Eigen::Index i = 0; i < V.rows(); ++i) {
-    S.row(i) = proj(V.row(i).transpose()).transpose();
     const double l = N.row(i).norm();
     if (l > 0) N.row(i) /= l;
   }
-  std::vector<double> depth(static_cast<size_t>(width) * height,
-                            std::numeric_limits<double>::infinity());
+  return N;
+}
+
+namespace {
+
+void check_mesh(const Eigen::Ref<const Eigen::MatrixXd>& V, const Eigen::Ref<const Eigen::MatrixXi>& F) {
+  if (V.cols() != 3 || F.cols() != 3) throw std::invalid_argument("the mesh to render needs n x 3, f x 3");
+  if (F.size() > 0 && (F.minCoeff() < 0 || F.maxCoeff() >= V.rows()))
+    throw std::invalid_argument("the mesh to render indexes vertices outside its " + std::to_string(V.rows()));
+}
+
+// Draws V, F into img where it is nearer than `depth` (and writes its depth there).
+void draw_shaded(Image& img, std::vector<double>& depth, const Projector& proj, const Eigen::Ref<const Eigen::MatrixXd>& V,
+                 const Eigen::Ref<const Eigen::MatrixXi>& F, const Eigen::Vector3d& color, bool shaded = true) {
+  const int width = img.width, height = img.height;
+  const Eigen::MatrixXd N = vertex_normals(V, F);
+  Eigen::MatrixXd S(V.rows(), 3);  // screen coordinates
+  for (Eigen::Index i = 0; i < V.rows(); ++i) S.row(i) = proj(V.row(i).transpose()).transpose();
   const Eigen::Vector3d light = -proj.fwd;  // headlight
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
     const int i0 = F(f, 0), i1 = F(f, 1), i2 = F(f, 2);
@@ -119,15 +128,34 @@ Image render_mesh(const Eigen::Ref<const Eigen::MatrixXd>& V,
                       double& zb = depth[static_cast<size_t>(y) * width + x];
                       if (z >= zb) return;
                       zb = z;
+                      std::uint8_t* px = img.at(x, y);
+                      if (!shaded) {
+                        for (int c = 0; c < 3; ++c) px[c] = to_byte(color[c]);
+                        return;
+                      }
                       Eigen::Vector3d n = w0 * N.row(i0) + w1 * N.row(i1) + w2 * N.row(i2);
                       n.normalize();
                       const double lam = std::abs(n.dot(light));
                       const double spec = std::pow(lam, 40.0) * 0.25;
-                      std::uint8_t* px = img.at(x, y);
                       for (int c = 0; c < 3; ++c)
                         px[c] = to_byte(color[c] * (0.18 + 0.82 * lam) + spec);
                     });
   }
+}
+
+}  // namespace
+
+Image render_mesh(const Eigen::Ref<const Eigen::MatrixXd>& V,
+                  const Eigen::Ref<const Eigen::MatrixXi>& F, const View& view, int width,
+                  int height, const Eigen::Vector3d& color, const std::vector<Solid>& solids) {
+  check_mesh(V, F);
+  for (const Solid& s : solids) check_mesh(s.V, s.F);
+  Image img(width, height, {255, 255, 255});
+  const Projector proj(view, width, height);
+  std::vector<double> depth(static_cast<size_t>(width) * height,
+                            std::numeric_limits<double>::infinity());
+  draw_shaded(img, depth, proj, V, F, color);
+  for (const Solid& s : solids) draw_shaded(img, depth, proj, s.V, s.F, s.color, s.shaded);
   return img;
 }
 

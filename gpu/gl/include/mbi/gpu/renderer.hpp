@@ -40,10 +40,13 @@ class Renderer {
 
   /// Renders the evaluator's last pass (3D, evaluated with normals) seen through `view` into a
   /// width x height picture (white background). `wire_X` (n x 3 control positions) with
-  /// `wire_T` (m x 4) adds the control mesh's edges in dark grey.
+  /// `wire_T` (m x 4) adds the control mesh's edges in dark grey; `solids` (colliders, the
+  /// ground) are drawn with it by draw_mesh, their normals raster::vertex_normals (an unlit
+  /// solid's toward the eye: its colour as it is).
   io::Image render(const GpuEvaluator& evaluator, const raster::View& view, int width, int height,
                    const Eigen::Vector3d& color = {0.85, 0.62, 0.35},
-                   const Eigen::MatrixXd* wire_X = nullptr, const Eigen::MatrixXi* wire_T = nullptr);
+                   const Eigen::MatrixXd* wire_X = nullptr, const Eigen::MatrixXi* wire_T = nullptr,
+                   const std::vector<raster::Solid>& solids = {});
 
   /// Draws into the bound framebuffer and viewport (a window): world -> clip matrix
   /// `view_projection`, `eye_direction` from the eye into the scene (headlight). Depth test on;

@@ -29,12 +29,26 @@ double view_aspect(const View& view);
 View frame_points(const Eigen::Ref<const Eigen::MatrixXd>& V, const Eigen::Vector3d& direction,
                   const Eigen::Vector3d& up);
 
+/// A triangle mesh in one colour (0..1) drawn beside the model: a collider, the ground.
+struct Solid {
+  Eigen::MatrixXd V;  ///< n x 3, world
+  Eigen::MatrixXi F;  ///< t x 3 rows of V
+  Eigen::Vector3d color = {0.6, 0.6, 0.6};
+  bool shaded = true;  ///< false: the colour as it is, unlit (a floor seen at a slant stays light)
+};
+
+/// Unit vertex normals of V (n x 3), F (f x 3), area weighted; a vertex of no triangle gets 0.
+Eigen::MatrixXd vertex_normals(const Eigen::Ref<const Eigen::MatrixXd>& V, const Eigen::Ref<const Eigen::MatrixXi>& F);
+
 /// Renders V (n x 3), F (f x 3) with a z-buffer and per-vertex normals (area weighted) under a
 /// headlight with Lambert + ambient shading in `color` (0..1). Shading reveals creases, so BI's
-/// first-order discontinuities show up.
+/// first-order discontinuities show up. `solids` are drawn into the same z-buffer after it,
+/// shaded alike, each in its colour; without them the picture is the model's alone. Throws
+/// std::invalid_argument on shapes that are not n x 3 and f x 3 or an index outside V.
 Image render_mesh(const Eigen::Ref<const Eigen::MatrixXd>& V,
                   const Eigen::Ref<const Eigen::MatrixXi>& F, const View& view, int width,
-                  int height, const Eigen::Vector3d& color = {0.85, 0.62, 0.35});
+                  int height, const Eigen::Vector3d& color = {0.85, 0.62, 0.35},
+                  const std::vector<Solid>& solids = {});
 
 /// Draws the control mesh's edges (U n x 3, T m x 4) as thin dark lines over an image rendered
 /// with the same view.
