@@ -124,8 +124,8 @@ void same_model(const Image& a, const Image& b, bool background_kept) {
   if (background_kept) CHECK(background_ok == background);
 }
 
-TEST_CASE("pictures: the ground and a large collider far from the model move neither the camera nor the model; "
-          "without colliders the model is alone",
+TEST_CASE("pictures: the ground and a large collider far from the model move neither the camera nor the model, "
+          "and without colliders the model is alone",
           "[scenes][pictures]") {
   mbi::test::TempDir dir("pictures-ground");
   const fs::path bare = run_text(still_ball("control", "", "off"), dir, "bare");
