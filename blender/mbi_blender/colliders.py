@@ -1,5 +1,6 @@
-"""Colliders from Blender objects: an object marked as an mbi collider (plane, sphere, box, capsule)
-becomes an mbi.Collider fitted from its bounding box and world transform at the run's first frame;
+"""Colliders from Blender objects: an object marked as an mbi collider (plane, sphere, box, capsule,
+mesh) becomes an mbi.Collider fitted from its bounding box (or made from its mesh) and world transform
+at the run's first frame;
 its animated transform over the run becomes the collider's rigid motion (motion.fit).
 
 Shapes, in world space (the object's bounding box: local center c, half extents h scaled by the
@@ -8,6 +9,9 @@ object's scale):
   sphere   center c, radius the largest scaled half extent
   box      center c, half extents h, axes the object's rotated axes
   capsule  along the longest axis of h, radius the largest other half extent
+  mesh     the object's own mesh (modifiers not applied), triangulated, its vertices placed by the
+           object's transform: a closed mesh, as mbi.Collider.mesh's level set (its voxel size chosen
+           from the mesh)
 """
 import numpy as np
 
@@ -34,6 +38,8 @@ def shape(obj, M):
     center = M[:3, :3] @ ((lo + hi) / 2) + M[:3, 3]
     half = (hi - lo) / 2 * scale
     kind = obj.mbi.collider
+    if kind == "mesh":
+        return dict(shape="mesh", V=mesh_points(obj.data) @ M[:3, :3].T + M[:3, 3], F=triangles(obj.data))
     if kind == "plane":
         return dict(shape="plane", point=M[:3, 3].copy(), normal=axes[:, 2].copy())
     if kind == "sphere":
@@ -44,6 +50,19 @@ def shape(obj, M):
     radius = float(np.delete(half, k).max())
     reach = max(half[k] - radius, 0.0) * axes[:, k]
     return dict(shape="capsule", a=center - reach, b=center + reach, radius=radius)
+
+
+def mesh_points(mesh):
+    co = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
+    mesh.vertices.foreach_get("co", co)
+    return co.reshape(-1, 3).astype(np.float64)
+
+
+def triangles(mesh):
+    mesh.calc_loop_triangles()
+    F = np.empty(len(mesh.loop_triangles) * 3, dtype=np.int32)
+    mesh.loop_triangles.foreach_get("vertices", F)
+    return F.reshape(-1, 3)
 
 
 def check_apart(obj, collider, models):
@@ -74,6 +93,8 @@ def make(mbi, obj, matrices, dt, first_frame):
             collider = mbi.Collider.plane(s["point"], s["normal"], friction=friction)
         elif s["shape"] == "sphere":
             collider = mbi.Collider.sphere(s["center"], s["radius"], friction=friction)
+        elif s["shape"] == "mesh":
+            collider = mbi.Collider.mesh(s["V"], s["F"], friction=friction)
         elif s["shape"] == "box":
             collider = mbi.Collider.box(s["center"], s["half_extents"], s["axes"], friction=friction)
         else:

@@ -17,7 +17,8 @@ COLLIDERS = [("none", "None", "Not an mbi collider"),
              ("plane", "Plane", "The plane through the object's origin, normal its local +Z (solid below)"),
              ("sphere", "Sphere", "Centered in the object's bounding box, radius its largest half extent"),
              ("box", "Box", "The object's bounding box, rotated with it"),
-             ("capsule", "Capsule", "Along the bounding box's longest axis, radius the largest other half extent")]
+             ("capsule", "Capsule", "Along the bounding box's longest axis, radius the largest other half extent"),
+             ("mesh", "Mesh", "The object's own closed triangle mesh (modifiers not applied), as a level set")]
 
 
 class MbiObjectSettings(bpy.types.PropertyGroup):

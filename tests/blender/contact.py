@@ -4,7 +4,8 @@ object keyed to move at constant velocity; the baked ball equals `mbi run`'s pip
 the same data (contact = "surface", the same [[colliders]] and motion; FramePipeline.from_scene) at
 every frame, and stays on the colliders' approach side. A collider overlapping the ball at rest, and one whose keys are not a
 constant-velocity motion, are refused with their messages and leave no cache. The shapes fitted from
-objects (plane, sphere, box, capsule) and their signed distances agree with mbi.Collider's.
+objects (plane, sphere, box, capsule) and their signed distances agree with mbi.Collider's; a cube
+as a mesh collider (its own triangles) measures as the box within a voxel.
 
     blender -b --factory-startup --python contact.py -- <work dir> <mbi executable>
 """
@@ -80,7 +81,30 @@ def shapes():
     capsule = colliders.shape(cube, M)
     check(abs(capsule["radius"] - 1.0) < 1e-6 and abs(np.linalg.norm(capsule["b"] - capsule["a"]) - 2.0) < 1e-6,
           "the same cube as a capsule: radius 1 along its longest axis, segment 2")
+    mesh_like_box(cube, M, box)
     bpy.data.objects.remove(cube)
+
+
+def mesh_like_box(cube, M, box):
+    """The cube as a mesh collider (its own triangles, a level set) measures as the fitted box, within a
+    voxel, at points near its faces; moved by its keys as the other shapes are."""
+    from mbi_blender import colliders, module
+    mbi = module.load()
+    cube.mbi.collider = "mesh"
+    mesh, fitted, _ = colliders.make(mbi, cube, [M, M], 1.0 / FPS, START)
+    check(mesh.shape == "mesh" and fitted["F"].shape == (12, 3), "the cube as a mesh collider: 12 triangles")
+    exact = mbi.Collider.box(box["center"], box["half_extents"], box["axes"])
+    rng = np.random.default_rng(3)
+    corners = np.array([tuple(v) for v in cube.bound_box])
+    half = (corners.max(axis=0) - corners.min(axis=0)) / 2  # the mesh's, its center at the origin
+    local = rng.uniform(-1.0, 1.0, (400, 3))
+    local[np.arange(400), rng.integers(0, 3, 400)] = rng.choice([-1.0, 1.0], 400)  # on a face
+    P = (local * half) @ M[:3, :3].T + M[:3, 3]
+    P += rng.uniform(-0.05, 0.05, (400, 1)) * exact.distances(P)[1]  # off it along the normal
+    voxel = np.linalg.norm(np.ptp(fitted["V"], axis=0)) / 128
+    error = np.abs(mesh.distances(P)[0] - exact.distances(P)[0]).max()
+    check(error <= voxel, "the mesh collider's distances are the box's within a voxel (%.2e <= %.2e m)"
+          % (error, voxel))
 
 
 def refused(cage, model, what, expected):
