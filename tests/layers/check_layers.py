@@ -14,7 +14,7 @@ GRAPH = {
     "base": [],
     "interp": ["base"], "sim": ["base"], "io": ["base"],
     "pipeline": ["interp", "sim"], "generate": ["io", "interp"], "raster": ["io"],
-    "interact": ["interp"],
+    "interact": ["pipeline"],
     "gpu": ["pipeline", "raster", "io"],
     "scene_format": ["generate", "pipeline"], "scenes": ["gpu", "scene_format"],
     "viewer": ["scenes", "interact"], "web": ["scene_format", "interact"], "python": ["scenes"], "bench": ["scenes"],

@@ -6,11 +6,11 @@
 #include <mbi/interp/embed.hpp>
 #include <mbi/io/io.hpp>
 #include <mbi/scenes/models.hpp>
-#include <mbi/scenes/runner.hpp>
 #include <mbi/web/page_model.hpp>
 #include <mbi/web/scene_files.hpp>
 
 #include "common/files.hpp"
+#include "common/run_mbi.hpp"
 #include "common/temp_dir.hpp"
 
 #include <nlohmann/json.hpp>
@@ -119,16 +119,17 @@ TEST_CASE("the page runs contact at the dense surface as mbi run does: positions
   for (int k = 0; k < frames; ++k) REQUIRE(page.step());
   REQUIRE(page.frame() == frames);
 
+  // `mbi run` as a user runs it, on the same file
   const mbi::test::TempDir dir("page-contact");
-  mbi::scenes::RunOptions o;
-  o.out_dir = dir / "run";
-  o.frames = frames;
-  o.gpu = mbi::scenes::GpuUse::Off;
-  const mbi::scenes::RunResult r = mbi::scenes::run_scene(s, o);
-  REQUIRE_FALSE(r.failed);
-  const mbi::io::PointCache cache = mbi::io::read_pc2(o.out_dir / "dense.pc2");
+  const std::filesystem::path out = dir / "run";
+  const mbi::test::Result r =
+      mbi::test::run_mbi("run " + mbi::test::q(mbi::test::source_dir() / "tests/data/scenes/page-contact.toml") +
+                             " --out " + mbi::test::q(out) + " --frames " + std::to_string(frames) + " --gpu off",
+                         dir);
+  REQUIRE(r.code == 0);
+  const mbi::io::PointCache cache = mbi::io::read_pc2(out / "dense.pc2");
   REQUIRE(cache.frames.size() == static_cast<std::size_t>(frames + 1));
-  std::ifstream in(o.out_dir / "metrics.json");
+  std::ifstream in(out / "metrics.json");
   const nlohmann::json metrics = nlohmann::json::parse(in);
 
   const Eigen::MatrixXd& P = cache.frames.back();
