@@ -7,6 +7,7 @@
 
 #include <mbi/viewer/camera.hpp>
 
+#include "scenes/contact_ball.hpp"
 #include "viewer_run.hpp"
 
 #include <cmath>
@@ -20,32 +21,9 @@ namespace {
 
 Eigen::Vector3d vec(const nlohmann::json& j) { return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()}; }
 
-// A ball of radius 0.5 about the origin, 16 latitudes x 32 longitudes (482 vertices).
-void write_ball(const fs::path& path) {
-  std::ofstream out(path);
-  out.precision(17);
-  const int lat = 16, lon = 32;
-  const double pi = std::acos(-1.0);
-  out << "v 0 -0.5 0\n";
-  for (int i = 1; i < lat; ++i)
-    for (int j = 0; j < lon; ++j) {
-      const double t = pi * i / lat, f = 2 * pi * j / lon;
-      out << "v " << 0.5 * std::sin(t) * std::cos(f) << " " << -0.5 * std::cos(t) << " " << 0.5 * std::sin(t) * std::sin(f) << "\n";
-    }
-  out << "v 0 0.5 0\n";
-  auto ring = [&](int i, int j) { return 2 + (i - 1) * lon + j % lon; };  // 1-based
-  const int top = 2 + (lat - 1) * lon;
-  for (int j = 0; j < lon; ++j) out << "f 1 " << ring(1, j + 1) << " " << ring(1, j) << "\n";
-  for (int i = 1; i + 1 < lat; ++i)
-    for (int j = 0; j < lon; ++j)
-      out << "f " << ring(i, j) << " " << ring(i, j + 1) << " " << ring(i + 1, j + 1) << "\nf " << ring(i, j) << " "
-          << ring(i + 1, j + 1) << " " << ring(i + 1, j) << "\n";
-  for (int j = 0; j < lon; ++j) out << "f " << top << " " << ring(lat - 1, j) << " " << ring(lat - 1, j + 1) << "\n";
-}
-
 // The ball on the ground y = -0.5 (frictionless), a sphere of radius 0.3 beside it (0.2 m away).
 fs::path write_scene(const TempDir& dir) {
-  write_ball(dir / "ball.obj");
+  fs::copy_file(mbi::test::ball_file(), dir / "ball.obj");  // the contact tests' ball
   const fs::path scene = dir / "push.toml";
   std::ofstream(scene) << "name = \"push\"\n[dense]\npath = \"ball.obj\"\n[control]\ngenerate_vertices = 60\n"
                           "[material]\nyoung = 2e4\npoisson = 0.3\ndensity = 100\n"
