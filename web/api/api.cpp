@@ -68,6 +68,21 @@ std::string problem_of(int scene) {
   }
 }
 
+// Loads the scene that parse() gives: 1, or 0 with its error kept for mbi_last_error.
+template <class Parse>
+int load_scene(Parse parse) {
+  g_error.clear();
+  try {
+    const mbi::scenes::Scene s = parse();
+    loaded(PageModel::scene(s));
+    std::copy(s.output.up.data(), s.output.up.data() + 3, g_up);
+    return 1;
+  } catch (const std::exception& e) {
+    g_error = e.what();
+  }
+  return 0;
+}
+
 }  // namespace
 
 extern "C" {
@@ -85,30 +100,12 @@ const char* mbi_scene_problem(int scene) {
 }
 
 int mbi_load_scene(int scene) {
-  g_error.clear();
-  try {
-    const mbi::scenes::Scene s = mbi::web::parse(scene_file(scene));
-    loaded(PageModel::scene(s));
-    std::copy(s.output.up.data(), s.output.up.data() + 3, g_up);
-    return 1;
-  } catch (const std::exception& e) {
-    g_error = e.what();
-  }
-  return 0;
+  return load_scene([&] { return mbi::web::parse(scene_file(scene)); });
 }
 
 int mbi_load_scene_text(const char* text, int bytes, const char* name) {
-  g_error.clear();
-  try {
-    const mbi::scenes::Scene s =
-        mbi::scenes::parse_scene(std::string_view(text, static_cast<std::size_t>(bytes)), name);
-    loaded(PageModel::scene(s));
-    std::copy(s.output.up.data(), s.output.up.data() + 3, g_up);
-    return 1;
-  } catch (const std::exception& e) {
-    g_error = e.what();
-  }
-  return 0;
+  return load_scene(
+      [&] { return mbi::scenes::parse_scene(std::string_view(text, static_cast<std::size_t>(bytes)), name); });
 }
 
 const double* mbi_up(void) { return g_up; }
