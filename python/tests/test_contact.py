@@ -83,13 +83,20 @@ def run_frames(pipe, frames):
     return np.array(positions), figures
 
 
-def test_from_scene_steps_as_mbi_run_writes(scene):
+def run_and_step(scene):
+    """mbi run of the scene, and FramePipeline.from_scene stepped as many frames: (run, positions,
+    figures, size), the positions checked against the run's point cache."""
     run = mbi.run_scene(scene["path"], scene["out"])
     assert not run["failed"]
     written = np.asarray(mbi.read_point_cache(os.path.join(run["out_dir"], "dense.pc2")).frames)
     positions, figures = run_frames(mbi.FramePipeline.from_scene(scene["path"]), 24)
     size = np.linalg.norm(np.ptp(scene["V"], axis=0))
     assert np.abs(positions - written).max() <= 1e-6 * size  # the point cache holds float32
+    return run, positions, figures, size
+
+
+def test_from_scene_steps_as_mbi_run_writes(scene):
+    run, positions, figures, size = run_and_step(scene)
     frames = run["metrics"]["frames"]
     assert [f["touching"] for f in figures] == [f["contact_points"] for f in frames]
     assert [f["newton_iterations"] for f in figures] == [f["newton_iterations"] for f in frames]
@@ -239,12 +246,7 @@ def test_from_scene_with_a_mesh_collider_steps_as_mbi_run_writes(scene, tmp_path
     mbi.write_surface(str(tmp_path / "floor.obj"), bv + (0.5, GROUND - 0.1, 0.5), bf.astype(np.int32))
     text = scene["path"].read_text().replace(f"ground = {GROUND!r}\n", "")
     scene["path"].write_text(text + '[[colliders]]\nshape = "mesh"\npath = "floor.obj"\n')
-    run = mbi.run_scene(scene["path"], scene["out"])
-    assert not run["failed"]
-    written = np.asarray(mbi.read_point_cache(os.path.join(run["out_dir"], "dense.pc2")).frames)
-    positions, figures = run_frames(mbi.FramePipeline.from_scene(scene["path"]), 24)
-    size = np.linalg.norm(np.ptp(scene["V"], axis=0))
-    assert np.abs(positions - written).max() <= 1e-6 * size  # the point cache holds float32
+    run, positions, figures, size = run_and_step(scene)
     assert [f["touching"] for f in figures] == [f["contact_points"] for f in run["metrics"]["frames"]]
     assert figures[-1]["touching"] > 0
     assert abs(positions[-1][:, 1].min() - GROUND) <= 1e-3 * size
