@@ -15,16 +15,16 @@ class Extension:
 
     def __init__(self, U, T):
         self.U = np.asarray(U, dtype=np.float64)
+        self.U32 = self.U.astype(np.float32)  # as Blender stores positions: compared every frame
         self.extension = module.load().HarmonicExtension(self.U, T)  # fixed: the boundary's nodes
         self.boundary = self.extension.fixed_nodes
         self.interior = self.extension.free_nodes
 
     def boundary_moved_only(self, X):
         """True when the interior nodes are exactly at rest and some boundary node is not."""
-        U32 = self.U.astype(np.float32)
         X32 = np.asarray(X, dtype=np.float32)
-        return (np.array_equal(X32[self.interior], U32[self.interior])
-                and not np.array_equal(X32[self.boundary], U32[self.boundary]))
+        return (np.array_equal(X32[self.interior], self.U32[self.interior])
+                and not np.array_equal(X32[self.boundary], self.U32[self.boundary]))
 
     def apply(self, X):
         """X (n, 3) with its interior rows replaced by the extension of its boundary rows' motion."""
