@@ -1,5 +1,10 @@
 #pragma once
-// The ball that the contact tests drop: a file written once per process (tests/scenes/).
+// The ball that the contact tests drop (a file written once per process) and a scene text run as
+// `mbi run` runs it (tests/scenes/).
+#include <catch2/catch.hpp>
+
+#include <mbi/scenes/runner.hpp>
+
 #include "common/temp_dir.hpp"
 
 #include <cmath>
@@ -38,6 +43,17 @@ inline std::string ball_file() {
     return path.string();
   }();
   return file;
+}
+
+/// Writes `text` as dir/name.toml and runs it as `mbi run` does; the output folder (dir/name).
+inline std::filesystem::path run_scene_text(const std::string& text, const TempDir& dir, const std::string& name) {
+  const std::filesystem::path file = dir / (name + ".toml");
+  std::ofstream(file) << text;
+  mbi::scenes::RunOptions o;
+  o.out_dir = dir / name;
+  const mbi::scenes::RunResult r = mbi::scenes::run_scene(mbi::scenes::load_scene(file), o);
+  REQUIRE_FALSE(r.failed);
+  return o.out_dir;
 }
 
 }  // namespace mbi::test

@@ -48,14 +48,9 @@ struct Run {
 };
 
 Run run_text(const std::string& text, const mbi::test::TempDir& dir, const std::string& name) {
-  const fs::path file = dir / (name + ".toml");
-  std::ofstream(file) << text;
-  RunOptions o;
-  o.out_dir = dir / name;
-  const RunResult r = run_scene(load_scene(file), o);
-  REQUIRE_FALSE(r.failed);
-  Run run{mbi::io::read_pc2(o.out_dir / "dense.pc2"), {}};
-  std::ifstream in(o.out_dir / "metrics.json");
+  const fs::path out = mbi::test::run_scene_text(text, dir, name);
+  Run run{mbi::io::read_pc2(out / "dense.pc2"), {}};
+  std::ifstream in(out / "metrics.json");
   run.metrics = nlohmann::json::parse(in);
   return run;
 }

@@ -38,13 +38,7 @@ const std::string kRising = "ground = -0.55\n[[colliders]]\nshape = \"sphere\"\n
 
 // Runs `text`; the pictures' folder.
 fs::path run_text(const std::string& text, const mbi::test::TempDir& dir, const std::string& name) {
-  const fs::path file = dir / (name + ".toml");
-  std::ofstream(file) << text;
-  RunOptions o;
-  o.out_dir = dir / name;
-  const RunResult r = run_scene(load_scene(file), o);
-  REQUIRE_FALSE(r.failed);
-  return o.out_dir;
+  return mbi::test::run_scene_text(text, dir, name);
 }
 
 Image picture(const fs::path& out, int frame) { return mbi::io::read_png(mbi::io::frame_path(out / "frame", frame, ".png")); }
