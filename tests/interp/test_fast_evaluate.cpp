@@ -14,15 +14,15 @@ using namespace mbi::interp;
 using namespace mbi::test;
 
 namespace {
-struct Setup {
+struct FastSetup {
   Mesh M;
   BezierPoints B, Bbi;
   Embedding emb;
   Eigen::MatrixXd normals;
 };
 
-Setup make(int d, int points, double lo, double hi, Eigen::RowVectorXd offset = {}) {
-  Setup s;
+FastSetup make_fast(int d, int points, double lo, double hi, Eigen::RowVectorXd offset = {}) {
+  FastSetup s;
   s.M = jittered_mesh(d, 51);
   Eigen::MatrixXd X = smooth_deform(s.M.U, 0.5);
   const ModifiedBI mbi(s.M.U, s.M.T);
@@ -64,7 +64,7 @@ std::vector<Simd> kernels() {
 }  // namespace
 
 TEST_CASE("FastEvaluator: the kernels this CPU runs, and which one Auto picks", "[fast_evaluate]") {
-  const Setup s3 = make(3, 10, 0.0, 1.0), s2 = make(2, 10, 0.0, 1.0);
+  const FastSetup s3 = make_fast(3, 10, 0.0, 1.0), s2 = make_fast(2, 10, 0.0, 1.0);
   const std::vector<Simd> k = kernels();
   REQUIRE(k.back() == Simd::Portable);
   CHECK(FastEvaluator::supported(Simd::Auto));
@@ -91,7 +91,7 @@ TEST_CASE("FastEvaluator: the AVX-512 and AVX2 kernels give the same positions",
     WARN("skipped: this CPU has no AVX-512");
     return;
   }
-  const Setup s = make(3, mbi::test::sized(100013), -0.2, 1.2);
+  const FastSetup s = make_fast(3, mbi::test::sized(100013), -0.2, 1.2);
   for (const BezierPoints* B : {&s.B, &s.Bbi}) {
     RowMatrixXf p[2], n[2], q[2];
     int i = 0;
@@ -113,7 +113,7 @@ TEST_CASE("FastEvaluator: float positions and normals agree with the double kern
     for (bool far : {false, true}) {
       const Eigen::RowVectorXd offset = far ? Eigen::RowVectorXd::Constant(d, 1000.0) : Eigen::RowVectorXd();
       // points inside and outside (extrapolated) the control mesh
-      const Setup s = make(d, mbi::test::sized(50013), -0.2, 1.2, offset);
+      const FastSetup s = make_fast(d, mbi::test::sized(50013), -0.2, 1.2, offset);
       REQUIRE(!s.emb.outside.empty());
       for (const BezierPoints* B : {&s.B, &s.Bbi}) for (Simd v : kernels()) {
         INFO("d = " << d << ", far " << far << ", kernel " << FastEvaluator::name(v));
@@ -142,7 +142,7 @@ TEST_CASE("FastEvaluator: float positions and normals agree with the double kern
 }
 
 TEST_CASE("FastEvaluator: thread counts, caller memory and repeated calls give identical results", "[fast_evaluate]") {
-  const Setup s = make(3, 200013, 0.0, 1.0);
+  const FastSetup s = make_fast(3, 200013, 0.0, 1.0);
   for (Simd v : kernels()) {
   INFO("kernel " << FastEvaluator::name(v));
   FastEvaluator ref(s.emb, 1, v);
@@ -185,7 +185,7 @@ TEST_CASE("FastEvaluator: thread counts, caller memory and repeated calls give i
 // a range written one by one: at every offset from a 64-byte boundary the same values come out,
 // and nothing before or after the outputs changes.
 TEST_CASE("FastEvaluator: outputs at every offset within a cache line, nothing written outside them", "[fast_evaluate]") {
-  const Setup s = make(3, 70013, 0.0, 1.0);  // 3 blocks, the last one partial, then a tail
+  const FastSetup s = make_fast(3, 70013, 0.0, 1.0);  // 3 blocks, the last one partial, then a tail
   const long long n = 3 * 70013;
   for (Simd v : kernels()) {
     FastEvaluator ref(s.emb, 1, v);
@@ -230,7 +230,7 @@ TEST_CASE("FastEvaluator: few points (tails shorter than a group of 4, the first
   for (int p : {1, 2, 3, 4, 5, 7, 8, 9, 11, 12, 13, 15, 16, 17, 19, 20, 28, 31, 32, 33, 35, 47, 48, 51, 64, 67, 79, 100})
   for (Simd v : kernels()) {
     INFO("points " << p << ", kernel " << FastEvaluator::name(v));
-    const Setup s = make(3, p, 0.0, 1.0);
+    const FastSetup s = make_fast(3, p, 0.0, 1.0);
     Eigen::MatrixXd pd, nd;
     evaluate<double>(s.B, s.emb, s.normals, pd, nd, 1);
     FastEvaluator fe(s.emb, 0, v);
@@ -247,7 +247,7 @@ TEST_CASE("FastEvaluator: few points (tails shorter than a group of 4, the first
   empty.bary.resize(0, 4);
   FastEvaluator fe(empty);
   RowMatrixXf pf;
-  const Setup s = make(3, 1, 0.0, 1.0);
+  const FastSetup s = make_fast(3, 1, 0.0, 1.0);
   fe.evaluate(s.B, pf);
   CHECK(pf.rows() == 0);
 }
@@ -255,7 +255,7 @@ TEST_CASE("FastEvaluator: few points (tails shorter than a group of 4, the first
 // Points in a mesh's order (most follow a point of the same element) take the kernel without
 // prefetches: the same results as the double kernel.
 TEST_CASE("FastEvaluator: points stored by element agree with the double kernel", "[fast_evaluate]") {
-  const Setup s = make(3, 70013, 0.0, 1.0);  // 2 threads take at least 2 x 32K points
+  const FastSetup s = make_fast(3, 70013, 0.0, 1.0);  // 2 threads take at least 2 x 32K points
   CHECK_FALSE(FastEvaluator(s.emb).coherent());  // random order: the prefetching kernel
   std::vector<int> order(static_cast<size_t>(s.emb.size()));
   for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
@@ -293,7 +293,7 @@ TEST_CASE("FastEvaluator: points stored by element agree with the double kernel"
 // rescales by powers of 2 so that models of any size float holds keep their normals.
 TEST_CASE("FastEvaluator: normals at extreme model scales, and zero on a collapsed element", "[fast_evaluate]") {
   for (int d : {2, 3}) {
-    const Setup s = make(d, 4013, -0.1, 1.1);
+    const FastSetup s = make_fast(d, 4013, -0.1, 1.1);
     Eigen::MatrixXd pd, nd;
     evaluate<double>(s.B, s.emb, s.normals, pd, nd, 1);
     // the same points stored by element (the kernels without prefetches)
@@ -350,7 +350,7 @@ TEST_CASE("FastEvaluator: normals at extreme model scales, and zero on a collaps
 }
 
 TEST_CASE("FastEvaluator rejects inconsistent input", "[fast_evaluate]") {
-  const Setup s = make(3, 100, 0.0, 1.0);
+  const FastSetup s = make_fast(3, 100, 0.0, 1.0);
   FastEvaluator fe(s.emb);
   RowMatrixXf p, n;
   CHECK_THROWS_WITH(fe.evaluate(s.B.topRows(s.B.rows() - 10), p), Catch::Contains("Bezier points"));

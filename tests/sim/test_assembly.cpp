@@ -2,6 +2,7 @@
 // against the tested mesh functions and against finite differences; the element kernels that
 // both share.
 #include <catch2/catch.hpp>
+#include <common/node_vectors.hpp>
 
 #include "sim_helpers.hpp"
 
@@ -9,21 +10,11 @@
 #include <random>
 
 using namespace mbi::sim;
+using mbi::test::flat;
+using mbi::test::unflat;
 using mbi::test::nodes_at;
 
 namespace {
-
-Eigen::VectorXd flat(const Eigen::MatrixXd& X) {  // n x 3 -> 3n node-major
-  Eigen::VectorXd q(X.size());
-  for (Eigen::Index i = 0; i < X.rows(); ++i) q.segment<3>(3 * i) = X.row(i).transpose();
-  return q;
-}
-
-Eigen::MatrixXd unflat(const Eigen::VectorXd& q) {
-  Eigen::MatrixXd X(q.size() / 3, 3);
-  for (Eigen::Index i = 0; i < X.rows(); ++i) X.row(i) = q.segment<3>(3 * i).transpose();
-  return X;
-}
 
 double max_abs(const Eigen::MatrixXd& A) { return A.cwiseAbs().maxCoeff(); }
 

@@ -1,6 +1,7 @@
 // Energy density / element / mesh levels of the co-rotational model: finite-difference checks,
 // rigid-motion invariance, proper rotations, bad input.
 #include <catch2/catch.hpp>
+#include <common/node_vectors.hpp>
 #include <common/grid_meshes.hpp>
 #include <mbi/sim/corotational.hpp>
 
@@ -10,6 +11,8 @@
 #include <random>
 
 using namespace mbi::sim;
+using mbi::test::flat;
+using mbi::test::unflat;
 
 namespace {
 
@@ -21,20 +24,8 @@ Eigen::MatrixXd perturbed(const Eigen::MatrixXd& U, double amount, unsigned seed
   return X;
 }
 
-Eigen::VectorXd flat(const Eigen::MatrixXd& X) {  // n x 3 -> 3n node-major
-  Eigen::VectorXd q(X.size());
-  for (Eigen::Index i = 0; i < X.rows(); ++i) q.segment<3>(3 * i) = X.row(i).transpose();
-  return q;
-}
-
-Eigen::MatrixXd unflat(const Eigen::VectorXd& q) {
-  Eigen::MatrixXd X(q.size() / 3, 3);
-  for (Eigen::Index i = 0; i < X.rows(); ++i) X.row(i) = q.segment<3>(3 * i).transpose();
-  return X;
-}
-
 // A small irregular mesh: 2x2x2 cells, interior node jittered, then a general deformation.
-struct Fixture {
+struct CorotFixture {
   mbi::test::Mesh M = [] {
     auto m = mbi::test::box_tet_mesh(2, 2, 2, Eigen::Vector3d(1.0, 0.8, 1.2));
     mbi::test::jitter(m, 0.2, 0.4, 3);
@@ -70,7 +61,7 @@ TEST_CASE("rotation() is a proper rotation, also for inverted and flat F", "[sim
 }
 
 TEST_CASE("forces are minus the finite-difference gradient of the energy", "[sim][corot]") {
-  Fixture fx;
+  CorotFixture fx;
   // States: moderate strain, large rotation + strain, and inverted elements.
   const Eigen::MatrixXd R = mbi::test::random_rotation(3, 4);
   std::vector<Eigen::MatrixXd> states;
@@ -101,7 +92,7 @@ TEST_CASE("forces are minus the finite-difference gradient of the energy", "[sim
 TEST_CASE("exact Hessian matches finite differences of the forces, warped stiffness is exact "
           "at rigidly rotated rest states",
           "[sim][corot]") {
-  Fixture fx;
+  CorotFixture fx;
   const Eigen::MatrixXd R = mbi::test::random_rotation(3, 8);
   const Eigen::MatrixXd X = perturbed(fx.M.U, 0.05, 9) * R.transpose();
   auto fd_hessian = [&](const Eigen::MatrixXd& Y) {
@@ -150,7 +141,7 @@ TEST_CASE("exact Hessian matches finite differences of the forces, warped stiffn
 }
 
 TEST_CASE("zero elastic energy and force under random rigid motions", "[sim][corot]") {
-  Fixture fx;
+  CorotFixture fx;
   for (unsigned seed = 1; seed <= 20; ++seed) {
     const Eigen::MatrixXd R = mbi::test::random_rotation(3, seed);
     std::mt19937 rng(seed);
@@ -167,7 +158,7 @@ TEST_CASE("zero elastic energy and force under random rigid motions", "[sim][cor
 TEST_CASE("elastic energy is positive for non-rigid deformations and matches linear "
           "elasticity at small strain",
           "[sim][corot]") {
-  Fixture fx;
+  CorotFixture fx;
   const int n = static_cast<int>(fx.M.U.rows());
   const Eigen::MatrixXd dU = perturbed(Eigen::MatrixXd::Zero(n, 3), 1e-6, 12);
   const Eigen::VectorXd u = flat(dU);
@@ -178,7 +169,7 @@ TEST_CASE("elastic energy is positive for non-rigid deformations and matches lin
 }
 
 TEST_CASE("lumped masses sum to density times volume", "[sim][corot]") {
-  Fixture fx;
+  CorotFixture fx;
   const Eigen::VectorXd m = lumped_masses(fx.rest, fx.M.T, static_cast<int>(fx.M.U.rows()));
   CHECK(m.sum() == Approx(1000.0 * 1.0 * 0.8 * 1.2).epsilon(1e-12));
   CHECK(m.minCoeff() > 0);
