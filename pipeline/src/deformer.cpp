@@ -5,6 +5,7 @@
 #include <mbi/pipeline/deformer.hpp>
 #include <mbi/pipeline/precompute.hpp>
 
+#include <algorithm>
 #include <exception>
 #include <mutex>
 #include <string>
@@ -24,6 +25,7 @@ std::string shape(Eigen::Index rows, Eigen::Index cols) {
 struct Scratch {
   Precompute::PoseScratch pose;  // deform(): M and the Bezier points
   Eigen::MatrixXd X;             // deform_batch(): a frame whose columns are not contiguous, copied
+  interp::VertexMatrices Ms;     // deform_batch(): modified-BI's M of a block of frames
   interp::BezierPoints GB;       // vjp(): dL/dB, dL/dX through B, dL/dM and dL/dX through M
   Eigen::MatrixXd GX, GMX;
   interp::VertexMatrices GM;
@@ -259,9 +261,29 @@ void Deformer::deform_batch(const interp::ConstPointsRef<double>& X, interp::Poi
     throw Error("positions must be " + shape(frames * p, d) + ", got " + shape(positions.rows(), positions.cols()));
   const Impl& I = *impl_;
   const Impl::Lease s(I);
-  for (Eigen::Index k = 0; k < frames; ++k)
-    interp::evaluate<double>(I.bezier(frame(X, k, n, (*s).X), *s), I.embedding, positions.middleRows(k * p, p),
-                             I.options.threads);
+  const interp::ModifiedBI* solver = I.options.method == Method::ModifiedBI ? I.pre.built_solver() : nullptr;
+  if (!solver) {  // BI and Phong: M of a frame costs about what reading it does, nothing to share
+    for (Eigen::Index k = 0; k < frames; ++k)
+      interp::evaluate<double>(I.bezier(frame(X, k, n, (*s).X), *s), I.embedding, positions.middleRows(k * p, p),
+                               I.options.threads);
+    return;
+  }
+  // modified-BI: the M of a block of frames in one solve (one pass over the operator or the factor
+  // for all of them), then each frame's Bezier points and evaluation
+  const Eigen::Index block = solver->dense_operator() ? 8 : 8 / d, nd = n * d;
+  Scratch& t = *s;
+  t.pose.B.resize(I.pre.elements().rows() * ((d + 1) * (d + 2) / 2), d);
+  for (Eigen::Index k0 = 0; k0 < frames; k0 += block) {
+    const Eigen::Index count = std::min(block, frames - k0);
+    for (Eigen::Index k = k0; k < k0 + count; ++k) I.pre.check_pose(frame(X, k, n, t.X));
+    t.Ms.resize(block * nd, d);
+    solver->solve_batch(X.middleRows(k0 * n, count * n), t.Ms.topRows(count * nd));
+    for (Eigen::Index k = 0; k < count; ++k) {
+      interp::bezier_points(I.pre.rest_positions(), I.pre.elements(), frame(X, k0 + k, n, t.X),
+                            t.Ms.middleRows(k * nd, nd), t.pose.B);
+      interp::evaluate<double>(t.pose.B, I.embedding, positions.middleRows((k0 + k) * p, p), I.options.threads);
+    }
+  }
 }
 
 void Deformer::deform_float(const Eigen::Ref<const Eigen::MatrixXd>& X, Eigen::Ref<interp::RowMatrixXf> positions) {

@@ -8,8 +8,10 @@
 
 #include "common/grid_meshes.hpp"
 
+#include <limits>
 #include <random>
 #include <string>
+#include <vector>
 
 using namespace mbi;
 using pipeline::Deformer;
@@ -116,6 +118,65 @@ TEST_CASE("deformer: a batch equals its poses one by one", "[deformer]") {
     CHECK_THROWS_AS(deformer.deform_batch(X.topRows(n + 1), positions), Error);
     CHECK_THROWS_AS(deformer.vjp_batch(G, dX.topRows(n)), Error);
   }
+}
+
+// Strided views, as numpy hands a C-order array to the bindings: rows `cols + gap` doubles apart,
+// columns one apart, in a buffer with a gap after each row.
+struct DeformerStrided {
+  std::vector<double> buffer;
+  Eigen::Index rows, cols, pitch;
+  DeformerStrided(Eigen::Index r, Eigen::Index c, Eigen::Index gap) : buffer(r * (c + gap), -7.0), rows(r), cols(c), pitch(c + gap) {}
+  interp::PointsRef<double> view() {
+    return Eigen::Map<Eigen::MatrixXd, 0, Eigen::Stride<Eigen::Dynamic, Eigen::Dynamic>>(
+        buffer.data(), rows, cols, Eigen::Stride<Eigen::Dynamic, Eigen::Dynamic>(1, pitch));
+  }
+};
+
+TEST_CASE("deformer: a batch in blocks of frames equals its poses one by one, strided, every method and solve path",
+          "[deformer]") {
+  for (int d : {2, 3})
+    for (Method method : pipeline::all_methods())
+      for (interp::SolvePath path : {interp::SolvePath::Dense, interp::SolvePath::Sparse}) {
+        if (method != Method::ModifiedBI && path == interp::SolvePath::Sparse) continue;
+        INFO(d << "D, " << pipeline::method_name(method) << ", " << interp::kSolvePathNames.name(path));
+        const test::Mesh m = mesh(d);
+        const Eigen::Index n = m.U.rows(), p = 150;
+        pipeline::DeformerOptions options{.method = method};
+        options.interp.solve_path = path;
+        const Deformer deformer(m.U, m.T, points_in(m.U, static_cast<int>(p), 41), options);
+        // 19 frames: two blocks of 8 and 3 on the dense operator, 9 pairs and one (3D) or 4 fours
+        // and 3 (2D) on the factor
+        const Eigen::Index frames = 19;
+        DeformerStrided X(frames * n, d, 1), positions(frames * p, d, 2);
+        for (Eigen::Index k = 0; k < frames; ++k) X.view().middleRows(k * n, n) = pose(m.U, 50 + static_cast<unsigned>(k));
+        deformer.deform_batch(X.view(), positions.view());
+        double worst = 0, scale = 0;
+        for (Eigen::Index k = 0; k < frames; ++k) {
+          const Eigen::MatrixXd one = deformer.deform(Eigen::MatrixXd(X.view().middleRows(k * n, n)));
+          worst = std::max(worst, max_abs(positions.view().middleRows(k * p, p) - one));
+          scale = std::max(scale, max_abs(one));
+        }
+        CHECK(worst <= 1e-12 * scale);
+        for (Eigen::Index i = 0; i < frames * p; ++i) CHECK(positions.buffer[i * positions.pitch + d] == -7.0);
+        if (method != Method::ModifiedBI) continue;
+        // the solver's batch, M pose by pose, and its check naming the pose
+        const interp::ModifiedBI& solver = deformer.solver();
+        Eigen::MatrixXd M(frames * n * d, d);
+        solver.solve_batch(X.view(), M);
+        double worst_m = 0, scale_m = 0;
+        for (Eigen::Index k = 0; k < frames; ++k) {
+          const Eigen::MatrixXd one = solver.solve(Eigen::MatrixXd(X.view().middleRows(k * n, n)));
+          worst_m = std::max(worst_m, max_abs(M.middleRows(k * n * d, n * d) - one));
+          scale_m = std::max(scale_m, max_abs(one));
+        }
+        CHECK(scale_m > 0);
+        CHECK(worst_m <= 1e-12 * scale_m);
+        X.view()(7 * n + 3, 1) = std::numeric_limits<double>::infinity();
+        CHECK_THROWS_WITH(solver.solve_batch(X.view(), M), Catch::Contains("control vertex 3 of pose 7"));
+        CHECK_THROWS_WITH(deformer.deform_batch(X.view(), positions.view()), Catch::Contains("control vertex 3"));
+        CHECK_THROWS_AS(solver.solve_batch(X.view().topRows(n + 1), M), Error);
+        CHECK_THROWS_AS(solver.solve_batch(X.view(), M.topRows(n * d)), Error);
+      }
 }
 
 TEST_CASE("deformer: vjp against finite differences, every method, 2D and 3D", "[deformer]") {

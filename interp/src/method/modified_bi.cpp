@@ -388,17 +388,17 @@ const std::vector<std::pair<int, int>>& bezier_edges(int d) {
 
 namespace {
 
-// rows [a0, a1) of R (row-major, D columns) = A X for A in CSR (outer, inner, val) and X
-// column-major with leading dimension ld; D a constant, so that the compiler keeps the D sums in
-// registers.
+// rows [a0, a1) of R (row-major, rows W doubles apart, D columns) = A X for A in CSR (outer,
+// inner, val) and X with its rows `is` and its columns `ld` doubles apart; D a constant, so that
+// the compiler keeps the D sums in registers.
 template <int D>
-void rhs_rows(const int* outer, const int* inner, const double* val, const double* x, Eigen::Index ld,
-              double* R, long long a0, long long a1) {
+void rhs_rows(const int* outer, const int* inner, const double* val, const double* x, Eigen::Index is,
+              Eigen::Index ld, double* R, Eigen::Index W, long long a0, long long a1) {
   for (long long a = a0; a < a1; ++a) {
     double acc[D] = {};
     for (int p = outer[a]; p < outer[a + 1]; ++p)
-      for (int c = 0; c < D; ++c) acc[c] += val[p] * x[inner[p] + c * ld];
-    for (int c = 0; c < D; ++c) R[a * D + c] = acc[c];
+      for (int c = 0; c < D; ++c) acc[c] += val[p] * x[inner[p] * is + c * ld];
+    for (int c = 0; c < D; ++c) R[a * W + c] = acc[c];
   }
 }
 
@@ -497,24 +497,82 @@ struct ModifiedBI::Impl {
     return detail::cholmod_available();
   }
 
-  // sol (n_red x d, row-major) for the right-hand sides X (n x d) by the factor.
-  void sparse_solve(const Eigen::Ref<const Eigen::MatrixXd>& X, std::vector<double>& sol) const {
+  // sol (n_red x (frames d), row-major: frame f's d columns from f d on) for the right-hand sides
+  // of `frames` poses X ((frames n) x d, frame f in rows [f n, f n + n)) by the factor, which
+  // takes 8 columns at most.
+  void sparse_solve(const MatrixIn& X, int frames, std::vector<double>& sol) const {
     // right-hand sides -beta H_mx X, row by row in parallel (rows of rhs_op: CSR); shared out
     // from a few thousand rows on, so that no serial stretch between the calls is long enough for
     // the pool's threads to fall asleep (a sleeping thread joins the next call late)
-    sol.resize(static_cast<size_t>(n_red) * d);
+    const Eigen::Index W = static_cast<Eigen::Index>(frames) * d;
+    sol.resize(static_cast<size_t>(n_red) * static_cast<size_t>(W));
     const int* outer = rhs_op.outerIndexPtr();
     const int* inner = rhs_op.innerIndexPtr();
     const double* val = rhs_op.valuePtr();
-    const double* x = X.data();
-    const Eigen::Index ld = X.outerStride();
-    const int nt = detail::thread_count(rhs_op.nonZeros(), 1 << 14);
+    const Eigen::Index is = X.innerStride(), ld = X.outerStride();
+    const int nt = detail::thread_count(rhs_op.nonZeros() * frames, 1 << 14);
     double* out = sol.data();
     detail::parallel_blocks(n_red, 512, nt, [&](long long a0, long long a1) {
-      if (d == 3) rhs_rows<3>(outer, inner, val, x, ld, out, a0, a1);
-      else rhs_rows<2>(outer, inner, val, x, ld, out, a0, a1);
+      for (int f = 0; f < frames; ++f) {
+        const double* x = X.data() + static_cast<Eigen::Index>(f) * n * is;
+        if (d == 3) rhs_rows<3>(outer, inner, val, x, is, ld, out + f * d, W, a0, a1);
+        else rhs_rows<2>(outer, inner, val, x, is, ld, out + f * d, W, a0, a1);
+      }
     });
-    F.solve(sol.data(), d);
+    F.solve(sol.data(), static_cast<int>(W));
+  }
+
+  // Rows [row0, row0 + n d) of M from a reduced solution (row a: the d components from sol + a W).
+  void scatter(const double* sol, Eigen::Index W, MatrixOut& M, Eigen::Index row0) const {
+    for (int i = 0; i < n; ++i)
+      for (int r = 0; r < d; ++r) {
+        const int a = reduced[static_cast<size_t>(i) * d + r];
+        if (a < 0) continue;
+        for (int c = 0; c < d; ++c) M(row0 + i * d + c, r) = sol[a * W + c];
+      }
+  }
+
+  // M ((frames n d) x d) of `frames` poses X ((frames n) x d), checked by the caller. The map is
+  // linear column by column (fact 11): the dense operator or the factor serves all the frames in
+  // one pass. Scratch kept per thread, of the size of the frames of one call.
+  void solve_frames(const MatrixIn& X, Eigen::Index frames, MatrixOut& M) const {
+    M.setZero();
+    if (n_red == 0) return;
+    thread_local std::vector<double> sol, cols;
+    if (!dense) {
+      const int group = 8 / d;  // the factor's 8 columns at a time
+      for (Eigen::Index f0 = 0; f0 < frames; f0 += group) {
+        const int g = static_cast<int>(std::min<Eigen::Index>(group, frames - f0));
+        sparse_solve(X.middleRows(f0 * n, g * n), g, sol);
+        for (int f = 0; f < g; ++f) scatter(sol.data() + f * d, static_cast<Eigen::Index>(g) * d, M, (f0 + f) * n * d);
+      }
+      return;
+    }
+    // the frames' columns, 3 of n doubles a frame (z zero in 2D); the solutions n_red x 3 a frame
+    const std::ptrdiff_t cn = 3 * static_cast<std::ptrdiff_t>(n), sn = 3 * static_cast<std::ptrdiff_t>(n_red);
+    cols.assign(static_cast<size_t>(frames * cn), 0.0);
+    sol.resize(static_cast<size_t>(frames * sn));
+    for (Eigen::Index f = 0; f < frames; ++f)
+      for (int c = 0; c < d; ++c)
+        for (int j = 0; j < n; ++j) cols[static_cast<size_t>(f * cn + c * n + j)] = X(f * n + j, c);
+    const std::ptrdiff_t rows = n_red;
+    // one block of an even number of rows a thread (the kernel takes rows two at a time): the
+    // caller, which takes the first, then reads the same part of K every frame and finds it in
+    // its cache; within it, tiles of about 64 KB of K that every frame reads while it is cached
+    const int nt = detail::thread_count(rows * n * frames, 1 << 17);
+    const std::ptrdiff_t block = std::max<std::ptrdiff_t>(2, ((rows + nt - 1) / nt + 1) & ~std::ptrdiff_t(1));
+    const std::ptrdiff_t tile = std::max<std::ptrdiff_t>(2, (8192 / n) & ~std::ptrdiff_t(1));
+    const double* c0 = cols.data();
+    double* s0 = sol.data();
+    detail::parallel_blocks(rows, block, nt, [&](long long a, long long b) {
+      for (long long r = a; r < b; r += tile)
+        for (Eigen::Index f = 0; f < frames; ++f) {
+          const double* cf = c0 + f * cn;
+          dense_rows(K.data(), n, cf, cf + n, cf + 2 * static_cast<std::ptrdiff_t>(n), s0 + f * sn, r,
+                     std::min<long long>(r + tile, b));
+        }
+    });
+    for (Eigen::Index f = 0; f < frames; ++f) scatter(s0 + f * sn, 3, M, f * n * d);
   }
 
   // The blocks on the reduced unknowns: R H R^T and R H_mx with R (n_red x d n) selecting them.
@@ -677,38 +735,23 @@ void ModifiedBI::solve(const Eigen::Ref<const Eigen::MatrixXd>& X, MatrixOut M) 
                 ", got " + std::to_string(X.rows()) + " x " + std::to_string(X.cols()));
   check_out("M", M.rows(), M.cols(), static_cast<Eigen::Index>(d) * n, d);
   detail::check_finite("control vertex", X);
-  M.setZero();
-  if (I.n_red == 0) return;
-  // n_red x d row-major: row a = reduced m of every component; kept per thread (no allocation per frame)
-  thread_local std::vector<double> sol, cols, s3;
-  if (I.dense) {
-    cols.assign(static_cast<size_t>(n) * 3, 0.0);
-    s3.resize(static_cast<size_t>(I.n_red) * 3);
+  I.solve_frames(X, 1, M);
+}
+
+void ModifiedBI::solve_batch(const MatrixIn& X, MatrixOut M) const {
+  const Impl& I = *impl_;
+  const int d = I.d, n = I.n;
+  if (X.cols() != d || X.rows() % n != 0)
+    throw Error("poses must be (frames " + std::to_string(n) + ") x " + std::to_string(d) + ", got " +
+                std::to_string(X.rows()) + " x " + std::to_string(X.cols()));
+  const Eigen::Index frames = X.rows() / n;
+  check_out("M", M.rows(), M.cols(), frames * n * d, d);
+  for (Eigen::Index i = 0; i < X.rows(); ++i)
     for (int c = 0; c < d; ++c)
-      for (int j = 0; j < n; ++j) cols[static_cast<size_t>(c) * n + j] = X(j, c);
-    const std::ptrdiff_t rows = I.n_red;
-    const double* c0 = cols.data();
-    double* s3p = s3.data();
-    // one block of an even number of rows a thread (the kernel takes rows two at a time): the
-    // caller, which takes the first, then reads the same part of K every frame and finds it in
-    // its cache
-    const int nt = detail::thread_count(rows * n, 1 << 17);
-    const std::ptrdiff_t block = std::max<std::ptrdiff_t>(2, ((rows + nt - 1) / nt + 1) & ~std::ptrdiff_t(1));
-    detail::parallel_blocks(rows, block, nt, [&](long long a, long long b) {
-      dense_rows(I.K.data(), n, c0, c0 + n, c0 + 2 * static_cast<std::ptrdiff_t>(n), s3p, a, b);
-    });
-    sol.resize(static_cast<size_t>(I.n_red) * d);
-    for (int a = 0; a < I.n_red; ++a)
-      for (int c = 0; c < d; ++c) sol[static_cast<size_t>(a) * d + c] = s3[static_cast<size_t>(a) * 3 + c];
-  } else {
-    I.sparse_solve(X, sol);
-  }
-  for (int i = 0; i < n; ++i)
-    for (int r = 0; r < d; ++r) {
-      const int a = I.reduced[i * d + r];
-      if (a < 0) continue;
-      for (int c = 0; c < d; ++c) M(i * d + c, r) = sol[static_cast<size_t>(a) * d + c];
-    }
+      if (!std::isfinite(X(i, c)))
+        throw Error("control vertex " + std::to_string(i % n) + " of pose " + std::to_string(i / n) +
+                    " has a non-finite coordinate (column " + std::to_string(c) + ")");
+  I.solve_frames(X, frames, M);
 }
 
 Eigen::MatrixXd ModifiedBI::solve_transpose(const VertexMatrices& G) const {

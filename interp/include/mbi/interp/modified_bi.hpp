@@ -118,6 +118,12 @@ class ModifiedBI {
   /// The same into caller memory M ((n d) x d already, Error otherwise). Its temporaries are kept
   /// per thread: after the first call on a thread it allocates nothing.
   void solve(const Eigen::Ref<const Eigen::MatrixXd>& X, MatrixOut M) const;
+  /// M of several poses at once: X (frames n) x d, pose k in rows [k n, k n + n), into M
+  /// ((frames n d) x d already), pose k's M in rows [k n d, k n d + n d); the same as solve()
+  /// pose by pose. solve() is linear column by column in X (fact 11): one pass over the dense
+  /// operator, or one solve with the factor for every 8 / d poses, serves all of them. Its
+  /// temporaries, kept per thread, grow with the poses of one call: give a few at a time.
+  void solve_batch(const MatrixIn& X, MatrixOut M) const;
 
   /// The transpose of solve(), which is linear in X (fact 11): dL/dX (n x d) from
   /// G = dL/dM ((n d) x d). One solve with the cached factor (the system is symmetric) and one

@@ -84,6 +84,9 @@ class Deformer {
               interp::PointsRef<double> normals) const;
   Eigen::MatrixXd deform(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
   /// Frames at once: X (frames n) x d, positions (frames p) x d; frame k = rows [k n, k n + n).
+  /// The same positions as deform() frame by frame; modified-BI solves for M a block of frames at
+  /// a time (interp::ModifiedBI::solve_batch: 8 frames on the dense operator, 8 / d on the
+  /// factor), so its scratch holds a block's M, not the batch's.
   void deform_batch(const interp::ConstPointsRef<double>& X, interp::PointsRef<double> positions) const;
 
   /// The float kernel (interp::FastEvaluator, built on the first call): positions, and normals
