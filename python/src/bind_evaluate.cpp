@@ -24,12 +24,9 @@ py::object evaluate_exact(const py::object& B, const Embedding& emb, const py::o
   const Input b = bezier_points_arg(B, emb.dim(), true);
   Output pos = float_output(out, "out", emb.size(), emb.dim());
   check_disjoint(pos, {&b});
-  // evaluate() reads B as a matrix: copied into one kept per thread (no allocation per frame)
-  thread_local interp::BezierPoints Bm;
-  Bm = b.map;
   if (rest_normals.is_none()) {
     if (!normals_out.is_none()) throw Error("normals_out needs rest_normals");
-    without_gil([&] { interp::evaluate<double>(Bm, emb, pos.map, threads); });
+    without_gil([&] { interp::evaluate<double>(b.map, emb, pos.map, threads); });
     return pos.finish();
   }
   const Input n = float_matrix(rest_normals, "rest_normals", {emb.size(), emb.dim()});
@@ -37,7 +34,7 @@ py::object evaluate_exact(const py::object& B, const Embedding& emb, const py::o
   check_disjoint(pos, {&n});
   check_disjoint(nrm, {&b, &n});
   check_disjoint(pos, nrm);
-  without_gil([&] { interp::evaluate<double>(Bm, emb, n.map, pos.map, nrm.map, threads); });
+  without_gil([&] { interp::evaluate<double>(b.map, emb, n.map, pos.map, nrm.map, threads); });
   return py::make_tuple(pos.finish(), nrm.finish());
 }
 

@@ -96,3 +96,35 @@ TEST_CASE("evaluate rejects inconsistent input", "[evaluate]") {
   CHECK_THROWS_AS(evaluate<double>(s.B, s.emb, nr.topRows(10), p, n), Error);
   CHECK_THROWS_AS(jacobian(s.M.U, s.M.T, s.B, -1, Eigen::Vector4d(0.25, 0.25, 0.25, 0.25)), Error);
 }
+
+TEST_CASE("evaluate reads the Bezier points in any layout: row-major, a column block, every other row", "[evaluate]") {
+  for (int d : {2, 3}) {
+    const Setup s = make(d, 3000);
+    Eigen::MatrixXd nr = random_matrix(s.P.rows(), d, 43);
+    nr.rowwise().normalize();
+    Eigen::MatrixXd p0, n0;
+    Eigen::MatrixXf f0;
+    evaluate<double>(s.B, s.emb, nr, p0, n0, 2);
+    evaluate<float>(s.B, s.emb, f0, 2);
+    using Strided = Eigen::Map<const Eigen::MatrixXd, 0, Eigen::Stride<Eigen::Dynamic, Eigen::Dynamic>>;
+    const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> rows = s.B;  // a C-order array
+    Eigen::MatrixXd wide = Eigen::MatrixXd::Constant(s.B.rows() + 3, d + 2, std::nan(""));
+    wide.block(3, 1, s.B.rows(), d) = s.B;
+    Eigen::MatrixXd twice = Eigen::MatrixXd::Constant(2 * s.B.rows(), d, std::nan(""));
+    for (Eigen::Index r = 0; r < s.B.rows(); ++r) twice.row(2 * r) = s.B.row(r);
+    const Strided layouts[] = {
+        Strided(rows.data(), s.B.rows(), d, Eigen::Stride<Eigen::Dynamic, Eigen::Dynamic>(1, d)),
+        Strided(wide.data() + wide.rows() + 3, s.B.rows(), d, Eigen::Stride<Eigen::Dynamic, Eigen::Dynamic>(wide.rows(), 1)),
+        Strided(twice.data(), s.B.rows(), d, Eigen::Stride<Eigen::Dynamic, Eigen::Dynamic>(twice.rows(), 2))};
+    for (const Strided& B : layouts) {
+      INFO(d << "D, strides " << B.innerStride() << ", " << B.outerStride());
+      Eigen::MatrixXd p, n;
+      Eigen::MatrixXf f;
+      evaluate<double>(B, s.emb, nr, p, n, 2);
+      evaluate<float>(B, s.emb, f, 2);
+      CHECK((p - p0).cwiseAbs().maxCoeff() == 0.0);
+      CHECK((n - n0).cwiseAbs().maxCoeff() == 0.0);
+      CHECK((f - f0).cwiseAbs().maxCoeff() == 0.0f);
+    }
+  }
+}

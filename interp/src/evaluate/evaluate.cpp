@@ -17,7 +17,7 @@ template <typename Scalar>
 using MatX = Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>;
 
 // Checks B / emb consistency (elements too, unless `elements` is false); returns d.
-int check_inputs(const BezierPoints& B, const Embedding& emb, bool elements = true) {
+int check_inputs(const MatrixIn& B, const Embedding& emb, bool elements = true) {
   const int d = static_cast<int>(B.cols());
   if (d != 2 && d != 3) throw Error("Bezier points must have 2 or 3 columns");
   const int K = (d + 1) * (d + 2) / 2;
@@ -46,8 +46,9 @@ int check_inputs(const BezierPoints& B, const Embedding& emb, bool elements = tr
 }
 
 // Position and derivatives dx/dphi_k (k = 0..D) of the quadratic Bezier simplex.
+// P: an element's K control points, point k's coordinate c at P[k is + c os].
 template <int D, typename Scalar>
-inline void bezier_eval(const Scalar* P /* K x D row-major */, const Scalar* b, Scalar* x,
+inline void bezier_eval(const Scalar* P, std::ptrdiff_t is, std::ptrdiff_t os, const Scalar* b, Scalar* x,
                         Scalar (*g)[D]) {
   constexpr int E = D * (D + 1) / 2;
   static constexpr std::array<std::pair<int, int>, 6> edges3{
@@ -56,26 +57,27 @@ inline void bezier_eval(const Scalar* P /* K x D row-major */, const Scalar* b, 
   for (int c = 0; c < D; ++c) x[c] = 0;
   for (int k = 0; k <= D; ++k) {
     const Scalar w = b[k] * b[k];
-    for (int c = 0; c < D; ++c) x[c] += w * P[k * D + c];
+    for (int c = 0; c < D; ++c) x[c] += w * P[k * is + c * os];
     if (g)
-      for (int c = 0; c < D; ++c) g[k][c] = 2 * b[k] * P[k * D + c];
+      for (int c = 0; c < D; ++c) g[k][c] = 2 * b[k] * P[k * is + c * os];
   }
   for (int s = 0; s < E; ++s) {
     const int i = D == 3 ? edges3[s].first : edges2[s].first;
     const int j = D == 3 ? edges3[s].second : edges2[s].second;
-    const Scalar* q = P + (D + 1 + s) * D;
+    const Scalar* q = P + (D + 1 + s) * is;
     const Scalar w = 2 * b[i] * b[j];
-    for (int c = 0; c < D; ++c) x[c] += w * q[c];
+    for (int c = 0; c < D; ++c) x[c] += w * q[c * os];
     if (g)
       for (int c = 0; c < D; ++c) {
-        g[i][c] += 2 * b[j] * q[c];
-        g[j][c] += 2 * b[i] * q[c];
+        g[i][c] += 2 * b[j] * q[c * os];
+        g[j][c] += 2 * b[i] * q[c * os];
       }
   }
 }
 
+// Points: the control points, point r's coordinate c at Points[r is + c os].
 template <int D, typename Scalar>
-void kernel(const MatX<Scalar>& Prow /* D x (m K), column per control point */, const Embedding& emb,
+void kernel(const Scalar* Points, std::ptrdiff_t is, std::ptrdiff_t os, const Embedding& emb,
             const MatX<Scalar>* grads /* D x (m (D+1)) */, const ConstPointsRef<Scalar>* normals_rest,
             PointsRef<Scalar>& pos, PointsRef<Scalar>* normals_out, int threads) {
   constexpr int K = (D + 1) * (D + 2) / 2;
@@ -85,13 +87,13 @@ void kernel(const MatX<Scalar>& Prow /* D x (m K), column per control point */, 
     for (long long p = begin; p < end; ++p) {
       const int e = emb.element(p);
       for (int k = 0; k <= D; ++k) b[k] = static_cast<Scalar>(emb.bary(p, k));
-      const Scalar* P = Prow.data() + static_cast<long long>(e) * K * D;
+      const Scalar* P = Points + static_cast<std::ptrdiff_t>(e) * K * is;
       if (!normals_out) {
-        bezier_eval<D, Scalar>(P, b, x, nullptr);
+        bezier_eval<D, Scalar>(P, is, os, b, x, nullptr);
         for (int c = 0; c < D; ++c) pos(p, c) = x[c];
         continue;
       }
-      bezier_eval<D, Scalar>(P, b, x, g);
+      bezier_eval<D, Scalar>(P, is, os, b, x, g);
       for (int c = 0; c < D; ++c) pos(p, c) = x[c];
       // J = sum_k g_k a_k^T (column r of J: sum_k g_k a_k[r])
       Scalar J[D][D];
@@ -132,7 +134,7 @@ void kernel(const MatX<Scalar>& Prow /* D x (m K), column per control point */, 
 // normals; returns d. Everything is checked before an output is touched, except the points'
 // elements when the kernels check them as they go (elements_later: the float path).
 template <typename Scalar>
-int check_all(const BezierPoints& B, const Embedding& emb, const ConstPointsRef<Scalar>* normals_rest,
+int check_all(const MatrixIn& B, const Embedding& emb, const ConstPointsRef<Scalar>* normals_rest,
               bool elements_later = false) {
   const int d = check_inputs(B, emb, !elements_later);
   if (normals_rest) {
@@ -158,31 +160,39 @@ void check_output(const char* what, Eigen::Index rows, Eigen::Index cols, const 
 // Float positions in 3D into memory of unit inner stride run on FastEvaluator's kernels (the
 // double path keeps the Bernstein form).
 template <typename Scalar>
-bool float_path(const BezierPoints& B, Eigen::Index inner_stride, bool normals) {
+bool float_path(const MatrixIn& B, Eigen::Index inner_stride, bool normals) {
   return std::is_same_v<Scalar, float> && !normals && B.cols() == 3 && inner_stride == 1;
 }
 
 // Inputs checked by check_all, outputs p x d.
 template <typename Scalar>
-void run(const BezierPoints& B, const Embedding& emb, int d, const ConstPointsRef<Scalar>* normals_rest,
+void run(const MatrixIn& B, const Embedding& emb, int d, const ConstPointsRef<Scalar>* normals_rest,
          PointsRef<Scalar> positions, PointsRef<Scalar>* normals_out, int threads) {
   if constexpr (std::is_same_v<Scalar, float>) {
     if (float_path<Scalar>(B, positions.innerStride(), normals_out != nullptr))
       return detail::evaluate_float3(B, emb, positions, threads);
   }
-  // control points as D x (m K) so that each element's points are contiguous; kept per thread,
-  // so that a frame loop allocates nothing
+  // double control points are read where they are, in any layout; float ones converted once into
+  // D x (m K) (each element's points contiguous), kept per thread so that a frame loop allocates nothing
   thread_local MatX<Scalar> Prow, grads;
-  Prow = B.transpose().template cast<Scalar>();
+  const Scalar* points = nullptr;
+  std::ptrdiff_t is = d, os = 1;
+  if constexpr (std::is_same_v<Scalar, double>) {
+    points = B.data(), is = B.innerStride(), os = B.outerStride();
+  } else {
+    Prow = B.transpose().template cast<Scalar>();
+    points = Prow.data();
+  }
   if (normals_out) grads = emb.gradients.transpose().template cast<Scalar>();
-  if (d == 3) kernel<3, Scalar>(Prow, emb, normals_out ? &grads : nullptr, normals_rest, positions, normals_out, threads);
-  else kernel<2, Scalar>(Prow, emb, normals_out ? &grads : nullptr, normals_rest, positions, normals_out, threads);
+  const MatX<Scalar>* g = normals_out ? &grads : nullptr;
+  if (d == 3) kernel<3, Scalar>(points, is, os, emb, g, normals_rest, positions, normals_out, threads);
+  else kernel<2, Scalar>(points, is, os, emb, g, normals_rest, positions, normals_out, threads);
 }
 
 }  // namespace
 
 template <typename Scalar>
-void evaluate(const BezierPoints& B, const Embedding& emb,
+void evaluate(const MatrixIn& B, const Embedding& emb,
               Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& positions, int threads) {
   const int d = check_all<Scalar>(B, emb, nullptr, float_path<Scalar>(B, 1, false));
   positions.resize(emb.size(), d);
@@ -190,7 +200,7 @@ void evaluate(const BezierPoints& B, const Embedding& emb,
 }
 
 template <typename Scalar>
-void evaluate(const BezierPoints& B, const Embedding& emb,
+void evaluate(const MatrixIn& B, const Embedding& emb,
               const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& normals_rest,
               Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& positions,
               Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& normals_out, int threads) {
@@ -203,14 +213,14 @@ void evaluate(const BezierPoints& B, const Embedding& emb,
 }
 
 template <typename Scalar>
-void evaluate(const BezierPoints& B, const Embedding& emb, PointsRef<Scalar> positions, int threads) {
+void evaluate(const MatrixIn& B, const Embedding& emb, PointsRef<Scalar> positions, int threads) {
   const int d = check_all<Scalar>(B, emb, nullptr, float_path<Scalar>(B, positions.innerStride(), false));
   check_output("positions", positions.rows(), positions.cols(), emb, d);
   run<Scalar>(B, emb, d, nullptr, positions, nullptr, threads);
 }
 
 template <typename Scalar>
-void evaluate(const BezierPoints& B, const Embedding& emb,
+void evaluate(const MatrixIn& B, const Embedding& emb,
               const ConstPointsRef<Scalar>& normals_rest, PointsRef<Scalar> positions,
               PointsRef<Scalar> normals_out, int threads) {
   const int d = check_all<Scalar>(B, emb, &normals_rest);
@@ -219,17 +229,17 @@ void evaluate(const BezierPoints& B, const Embedding& emb,
   run<Scalar>(B, emb, d, &normals_rest, positions, &normals_out, threads);
 }
 
-template void evaluate<float>(const BezierPoints&, const Embedding&, Eigen::MatrixXf&, int);
-template void evaluate<double>(const BezierPoints&, const Embedding&, Eigen::MatrixXd&, int);
-template void evaluate<float>(const BezierPoints&, const Embedding&, const Eigen::MatrixXf&,
+template void evaluate<float>(const MatrixIn&, const Embedding&, Eigen::MatrixXf&, int);
+template void evaluate<double>(const MatrixIn&, const Embedding&, Eigen::MatrixXd&, int);
+template void evaluate<float>(const MatrixIn&, const Embedding&, const Eigen::MatrixXf&,
                               Eigen::MatrixXf&, Eigen::MatrixXf&, int);
-template void evaluate<double>(const BezierPoints&, const Embedding&, const Eigen::MatrixXd&,
+template void evaluate<double>(const MatrixIn&, const Embedding&, const Eigen::MatrixXd&,
                                Eigen::MatrixXd&, Eigen::MatrixXd&, int);
-template void evaluate<float>(const BezierPoints&, const Embedding&, PointsRef<float>, int);
-template void evaluate<double>(const BezierPoints&, const Embedding&, PointsRef<double>, int);
-template void evaluate<float>(const BezierPoints&, const Embedding&, const ConstPointsRef<float>&,
+template void evaluate<float>(const MatrixIn&, const Embedding&, PointsRef<float>, int);
+template void evaluate<double>(const MatrixIn&, const Embedding&, PointsRef<double>, int);
+template void evaluate<float>(const MatrixIn&, const Embedding&, const ConstPointsRef<float>&,
                               PointsRef<float>, PointsRef<float>, int);
-template void evaluate<double>(const BezierPoints&, const Embedding&, const ConstPointsRef<double>&,
+template void evaluate<double>(const MatrixIn&, const Embedding&, const ConstPointsRef<double>&,
                                PointsRef<double>, PointsRef<double>, int);
 
 Eigen::MatrixXd jacobian(const Eigen::Ref<const Eigen::MatrixXd>& U,

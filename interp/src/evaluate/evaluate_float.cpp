@@ -128,7 +128,7 @@ Kernel kernel(bool prefetch) {
 
 }  // namespace
 
-void evaluate_float3(const Eigen::MatrixXd& B, const Embedding& emb, PointsRef<float> positions, int threads) {
+void evaluate_float3(const MatrixIn& B, const Embedding& emb, PointsRef<float> positions, int threads) {
   const long long p = emb.size();
   const int m = static_cast<int>(B.rows() / 10);
   if (p == 0) return;

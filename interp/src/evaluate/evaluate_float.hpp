@@ -8,6 +8,6 @@ namespace mbi::interp::detail {
 /// Positions (p x 3, inner stride 1, shapes checked by the caller) of every embedded point from B
 /// ((m 10) x 3); on up to `threads` threads (0: the library's count). Throws Error naming the first
 /// point whose element is not one of B's (positions are then unspecified).
-void evaluate_float3(const Eigen::MatrixXd& B, const Embedding& emb, PointsRef<float> positions, int threads);
+void evaluate_float3(const MatrixIn& B, const Embedding& emb, PointsRef<float> positions, int threads);
 
 }  // namespace mbi::interp::detail

@@ -56,7 +56,7 @@ std::int32_t as_word(float f) {
 // scale of the derivatives dx/db_k). Everything below is known at compile time but B: no scratch
 // to clear, no offset table to read per element.
 template <int D, const Layout& L>
-double prepare_terms(const Eigen::Ref<const BezierPoints>& B, float* coef, int m, int threads) {
+double prepare_terms(const MatrixIn& B, float* coef, int m, int threads) {
   constexpr int K = (D + 1) * (D + 2) / 2, NC = coef_stride(D);
   static constexpr TermIndex ix(D);
   constexpr auto unused = [] {
@@ -78,7 +78,8 @@ double prepare_terms(const Eigen::Ref<const BezierPoints>& B, float* coef, int m
     edge_row[edges[s].first][edges[s].second] = edge_row[edges[s].second][edges[s].first] =
         D + 1 + static_cast<int>(s);
   const double* col[D];
-  for (int c = 0; c < D; ++c) col[c] = B.data() + c * B.outerStride();  // B is column-major
+  for (int c = 0; c < D; ++c) col[c] = B.data() + c * B.outerStride();
+  const std::ptrdiff_t is = B.innerStride();  // rows is doubles apart (1 in a BezierPoints)
   // blocks of elements on up to `threads` threads (more than 512 elements); the largest |c_k|
   // of each block joins the maximum
   std::atomic<double> dmax_all{0.0};
@@ -90,14 +91,14 @@ double prepare_terms(const Eigen::Ref<const BezierPoints>& B, float* coef, int m
       for (int f = 0; f < NC; ++f)
         if (unused[f]) C[f] = 0.0f;
       for (int c = 0; c < D; ++c) {
-        const double* P = col[c] + row;
-        auto Pe = [&](int i, int j) { return P[edge_row[i][j]]; };
+        const double* P = col[c] + row * is;
+        auto Pe = [&](int i, int j) { return P[edge_row[i][j] * is]; };
         C[L.at(0, c)] = static_cast<float>(P[0]);
         for (int k = 1; k <= D; ++k) {
           const double ck = 2 * (Pe(0, k) - P[0]);
           dmax = std::max(dmax, std::abs(ck));
           C[L.at(ix.lin[k], c)] = static_cast<float>(ck);
-          C[L.at(ix.quad[k][k], c)] = static_cast<float>(P[0] + P[k] - 2 * Pe(0, k));
+          C[L.at(ix.quad[k][k], c)] = static_cast<float>(P[0] + P[k * is] - 2 * Pe(0, k));
           for (int l = k + 1; l <= D; ++l)
             C[L.at(ix.quad[k][l], c)] = static_cast<float>(2 * (P[0] - Pe(0, k) - Pe(0, l) + Pe(k, l)));
         }
@@ -112,7 +113,7 @@ double prepare_terms(const Eigen::Ref<const BezierPoints>& B, float* coef, int m
 }  // namespace
 
 namespace detail {
-double pairs_terms3(const BezierPoints& B, float* coef, int m, int threads) {
+double pairs_terms3(const MatrixIn& B, float* coef, int m, int threads) {
   return prepare_terms<3, kPairs>(B, coef, m, threads);
 }
 }  // namespace detail

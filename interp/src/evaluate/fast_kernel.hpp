@@ -25,6 +25,8 @@
 // D_2 x (m_1 D_3 - m_3 D_1) + m_2 (D_3 x D_1), two cross products instead of three).
 #include "runtime/cpu.hpp"
 
+#include <mbi/interp/modified_bi.hpp>
+
 #include <Eigen/Core>
 
 #include <cstdint>
@@ -80,7 +82,7 @@ using Kernel = void (*)(const std::int32_t* rec, const float* coef, const float*
 
 // The 3D element terms of B in the pairs layout (m x coef_stride(3) floats at coef, 64-byte
 // aligned), on up to `threads` threads; returns the largest |c_k| (fast_evaluate.cpp).
-double pairs_terms3(const Eigen::MatrixXd& B, float* coef, int m, int threads);
+double pairs_terms3(const MatrixIn& B, float* coef, int m, int threads);
 
 // The portable loop (d = 2 or 3, terms in layout L), any number of points.
 void eval_portable(int d, const std::int32_t* rec, const float* coef, const Layout& L, const float* mrest,

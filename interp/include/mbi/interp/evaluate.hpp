@@ -12,12 +12,13 @@
 
 namespace mbi::interp {
 
-/// Positions of all embedded points: p x d. Scalar = float or double (control points are
-/// converted once). threads = 0: the library's count (set_threads). On the float 3D path a point
+/// Positions of all embedded points: p x d. B: the element Bezier points ((m K) x d,
+/// interp::BezierPoints' layout) in memory of any strides (a BezierPoints, a numpy array), read
+/// where they are in double and in the float 3D positions; converted once for the other float paths. threads = 0: the library's count (set_threads). On the float 3D path a point
 /// whose element is not one of B's is found while evaluating: the Error names it, and positions
 /// are then partly written; every other error leaves the outputs untouched.
 template <typename Scalar>
-void evaluate(const BezierPoints& B, const Embedding& emb,
+void evaluate(const MatrixIn& B, const Embedding& emb,
               Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& positions, int threads = 0);
 
 /// Positions and mapped normals: normals_rest (p x d, unit rest normals) map by cof(J) n and are
@@ -25,7 +26,7 @@ void evaluate(const BezierPoints& B, const Embedding& emb,
 /// p x d. Needs emb.gradients (filled by embed()); throws Error otherwise.
 /// Points outside the mesh (emb.outside) are extrapolated with their element's quadratic.
 template <typename Scalar>
-void evaluate(const BezierPoints& B, const Embedding& emb,
+void evaluate(const MatrixIn& B, const Embedding& emb,
               const Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& normals_rest,
               Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& positions,
               Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic>& normals_out, int threads = 0);
@@ -42,9 +43,9 @@ using ConstPointsRef = Eigen::Ref<const Eigen::Matrix<Scalar, Eigen::Dynamic, Ei
 /// The same two in caller memory: positions (and normals_out) must be p x d already (Error
 /// otherwise); nothing of the points' size is allocated.
 template <typename Scalar>
-void evaluate(const BezierPoints& B, const Embedding& emb, PointsRef<Scalar> positions, int threads = 0);
+void evaluate(const MatrixIn& B, const Embedding& emb, PointsRef<Scalar> positions, int threads = 0);
 template <typename Scalar>
-void evaluate(const BezierPoints& B, const Embedding& emb, const ConstPointsRef<Scalar>& normals_rest,
+void evaluate(const MatrixIn& B, const Embedding& emb, const ConstPointsRef<Scalar>& normals_rest,
               PointsRef<Scalar> positions, PointsRef<Scalar> normals_out, int threads = 0);
 
 /// Jacobian dx/du (d x d) at one embedded point (element e, barycentric b), needs rest U/T for
