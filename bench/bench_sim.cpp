@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <vector>
 
@@ -89,5 +90,58 @@ void sim_args(benchmark::internal::Benchmark* b) {
 
 BENCHMARK(BM_SimStep)->ArgNames({"mesh", "solver", "tol"})->Apply(sim_args)
     ->Unit(benchmark::kMillisecond)->MinTime(mbi::bench::min_time(0.5));
+
+// The step against size on the PCG path (tolerance 1e-6, as Vega's and SOFA's CG solvers use):
+// bars of 4n x n x n cells, 5K to 527K tetrahedra, built once per size. Counters as above,
+// plus the set-up (Simulator construction: rest data, the pattern's analysis) in seconds.
+//
+//   mbi-bench --benchmark_filter=BM_SimStepSize
+void BM_SimStepSize(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));  // cells across; the bar is 4n long
+  const BarMesh M = bar_mesh(4 * n, n);
+  mbi::sim::Parameters p;
+  p.dt = 1.0 / 60.0;
+  p.newton_iterations = 1;
+  p.solver = mbi::sim::LinearSolver::PCG;
+  p.pcg_tolerance = 1e-6;
+  const auto t0 = std::chrono::steady_clock::now();
+  mbi::sim::Simulator sim(M.U, M.T, mbi::sim::Material{1e5, 0.45, 1000.0}, p);
+  const double setup_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::vector<int> fixed;
+  for (Eigen::Index i = 0; i < M.U.rows(); ++i)
+    if (M.U(i, 0) == 0.0) fixed.push_back(static_cast<int>(i));
+  sim.fix(fixed);
+  for (int s = 0; s < 3; ++s) sim.step();  // warm start, bar starts to sag
+  double iters = 0, assemble = 0, solve = 0;
+  long steps = 0;
+  for (auto _ : state) {
+    const mbi::sim::StepResult r = sim.step();
+    if (!r.success) {
+      state.SkipWithError(r.message.c_str());
+      break;
+    }
+    iters += r.solver_iterations;
+    assemble += r.assemble_ms;
+    solve += r.solve_ms;
+    ++steps;
+  }
+  const double k = steps > 0 ? 1.0 / static_cast<double>(steps) : 0.0;
+  state.counters["tets"] = static_cast<double>(M.T.rows());
+  state.counters["pcg_iters_per_step"] = iters * k;
+  state.counters["assemble_ms"] = assemble * k;
+  state.counters["solve_ms"] = solve * k;
+  state.counters["setup_s"] = setup_s;
+}
+
+// 24 n^3 tetrahedra: n = 6, 10, 16, 22, 28 give 5K, 24K, 98K, 256K, 527K; quick mode: 6 alone.
+void size_args(benchmark::internal::Benchmark* b) {
+  for (int n : {6, 10, 16, 22, 28}) {
+    b->Args({n});
+    if (mbi::bench::quick()) break;
+  }
+}
+
+BENCHMARK(BM_SimStepSize)->ArgNames({"cells"})->Apply(size_args)->Unit(benchmark::kMillisecond)
+    ->MinTime(mbi::bench::min_time(1.0));
 
 }  // namespace
