@@ -35,9 +35,15 @@ Eigen::Matrix2d friction_hessian(const Eigen::Vector2d& u, double eps) {
 
 double advance(const Collider& collider, const Eigen::Vector3d& p, const Eigen::Vector3d& dp, double time,
                double depth) {
+  if (dp.norm() == 0 || std::isinf(depth)) return 1.0;
+  return advance(collider, p, dp, time, depth, signed_distance(collider, p, time).value);
+}
+
+double advance(const Collider& collider, const Eigen::Vector3d& p, const Eigen::Vector3d& dp, double time,
+               double depth, double distance) {
   const double length = dp.norm();
   if (length == 0 || std::isinf(depth)) return 1.0;
-  const double room0 = signed_distance(collider, p, time).value + depth;
+  const double room0 = distance + depth;
   if (!(room0 > 0)) return 1.0;  // already past the depth (moved there by kinematic nodes): not guarded
   const double keep = 0.1 * room0;
   if (collider.shape == ColliderShape::Plane) {

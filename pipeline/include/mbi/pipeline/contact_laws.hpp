@@ -38,5 +38,8 @@ Eigen::Matrix2d friction_hessian(const Eigen::Vector2d& u, double eps);
 /// (room - room_0 / 10) / (lipschitz |dp|) is safe; exact for a plane.
 double advance(const Collider& collider, const Eigen::Vector3d& p, const Eigen::Vector3d& dp, double time,
                double depth);
+/// The same with `distance` = the signed distance at p (at `time`), already known.
+double advance(const Collider& collider, const Eigen::Vector3d& p, const Eigen::Vector3d& dp, double time,
+               double depth, double distance);
 
 }  // namespace mbi::pipeline::contact

@@ -119,15 +119,18 @@ class SurfaceContact : public sim::Potential {
     Eigen::Matrix<double, 3, 2> tangent;    ///< orthonormal basis of the tangent plane
     Eigen::Vector3d anchor;                 ///< start position moved with the collider, m
   };
+  using Rows3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
   /// The contact points that can matter at x (or on the move x -> x + dx), found from the
   /// element Bezier points (a point lies in their convex hull) and the substep's start, and their
-  /// positions W x (and W dx).
+  /// positions W x (and W dx), evaluated from the deformer's embedding without copying its rows.
   struct Sample {
     Eigen::VectorXd x, dx;              // dx empty: positions only
     interp::BezierPoints B;             // at x
     std::vector<Eigen::Index> points;   // by element, then by distance at the substep's start
-    interp::Embedding embedding;        // their rows of the deformer's embedding
-    Eigen::MatrixXd P, D;               // W x and W dx at those points, rows as `points`
+    std::vector<int> runs;              // starts of the runs of `points` in one element, then their count
+    Rows3 P, D;                         // W x and W dx at those points, rows as `points`
+    double cap = 1.0;                   // a move's: the largest fraction that max_step admits
+    std::vector<Eigen::Index> near;     // a move's: the rows that can contribute along it
     bool valid = false;
   };
   const Sample& sample(const Eigen::Ref<const Eigen::VectorXd>& x) const;
@@ -137,8 +140,9 @@ class SurfaceContact : public sim::Potential {
   /// The points that can come within `reach` (m, per element) of a collider: of the elements
   /// whose Bezier points do, those whose distance at the substep's start is not farther than
   /// their element's Bezier move since then (all of them without a start), and the points
-  /// outside every hull and with friction. Costs the elements and the points it keeps.
-  void gather(const interp::BezierPoints& B, const Eigen::VectorXd& reach, std::vector<Eigen::Index>& points) const;
+  /// outside every hull and with friction; and their runs by element. Costs the elements and
+  /// the points it keeps.
+  void gather(const interp::BezierPoints& B, const Eigen::VectorXd& reach, Sample& S) const;
   /// A lower bound of collider k's distance on the hull of an element's Bezier points Be.
   double hull_lower(const Eigen::Ref<const interp::BezierPoints>& Be, size_t k) const;
   /// The last substep's start bounds this one's: per element, how far a collider moved relative
@@ -149,34 +153,24 @@ class SurfaceContact : public sim::Potential {
   /// their distance: their own where evaluated, else (carried) the last one less the move since.
   void set_reference(const Sample& S, const std::vector<double>& least, bool carry);
   void index_points();                                          // element_start_ and the rest
-  /// The rows `points` of the deformer's embedding.
-  void select(const std::vector<Eigen::Index>& points, interp::Embedding& subset) const;
-  /// W x at the given points (B: x's Bezier points), with the rows at_ has kept.
-  void positions_at(const Eigen::Ref<const Eigen::VectorXd>& x, const interp::BezierPoints& B,
-                    const std::vector<Eigen::Index>& points, Eigen::MatrixXd& P) const;
-  /// W applied to X's Bezier points B at the points of `subset`.
-  void evaluate(const interp::BezierPoints& B, const interp::Embedding& subset, Eigen::MatrixXd& out) const;
-  /// Adds W^T G (G one row per point of `subset`) to out (3 n).
-  void add_transpose(const interp::Embedding& subset, const Eigen::MatrixXd& G, Eigen::Ref<Eigen::VectorXd> out) const;
+  /// W applied to the Bezier points B at `points`, rows as `points` (on the library's threads).
+  void evaluate(const interp::BezierPoints& B, const std::vector<Eigen::Index>& points, Rows3& out) const;
+  /// Adds W^T G to out (3 n): G one row per point of S, the rows with use[i] = 0 left out; summed
+  /// per run of S in order, so the same for every thread count.
+  void add_transpose(const Sample& S, const Rows3& G, const std::vector<char>& use, Eigen::Ref<Eigen::VectorXd> out) const;
   double depth(Eigen::Index point, size_t collider) const;        // guarded depth or infinity
   /// One point's energy (J), gradient (N) and Hessian or PSD surrogate (N/m) at position q, all
-  /// colliders and its slips.
+  /// colliders and its slips; the energy alone unless `full`.
   struct Term {
     double energy = 0.0;
     Eigen::Vector3d gradient = Eigen::Vector3d::Zero();
     Eigen::Matrix3d hessian = Eigen::Matrix3d::Zero();
     bool active = false;
   };
-  Term term(Eigen::Index point, const Eigen::Vector3d& q) const;
-  struct Active {
-    Eigen::Index point = 0;
-    Term term;
-  };
-  /// The active terms at x, in the order of the sample's points (kept until x, the time or the
-  /// substep changes).
-  const std::vector<Active>& terms(const Eigen::Ref<const Eigen::VectorXd>& x) const;
-  /// The rows of the deformer's embedding at the points of terms(x), in their order.
-  const interp::Embedding& active_embedding(const Eigen::Ref<const Eigen::VectorXd>& x) const;
+  Term term(Eigen::Index point, const Eigen::Vector3d& q, bool full = true) const;
+  /// The terms at x, one per point of sample(x) (kept until x, the time or the substep changes);
+  /// active_ flags those with a term.
+  const std::vector<Term>& terms(const Eigen::Ref<const Eigen::VectorXd>& x) const;
   void forget() { terms_valid_ = line_valid_ = at_.valid = along_.valid = false; }  // after a change of time or law
 
   std::shared_ptr<const Deformer> deformer_;
@@ -207,17 +201,15 @@ class SurfaceContact : public sim::Potential {
   std::vector<double> shift_;  // per element, carry_reference's collider move, m (0 within a substep)
   std::vector<char> exact_;
   mutable std::vector<char> near_;                    // per element, gather's last hull test
+  mutable std::vector<int> take_;                     // per element, gather's points taken
   mutable std::vector<int> row_of_;                   // per point, a sample's row or -1 (scratch)
   mutable std::vector<int> element_block_;            // per element, hessian_blocks' scratch (-1)
   mutable Eigen::MatrixXd X_;
-  mutable interp::Embedding subset_;   // rows of the deformer's embedding, for the vjp and positions_at
   mutable Sample at_, along_;          // x of the last evaluation; x and dx of the last move
-  mutable std::vector<Active> terms_;  // at at_.x
+  mutable std::vector<Term> terms_;    // at at_.x, per point of at_
+  mutable std::vector<char> active_;   // terms_[i].active
   mutable bool terms_valid_ = false;
-  mutable interp::Embedding active_;   // active_embedding's rows
-  mutable bool active_valid_ = false;
   Eigen::VectorXd line_start_, line_move_;  // begin_line's x and dx
-  std::vector<Eigen::Index> line_points_;    // rows of along_ that can contribute along it
   bool line_valid_ = false;
   mutable Counts counts_;
 };
