@@ -6,6 +6,7 @@
 #include <mbi/pipeline/precompute.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <exception>
 #include <mutex>
 #include <string>
@@ -40,6 +41,15 @@ Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>> frame(const interp::C
   if (f.innerStride() == 1) return {f.data(), f.rows(), f.cols(), Eigen::OuterStride<>(f.outerStride())};
   copy = f;
   return {copy.data(), copy.rows(), copy.cols(), Eigen::OuterStride<>(copy.rows())};
+}
+
+// Throws unless every coordinate of the poses X ((frames n) x d) is finite, naming the first bad one.
+void check_poses(const interp::ConstPointsRef<double>& X, Eigen::Index n) {
+  for (Eigen::Index i = 0; i < X.rows(); ++i)
+    for (Eigen::Index c = 0; c < X.cols(); ++c)
+      if (!std::isfinite(X(i, c)))
+        throw Error("control vertex " + std::to_string(i % n) + " of pose " + std::to_string(i / n) +
+                    " has a non-finite coordinate (column " + std::to_string(c) + ")");
 }
 
 }  // namespace
@@ -262,7 +272,8 @@ void Deformer::deform_batch(const interp::ConstPointsRef<double>& X, interp::Poi
   const Impl& I = *impl_;
   const Impl::Lease s(I);
   const interp::ModifiedBI* solver = I.options.method == Method::ModifiedBI ? I.pre.built_solver() : nullptr;
-  if (!solver) {  // BI and Phong: M of a frame costs about what reading it does, nothing to share
+  // one frame, or BI and Phong (their M costs about what reading a pose does: nothing to share)
+  if (!solver || frames == 1) {
     for (Eigen::Index k = 0; k < frames; ++k)
       interp::evaluate<double>(I.bezier(frame(X, k, n, (*s).X), *s), I.embedding, positions.middleRows(k * p, p),
                                I.options.threads);
@@ -270,12 +281,12 @@ void Deformer::deform_batch(const interp::ConstPointsRef<double>& X, interp::Poi
   }
   // modified-BI: the M of a block of frames in one solve (one pass over the operator or the factor
   // for all of them), then each frame's Bezier points and evaluation
+  check_poses(X, n);  // all of them before any is written
   const Eigen::Index block = solver->dense_operator() ? 8 : 8 / d, nd = n * d;
   Scratch& t = *s;
   t.pose.B.resize(I.pre.elements().rows() * ((d + 1) * (d + 2) / 2), d);
   for (Eigen::Index k0 = 0; k0 < frames; k0 += block) {
     const Eigen::Index count = std::min(block, frames - k0);
-    for (Eigen::Index k = k0; k < k0 + count; ++k) I.pre.check_pose(frame(X, k, n, t.X));
     t.Ms.resize(block * nd, d);
     solver->solve_batch(X.middleRows(k0 * n, count * n), t.Ms.topRows(count * nd));
     for (Eigen::Index k = 0; k < count; ++k) {

@@ -10,13 +10,13 @@ The C++ columns need the benchmark's clocks (CMake MBI_PYTHON_TIMING=ON); with t
 scripts/bench.sh --quick): a few seconds, small counts, a 24 MB batch, no idle wait.
 Sizes as in python/tests/faults.py: 1,000 random points in a 7 x 7 x 6-cell box (1,764 tetrahedra).
 
-1. Deformer.deform(X, out=) and Deformer.vjp(G, out=) for BI, Phong and modified-BI: median of
-   each Python call and of the same C++ call in a C++ loop (mbi._mbi._timing), in alternating
-   blocks of 100, and of each Python call less its own C++ section (the bindings clock the part
-   they run without the GIL: "outside C++" is what the binding adds to that very call); "fresh"
-   is a new process's first 200 + 200 calls after construction and one call, in blocks of 20
-   that alternate which side goes first, "warm" N calls (default 10,000) of a process that ran
-   many before.
+1. Deformer.deform(X, out=) and Deformer.vjp(G, out=) for BI, Phong and modified-BI, in pairs
+   of one Python call and the same C++ call timed in C++ (mbi._mbi._timing), adjacent in time,
+   every other pair the C++ call first: medians of the Python calls, of the C++ calls, of the
+   difference within each pair, and of each Python call less its own C++ section (the bindings
+   clock the part they run without the GIL: "outside C++" is what the binding adds to that very
+   call); "fresh" is a new process's first 200 pairs after construction and one call, "warm" N
+   pairs (default 10,000) after 2,000.
 2. 100 calls with out= (and mbi.evaluate of the method's Bezier points): the peak of the memory
    tracemalloc traces (numpy's arrays and Python's objects) and minor page faults per call.
 3. deform of a batch of frames into a new array (mbi allocates it) of about 600 MB, in a new
@@ -51,9 +51,9 @@ def setup(method, threads, points=1000):
 
 
 def calls(deformer, X, G, out, dX):
-    """(name, Python call, C++ loop of n calls) for deform and vjp."""
-    return [("deform", lambda: deformer.deform(X, out=out), lambda n: _mbi._timing.deform(deformer, X, out, n)),
-            ("vjp", lambda: deformer.vjp(G, out=dX), lambda n: _mbi._timing.vjp(deformer, G, dX, n))]
+    """(name, Python call, one C++ call timed in C++ (seconds)) for deform and vjp."""
+    return [("deform", lambda: deformer.deform(X, out=out), lambda: _mbi._timing.deform(deformer, X, out, 1)[0]),
+            ("vjp", lambda: deformer.vjp(G, out=dX), lambda: _mbi._timing.vjp(deformer, G, dX, 1)[0])]
 
 
 def timing():
@@ -61,45 +61,38 @@ def timing():
     return getattr(_mbi, "_timing", None)
 
 
-def python_times(call, n):
-    """Seconds of n calls from Python, and of each call's C++ section (NaN without clocks)."""
-    seconds, section, clock = np.empty(n), np.full(n, np.nan), time.perf_counter_ns
-    last_call = timing().last_call if timing() else None
+def paired(py_call, cpp_call, n):
+    """Medians (us) over n pairs of one Python call and the same C++ call, adjacent in time (which
+    goes first alternates), so that a slow spell of the machine falls on both: the Python call,
+    the C++ call, the difference within each pair, and each Python call less its own C++ section
+    (NaN without clocks)."""
+    py, cpp, section = np.empty(n), np.full(n, np.nan), np.full(n, np.nan)
+    clock, clocks = time.perf_counter_ns, timing()
     for k in range(n):
+        if clocks and k % 2:
+            cpp[k] = cpp_call()
         t0 = clock()
-        call()
-        seconds[k] = (clock() - t0) * 1e-9
-        if last_call:
-            section[k] = last_call()
-    return seconds, section
-
-
-def compare(py_call, cpp_times, n, block=100, alternate=False):
-    """Medians (us) of n Python calls, n C++ calls (NaN without clocks) and of each Python call
-    less its C++ section, in blocks; alternate: every other block the C++ side goes first."""
-    py, cpp, outside = [], [], []
-    for k in range(max(1, n // block)):
-        if alternate and k % 2 and timing():
-            cpp.append(cpp_times(block))
-        total, section = python_times(py_call, block)
-        py.append(total)
-        outside.append(total - section)
-        if timing() and not (alternate and k % 2):
-            cpp.append(cpp_times(block))
-    med = lambda v: float(np.median(np.concatenate(v))) * 1e6 if v else float("nan")
-    return med(py), med(cpp), med(outside)
+        py_call()
+        py[k] = (clock() - t0) * 1e-9
+        if clocks:
+            section[k] = clocks.last_call()
+            if not k % 2:
+                cpp[k] = cpp_call()
+    med = lambda v: float(np.median(v)) * 1e6
+    return med(py), med(cpp), med(py - cpp), med(py - section)
 
 
 def per_call(method, threads, n, fresh):
+    """fresh: the first 200 pairs after construction and one call; else n pairs after 2,000."""
     deformer, X, G, out, dX = setup(method, threads)
     result = {}
-    for name, py_call, cpp_times in calls(deformer, X, G, out, dX):
+    for name, py_call, cpp_call in calls(deformer, X, G, out, dX):
         py_call()
         if fresh:
-            result[name] = compare(py_call, cpp_times, 200, block=20, alternate=True)
+            result[name] = paired(py_call, cpp_call, 200)
         else:
-            compare(py_call, cpp_times, min(2000, n))  # warm-up
-            result[name] = compare(py_call, cpp_times, n)
+            paired(py_call, cpp_call, min(2000, n))  # warm-up
+            result[name] = paired(py_call, cpp_call, n)
     return result
 
 
@@ -174,15 +167,15 @@ def print_per_call(args):
     print(f"1,000 points, 1,764 tetrahedra; Deformer threads={args.threads} ({mbi.threads()} cores); "
           f"C++ loops: {'yes' if timing() else 'none in this module (MBI_PYTHON_TIMING=OFF)'}")
     print()
-    print("| method | call | process | from Python (us) | C++ alone (us) | difference (us) | outside C++ (us) |")
+    print("| method | call | process | from Python (us) | C++ alone (us) | paired difference (us) | outside C++ (us) |")
     print("|---|---|---|---|---|---|---|")
     for method in METHODS:
         fresh = in_new_process("--child", "fresh", "--method", method, "--threads", str(args.threads))
         warm = per_call(method, args.threads, args.calls, False)
         for name in ("deform", "vjp"):
-            for process, (py, cpp, outside) in (("fresh", fresh[name]), ("warm", warm[name])):
+            for process, (py, cpp, difference, outside) in (("fresh", fresh[name]), ("warm", warm[name])):
                 columns = [f"{py:.2f}"] + ["-" if np.isnan(v) else f"{v:{f}}" for v, f in
-                                           ((cpp, ".2f"), (py - cpp, "+.2f"), (outside, "+.2f"))]
+                                           ((cpp, ".2f"), (difference, "+.2f"), (outside, "+.2f"))]
                 print(f"| {method} | {name}(out=) | {process} | " + " | ".join(columns) + " |")
     print()
 
