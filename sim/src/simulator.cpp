@@ -184,6 +184,10 @@ struct Simulator::Impl {
   int halvings = 0;                 // line-search halvings of the current step
   Eigen::VectorXd cg_d, cg_res, cg_z, cg_p, cg_q, cg_hv;  // exact_step's scratch
   std::vector<double> phi_history;  // incremental potential of the last substep
+  // With a potential, Newton's first guess extrapolates the last substep's change of velocity:
+  // its start velocity and length (0: none, after a reset or a state set from outside).
+  Eigen::VectorXd last_v;
+  double last_h = 0.0;
 
   void build(const Eigen::Ref<const Eigen::MatrixXd>& U_, const Eigen::Ref<const Eigen::MatrixXi>& T_,
              const Material& material, const std::vector<Material>& per_element);
@@ -747,8 +751,18 @@ std::string Simulator::Impl::substep(double h, int& newton, int& iters, double& 
   if (constraints_dirty) update_constraints();
   for (int d = 0; d < 3 * n; ++d)
     if (constrained_dof[d]) vk(d) = ((target(d) - x(d)) / h - ps1 * v(d)) / ps2;
-  if (potential) {  // a first guess the potential does not admit starts from rest instead
+  if (potential) {
+    // First guess: the old velocity plus the last substep's change of it (a smooth motion's
+    // next velocity to first order); the old velocity when the potential does not admit that
+    // move from the start positions, rest when it does not admit either.
     const Eigen::VectorXd zero = Eigen::VectorXd::Zero(3 * n);
+    const bool extrapolate = last_h > 0 && last_v.size() == v.size();
+    if (extrapolate)
+      for (int d = 0; d < 3 * n; ++d)
+        if (!constrained_dof[d]) vk(d) = v(d) + (h / last_h) * (v(d) - last_v(d));
+    if (extrapolate && admissible(zero, vk, h) < 1.0)
+      for (int d = 0; d < 3 * n; ++d)
+        if (!constrained_dof[d]) vk(d) = v(d);
     if (admissible(zero, vk, h) < 1.0)
       for (int d = 0; d < 3 * n; ++d)
         if (!constrained_dof[d]) vk(d) = 0.0;
@@ -807,6 +821,8 @@ std::string Simulator::Impl::substep(double h, int& newton, int& iters, double& 
   }
   const Eigen::VectorXd x_old = x;
   x += h * (ps1 * v + ps2 * vk);
+  last_v = v;
+  last_h = h;
   v = vk;
   for (int d = 0; d < 3 * n; ++d)
     if (constrained_dof[d]) {
@@ -1102,6 +1118,7 @@ void Simulator::set_positions(const Eigen::Ref<const Eigen::MatrixXd>& X) {
       throw Error("position of node " + std::to_string(i) + " is not finite");
     s.x.segment<3>(3 * i) = X.row(i).transpose();
   }
+  s.last_h = 0.0;  // no last substep to extrapolate from
   s.sync_out();
 }
 
@@ -1114,6 +1131,7 @@ void Simulator::set_velocities(const Eigen::Ref<const Eigen::MatrixXd>& V) {
       throw Error("velocity of node " + std::to_string(i) + " is not finite");
     s.v.segment<3>(3 * i) = V.row(i).transpose();
   }
+  s.last_h = 0.0;  // no last substep to extrapolate from
   s.sync_out();
 }
 
@@ -1126,6 +1144,7 @@ void Simulator::reset() {
   s.guess1.resize(0);
   s.guess2.resize(0);
   s.have_rot = false;
+  s.last_h = 0.0;  // no last substep to extrapolate from
   s.sync_out();
 }
 
