@@ -193,3 +193,22 @@ def test_mesh_errors():
         mbi.embed(U, T, np.array([[1e20, 0.0, 0.0]]))
     with raises(r"2D or 3D|2 or 3"):
         mbi.default_alpha(4)
+
+
+def test_non_finite_anywhere_in_any_layout(setup):
+    """The finite check reads C and Fortran order at once and strided arrays value by value: each
+    finds a bad value at the first, a middle and the last place, and names it."""
+    U, T, P, deformer = setup
+    n = len(U)
+    for bad in (np.nan, np.inf, -np.inf, -np.nan):
+        for i, c in ((0, 0), (n // 2, 1), (n - 1, 2)):
+            X = U.copy()
+            X[i, c] = bad
+            wide = np.zeros((n, 6))
+            wide[:, ::2] = X
+            for layout in (X, np.asfortranarray(X), wide[:, ::2]):
+                with raises(rf"X\[{i}, {c}\] is not finite"):
+                    deformer.deform(layout)
+    huge = U.copy()
+    huge[3, 1] = np.finfo(np.float64).max  # the largest finite value passes
+    deformer.deform(huge)
