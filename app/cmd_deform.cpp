@@ -2,6 +2,7 @@
 //
 //   mbi deform --control REST --deformed X --mesh DENSE --out OUT [--mesh DENSE2 --out OUT2 ...]
 //              [--method bi|modified-bi|phong] [--alpha A] [--pin-boundary] [--stats STATS.json]
+//              [--max-memory 8G]
 //   mbi deform --control REST --deformed TRAJECTORY --mesh DENSE --out CACHE|GLTF|NUMBERED ...
 //   mbi deform --example twist-bar [--out OUT] [--stats STATS.json]
 //
@@ -12,6 +13,8 @@
 #include "deform.hpp"
 #include "deform_outputs.hpp"
 
+#include <mbi/error.hpp>
+#include <mbi/interp/memory.hpp>
 #include <mbi/pipeline/method.hpp>
 
 #include <memory>
@@ -62,6 +65,18 @@ const Registrar reg{
           "output frame rate: the sequence resampled to it from its frame times (an MDD or a .pvd), positions "
           "interpolated linearly between input frames; without it the frames are kept as they are (24 fps where "
           "times meet frame numbers)");
+      sub.add_option_function<std::string>(
+          "--max-memory",
+          [a](const std::string& s) {
+            try {
+              a->max_memory = interp::parse_memory_size(s);
+            } catch (const mbi::Error& e) {
+              throw CLI::ValidationError(std::string("--max-memory: ") + e.what());
+            }
+          },
+          "memory the run may take, e.g. 8G or 512M (K, M, G, T: powers of 1024); a control mesh whose estimated "
+          "peak (the factor's symbolic analysis, before any numeric work) exceeds it is refused, naming the sizes. "
+          "Default: MemAvailable of /proc/meminfo");
       sub.add_flag("--force", a->force, "overwrite existing --out / --stats files");
       sub.add_option("--example", a->example, "built-in example instead of files: twist-bar");
       add_threads_option(sub);

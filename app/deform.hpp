@@ -6,6 +6,7 @@
 // modified-BI for the summary and --stats. See docs/cli.md.
 #include "deform_inputs.hpp"
 
+#include <mbi/interp/memory.hpp>
 #include <mbi/interp/metrics.hpp>
 #include <mbi/pipeline/deformer.hpp>
 
@@ -26,6 +27,7 @@ struct DeformArgs {
   std::optional<double> alpha;  ///< none: interp's default
   bool pin_boundary = false, force = false;
   std::optional<double> max_outside;  ///< refuse points farther out (x the model size)
+  double max_memory = 0;  ///< bytes the run may take (--max-memory); 0: MemAvailable
   /// The output's frame rate: the frames resampled to it (Frames::resample); none: the input's
   /// frames as they are, at kDefaultFps where times meet frame numbers.
   std::optional<double> fps;
@@ -43,6 +45,8 @@ struct Run {
   std::string failure;
   Eigen::MatrixXd last_pose;  ///< the control positions of the last frame done
   double embed_ms = 0, precompute_ms = 0, phong_ms = 0, read_ms = 0, deform_ms = 0, write_ms = 0;
+  double estimate_ms = 0, solve_ms = 0;  ///< the memory estimate; one modified-BI solve (the comparison's)
+  interp::MemoryEstimate estimate;       ///< the run's memory estimate (scenes::check_run_size)
 };
 
 /// BI, Phong and modified-BI side by side at the last frame.
@@ -50,6 +54,9 @@ struct Comparison {
   bool built = false;  ///< false: no interior face (one element), modified-BI is not built
   double alpha = 0, beta = 0;
   int null_space_dim = 0;
+  std::string factorization;  ///< of the modified-BI solver, with its factor's nonzeros and kept bytes
+  long long factor_nonzeros = 0, kept_bytes = 0;
+  bool dense_operator = false;
   interp::DiscontinuityTable table;
   /// Against the closed-form deformation (the example): BI, Phong, modified-BI.
   std::vector<std::pair<std::string, interp::Accuracy>> accuracy;

@@ -15,6 +15,7 @@
 #include <atomic>
 #include <csignal>
 #include <cstdio>
+#include <new>
 #include <stdexcept>
 
 namespace fs = std::filesystem;
@@ -55,6 +56,18 @@ class Progress {
   bool tty_;
   Clock::time_point t0_ = Clock::now();
 };
+
+// A stage's std::bad_alloc as an error that names the stage: the estimate was passed, but the
+// memory went (another program took it, or the estimate missed; docs/performance.md, "Memory").
+template <class F>
+auto in_stage(const char* stage, F&& f) {
+  try {
+    return f();
+  } catch (const std::bad_alloc&) {
+    throw std::runtime_error(std::string("out of memory while ") + stage +
+                             " (see the estimate in docs/performance.md, \"Memory\"; --max-memory sets the limit)");
+  }
+}
 
 void check_args(const DeformArgs& a) {
   if (a.alpha) check_option("--alpha", [&] { interp::check_alpha(*a.alpha); });
@@ -211,31 +224,45 @@ std::optional<Comparison> try_compare(const Model& m, const pipeline::Deformer& 
 int deform_frames(const DeformArgs& a, Frames& frames, const std::vector<Out>& outs, io::OutputSet& outputs,
                   std::size_t i_stats) {
   test_signal_at("load");
-  const Model m = a.example.empty() ? load_model(a.control, a.meshes) : example_model(a.example);
-  // the same caps as a scene, before the embedding and the precompute allocate (docs/limits.md)
-  scenes::check_run_size(m.control_name, m.P.rows(), m.U.rows(), m.T.rows(), m.dim());
+  const Model m = in_stage("reading the models", [&] {
+    return a.example.empty() ? load_model(a.control, a.meshes) : example_model(a.example);
+  });
+  // the estimate against the memory there is, before the embedding and the precompute allocate
+  // (docs/limits.md)
+  interp::Options io;
+  io.pin_boundary = a.pin_boundary;
+  const auto t_estimate = Clock::now();
+  const interp::MemoryEstimate estimate = in_stage("estimating the memory", [&] {
+    return scenes::check_run_size(m.control_name, m.P.rows(), m.U, m.T, a.max_memory, io);
+  });
+  const double estimate_ms = ms_since(t_estimate);
   if (frames.count() == 0) throw std::runtime_error(a.deformed + ": no frames");
   frames.pose(0, m);  // a wrong node count fails before any work
   const Needs needs = output_needs(outs, m);
   Run run;
   run.frames = frames.count();
   run.trajectory = frames.trajectory();
+  run.estimate = estimate;
+  run.estimate_ms = estimate_ms;
   const Timing timing = output_timing(frames, a.fps, outs);
-  pipeline::Deformer deformer = make_deformer(a, m, needs.normals, run);
+  pipeline::Deformer deformer = in_stage("embedding the points and the precompute", [&] { return make_deformer(a, m, needs.normals, run); });
   // From the first frame to the last rename a signal stops the frames, and what was done is
   // finished (signals.hpp); before, it ends the process at once with nothing written.
   const StopOnSignal stop;
   std::optional<Comparison> comparison;
   try {
     FrameWriter out(outs, outputs, m, timing);
-    run_frames(frames, m, deformer, out, needs.use_float, stop, outputs, run);
+    in_stage("deforming the frames", [&] {
+      run_frames(frames, m, deformer, out, needs.use_float, stop, outputs, run);
+      return 0;
+    });
     if (run.done == 0 && run.signal) {
       std::fprintf(stderr, "mbi deform: interrupted by %s before the first frame: nothing written\n",
                    run.signal == SIGINT ? "SIGINT" : "SIGTERM");
       return 128 + run.signal;
     }
     if (run.done == 0) throw std::runtime_error(run.failure);
-    comparison = try_compare(m, deformer, run);
+    comparison = in_stage("comparing the methods", [&] { return try_compare(m, deformer, run); });
     test_signal_at("finish");
     out.finish();
   } catch (const std::exception& e) {

@@ -2,6 +2,7 @@
 // on stdout and --stats (deform.hpp).
 #include "deform.hpp"
 
+#include <mbi/base/timer.hpp>
 #include <mbi/error.hpp>
 #include <mbi/interp.hpp>
 #include <mbi/pipeline/precompute.hpp>
@@ -58,7 +59,14 @@ Comparison compare_methods(const Model& m, const pipeline::Deformer& deformer, R
   run.precompute_ms += own->precompute_ms();
   run.phong_ms += own->phong_ms();
   const Eigen::MatrixXd& X = run.last_pose;
-  const interp::VertexMatrices M_mbi = solver->solve(X), M_phong = phong->M(X);
+  const auto t_solve = Clock::now();
+  const interp::VertexMatrices M_mbi = solver->solve(X);
+  run.solve_ms = ms_since(t_solve);
+  const interp::VertexMatrices M_phong = phong->M(X);
+  c.factorization = solver->factorization();
+  c.factor_nonzeros = solver->factor_nonzeros();
+  c.kept_bytes = solver->memory_bytes();
+  c.dense_operator = solver->dense_operator();
   c.table = interp::discontinuity_table(*solver, X, M_mbi, M_phong);
   c.built = true;
   c.alpha = solver->alpha();
@@ -91,6 +99,13 @@ nlohmann::json stats_json(const DeformArgs& a, const Model& m, const pipeline::D
     j["e_disc"] = c->table.e_disc;
     j["e_total"] = c->table.e_total;
   }
+  if (built)
+    j["factor"] = {{"factorization", c->factorization}, {"nonzeros", c->factor_nonzeros},
+                   {"kept_bytes", c->kept_bytes}, {"dense_operator", c->dense_operator}};
+  j["memory_estimate"] = {{"peak_bytes", run.estimate.peak_bytes},         {"factor_bytes", run.estimate.factor_bytes},
+                          {"factor_nonzeros", run.estimate.factor_nonzeros}, {"assembly_bytes", run.estimate.assembly_bytes},
+                          {"model_bytes", run.estimate.model_bytes},         {"ordering", run.estimate.ordering},
+                          {"unknowns", run.estimate.unknowns},               {"factor_flops", run.estimate.factor_flops}};
   j["frames"] = run.done;
   j["frames_in_trajectory"] = run.frames;
   if (!run.failure.empty()) j["failure"] = run.failure;
@@ -98,6 +113,7 @@ nlohmann::json stats_json(const DeformArgs& a, const Model& m, const pipeline::D
   const double n = std::max(run.done, 1);
   j["timings_ms"] = {{"embed", run.embed_ms},      {"precompute", run.precompute_ms},
                      {"phong_precompute", run.phong_ms}, {"read", run.read_ms},
+                     {"memory_estimate", run.estimate_ms}, {"solve", run.solve_ms},
                      {"deform", run.deform_ms},    {"write", run.write_ms},
                      {"read_per_frame", run.read_ms / n}, {"deform_per_frame", run.deform_ms / n},
                      {"write_per_frame", run.write_ms / n}};

@@ -1,10 +1,11 @@
-// Resource caps and physical ranges of scenes: refused at load, quickly, with the
-// estimate and the key in the message; the memory estimate against the machine's memory.
+// The memory of scenes and physical ranges: refused at load, quickly, with the estimate and the
+// key in the message, only when a run would not fit (no cap on the counts).
 #include <mbi/scenes/limits.hpp>
 #include <mbi/scenes/scene.hpp>
 
 #include <catch2/catch.hpp>
 
+#include "common/grid_meshes.hpp"
 #include "common/temp_dir.hpp"
 
 #include <chrono>
@@ -27,27 +28,26 @@ fs::path write_scene(const std::string& name, const std::string& text) {
 }
 }  // namespace
 
-TEST_CASE("scenes over the control-mesh caps are refused at load within a second", "[limits]") {
+TEST_CASE("scenes whose control mesh cannot fit are refused at load within a second; no cap on the counts", "[limits]") {
   const std::string head = "[dense]\nbuiltin = \"paper-bar\"\n[control]\n";
+  // sizes whose floor alone (minimum_run_bytes) is terabytes: refused before anything is built
   const std::vector<std::pair<std::string, std::string>> cases{
       {"builtin = \"box\"\ncells = [1000, 1000, 1000]\n", "1003003001 control vertices and 6000000000 tetrahedra"},
-      {"builtin = \"box\"\ncells = [100, 100, 100]\n", "1030301 control vertices and 6000000 tetrahedra"},
-      {"generate_vertices = 100000\n", "100000 control vertices exceed the cap of 20000"},
-      // two cells for a box: one layer of boxes (nz = 1), counted as tetrahedra, not triangles
-      {"builtin = \"box\"\ncells = [140, 140]\n", "39762 control vertices and 117600 tetrahedra"},
-      {"builtin = \"grid-2d\"\ncells = [150, 150]\n", "22801 control vertices and 45000 triangles"},
+      {"generate_vertices = 1000000000\n", "1000000000 control vertices needs at least"},
   };
   for (const auto& [control, message] : cases) {
     const fs::path p = write_scene("caps.toml", head + control);
     const auto t0 = std::chrono::steady_clock::now();
-    CHECK_THROWS_WITH(load_scene(p), Catch::Contains(message) && Catch::Contains("control."));
+    CHECK_THROWS_WITH(load_scene(p), Catch::Contains(message) && Catch::Contains("control.") &&
+                                         Catch::Contains("GiB of memory, more than the"));
     // a guard against allocating first (minutes, gigabytes); milliseconds in fact, more under ASan
     CHECK(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < 10.0);
   }
-  // at the cap: 27 x 27 x 26 cells is 28 * 28 * 27 = 21168 vertices (over); 26^3 cells fit
-  CHECK_THROWS_AS(load_scene(write_scene("c.toml", head + "builtin = \"box\"\ncells = [27, 27, 26]\n")), mbi::scenes::Error);
-  CHECK_NOTHROW(load_scene(write_scene("c.toml", head + "builtin = \"box\"\ncells = [26, 26, 26]\n")));
-  CHECK_NOTHROW(load_scene(write_scene("c.toml", head + "generate_vertices = 20000\n")));
+  // what the cap of 20,000 vertices and 150,000 tetrahedra refused loads now
+  CHECK_NOTHROW(load_scene(write_scene("c.toml", head + "builtin = \"box\"\ncells = [140, 140]\n")));
+  CHECK_NOTHROW(load_scene(write_scene("c.toml", head + "builtin = \"grid-2d\"\ncells = [150, 150]\n")));
+  CHECK_NOTHROW(load_scene(write_scene("c.toml", head + "builtin = \"box\"\ncells = [30, 30, 30]\n")));
+  CHECK_NOTHROW(load_scene(write_scene("c.toml", head + "generate_vertices = 100000\n")));
 }
 
 TEST_CASE("scene values outside their physical range name the key", "[limits]") {
@@ -69,19 +69,29 @@ TEST_CASE("scene values outside their physical range name the key", "[limits]") 
   }
 }
 
-TEST_CASE("run size: caps and the memory estimate against the machine", "[limits]") {
-  CHECK_NOTHROW(check_run_size("s", 250000, 450, 2000, 3));
-  CHECK_THROWS_WITH(check_run_size("s", 1000, 20001, 1000, 3), Catch::Contains("20001 vertices"));
-  CHECK_THROWS_WITH(check_run_size("s", 1000, 1000, 150001, 3), Catch::Contains("150001 tetrahedra"));
-  // a dense model of 1e12 vertices needs terabytes: refused with the estimate
-  const double have = physical_memory_bytes();
-  REQUIRE(have > 0);
-  CHECK_THROWS_WITH(check_run_size("s", 1000000000000LL, 450, 2000, 3),
-                    Catch::Contains("GiB of memory") && Catch::Contains("1000000000000 dense vertices"));
-  // the estimate grows with every size and counts in 64 bits
-  CHECK(estimate_run_bytes(2000000, 450, 2000, 3) > estimate_run_bytes(1000000, 450, 2000, 3));
-  CHECK(estimate_run_bytes(1000, 20000, 120000, 3) > estimate_run_bytes(1000, 10000, 60000, 3));
-  CHECK(estimate_run_bytes(3000000000LL, 10, 10, 3) > 3e9 * 8);
+TEST_CASE("run size: the memory estimate against the limit, no cap on the counts", "[limits]") {
+  // 21 x 21 x 20 cells: 22 * 22 * 21 = 10164 vertices, 52920 tetrahedra
+  const mbi::test::Mesh box = mbi::test::box_tet_mesh(21, 21, 20);
+  const mbi::interp::MemoryEstimate e = check_run_size("s", 250000, box.U, box.T, 64.0 * 1024 * 1024 * 1024);
+  CHECK(e.peak_bytes > e.factor_bytes);
+  CHECK_THROWS_WITH(check_run_size("s", 250000, box.U, box.T, 1024.0 * 1024),
+                    Catch::StartsWith("s: the modified-BI precompute would need about") &&
+                        Catch::Contains("of --max-memory") && Catch::Contains("30492 unknowns"));
+  // the simulator's blocks count when the scene simulates
+  const double limit = e.peak_bytes * 1.001;
+  CHECK_NOTHROW(check_run_size("s", 250000, box.U, box.T, limit));
+  CHECK_THROWS(check_run_size("s", 250000, box.U, box.T, limit, {}, true));
+  std::string name;
+  CHECK(memory_limit(5e9, name) == 5e9);
+  CHECK(name == "--max-memory");
+  CHECK(memory_limit(0, name) > 0);
+  CHECK(name != "--max-memory");
+  // the floor grows with every size and counts in 64 bits
+  CHECK(minimum_run_bytes(2000000, 450, 2000, 3) > minimum_run_bytes(1000000, 450, 2000, 3));
+  CHECK(minimum_run_bytes(1000, 20000, 120000, 3) > minimum_run_bytes(1000, 10000, 60000, 3));
+  CHECK(minimum_run_bytes(3000000000LL, 10, 10, 3) > 3e9 * 8);
+  CHECK(over_memory_floor(1000, 1000, 5000, 3).empty());
+  CHECK_THAT(over_memory_floor(1000000000000LL, 450, 2000, 3), Catch::Contains("needs at least"));
 }
 
 // A container's memory limit (cgroup) counts like a smaller machine.

@@ -9,7 +9,9 @@
 
 #include <Eigen/SparseCholesky>
 #include <algorithm>
+#include <cstdlib>
 #include <mutex>
+#include <new>
 #include <optional>
 #include <string>
 
@@ -18,6 +20,20 @@
 #endif
 
 namespace mbi::interp::detail {
+
+void FactorValues::allocate(std::size_t n) {
+  p_.reset();
+  n_ = 0;
+  auto* p = static_cast<double*>(std::malloc(std::max<std::size_t>(n, 1) * sizeof(double)));
+  if (p == nullptr) throw std::bad_alloc();
+  p_ = std::unique_ptr<double, void (*)(void*)>(p, &std::free);
+  n_ = n;
+}
+
+void FactorValues::adopt(double* p, std::size_t n, void (*release)(void*)) {
+  p_ = std::unique_ptr<double, void (*)(void*)>(p, release);
+  n_ = n;
+}
 
 std::ptrdiff_t CholeskyFactor::nonzeros() const {
   std::ptrdiff_t nz = 0;
@@ -137,6 +153,11 @@ void CholeskyFactor::schedule(int n_groups, std::ptrdiff_t min_nonzeros) {
   bins = n_groups;
 }
 
+std::mutex& ordering_mutex() {
+  static std::mutex m;
+  return m;
+}
+
 bool cholmod_available() {
 #ifdef MBI_HAVE_CHOLMOD
   return true;
@@ -154,7 +175,8 @@ CholeskyFactor eigen_factor(const Eigen::SparseMatrix<double>& A) {
   CholeskyFactor F;
   F.method = "Eigen SimplicialLLT (AMD)";
   F.n = static_cast<int>(A.rows());
-  const Eigen::SparseMatrix<double> L = llt.matrixL();  // diagonal first in each column
+  // Eigen's own L, not a copy (diagonal first in each column): the copy below is the only one
+  const Eigen::SparseMatrix<double>& L = llt.matrixL().nestedExpression();
   F.perm.resize(F.n);
   // Eigen: y = P b with y[P.indices()[i]] = b[i]; ours: y[k] = b[perm[k]]
   for (int i = 0; i < F.n; ++i) F.perm[llt.permutationP().indices()[i]] = i;
@@ -162,14 +184,14 @@ CholeskyFactor eigen_factor(const Eigen::SparseMatrix<double>& A) {
   F.rowp.resize(F.n + 1);
   F.valp.resize(F.n + 1);
   F.rows.resize(L.nonZeros());
-  F.vals.resize(L.nonZeros());
+  F.vals.allocate(static_cast<std::size_t>(L.nonZeros()));
   for (int j = 0; j <= F.n; ++j) {
     F.super[j] = j;
     F.rowp[j] = F.valp[j] = L.outerIndexPtr()[j];
   }
   for (std::ptrdiff_t k = 0; k < L.nonZeros(); ++k) {
     F.rows[k] = L.innerIndexPtr()[k];
-    F.vals[k] = L.valuePtr()[k];
+    F.vals.data()[k] = L.valuePtr()[k];
   }
   for (int j = 0; j < F.n; ++j)
     if (F.rowp[j] == F.rowp[j + 1] || F.rows[F.rowp[j]] != j)
@@ -181,8 +203,14 @@ CholeskyFactor eigen_factor(const Eigen::SparseMatrix<double>& A) {
 // Flops above which the factorization runs BLAS on the library's threads (about 10,000 control
 // vertices and up; below it one thread is as fast, docs/performance.md "Threads").
 constexpr double kParallelFactorFlops = 4e9;
-// Unknowns from which METIS's ordering is tried beside AMD's (bench/results/blender.md, "Ordering").
-constexpr Eigen::Index kMetisMinUnknowns = 10000;
+
+// L's values after they changed hands: freed as CHOLMOD frees its memory
+void release_cholmod(void* p) {
+  cholmod_common c;
+  cholmod_start(&c);
+  cholmod_free(0, sizeof(double), p, &c);
+  cholmod_finish(&c);
+}
 
 CholeskyFactor factor_with_cholmod(const Eigen::SparseMatrix<double>& A) {
   cholmod_common c;
@@ -201,10 +229,7 @@ CholeskyFactor factor_with_cholmod(const Eigen::SparseMatrix<double>& A) {
   As.stype = -1;  // symmetric: CHOLMOD reads the lower triangle
   // serial: BLAS's and CHOLMOD's own threads would spin for milliseconds after it (threads.hpp)
   std::optional<SerialForeignPools> pools(std::in_place);
-  // METIS keeps its random state in globals: orderings computed at once by two threads would
-  // depend on timing (and so would the factor's round-off), so one thread orders at a time
-  static std::mutex ordering;
-  std::unique_lock<std::mutex> one_at_a_time(ordering);
+  std::unique_lock<std::mutex> one_at_a_time(ordering_mutex());
   cholmod_factor* L = cholmod_analyze(&As, &c);
   one_at_a_time.unlock();
   const bool analyzed = L != nullptr && c.status >= CHOLMOD_OK;
@@ -238,8 +263,9 @@ CholeskyFactor factor_with_cholmod(const Eigen::SparseMatrix<double>& A) {
   F.valp.assign(px, px + ns + 1);
   const int* srows = static_cast<const int*>(L->s);
   F.rows.assign(srows, srows + pi[ns]);
-  const double* x = static_cast<const double*>(L->x);
-  F.vals.assign(x, x + px[ns]);
+  // the values change hands: no second copy
+  F.vals.adopt(static_cast<double*>(L->x), static_cast<std::size_t>(px[ns]), &release_cholmod);
+  L->x = nullptr;
   cholmod_free_factor(&L, &c);
   cholmod_finish(&c);
   return F;

@@ -8,9 +8,29 @@
 #include <Eigen/SparseCore>
 
 #include <cstddef>
+#include <cstdlib>
+#include <memory>
+#include <mutex>
 #include <vector>
 
 namespace mbi::interp::detail {
+
+/// The values of L: memory the factor owns, either its own (Eigen's path) or CHOLMOD's, adopted
+/// without a copy (a copy would double the precompute's peak memory for a moment).
+class FactorValues {
+ public:
+  /// n doubles of its own, uninitialised; std::bad_alloc when they cannot be had.
+  void allocate(std::size_t n);
+  /// Takes p (n doubles), released by `release` when the factor goes.
+  void adopt(double* p, std::size_t n, void (*release)(void*));
+  double* data() { return p_.get(); }
+  const double* data() const { return p_.get(); }
+  std::size_t size() const { return n_; }
+
+ private:
+  std::unique_ptr<double, void (*)(void*)> p_{nullptr, &std::free};
+  std::size_t n_ = 0;
+};
 
 struct CholeskyFactor {
   int n = 0;
@@ -19,7 +39,7 @@ struct CholeskyFactor {
   std::vector<std::ptrdiff_t> rowp;  ///< nsuper + 1: supernode s's rows are rows[rowp[s] .. rowp[s+1])
   std::vector<std::ptrdiff_t> valp;  ///< nsuper + 1: its nsrow x nscol column-major block in vals
   std::vector<int> rows;             ///< first the supernode's own columns, then the rows below
-  std::vector<double> vals;
+  FactorValues vals;
   const char* method = "";           ///< "Eigen SimplicialLLT (AMD)" or "CHOLMOD supernodal (...)"
 
   // Schedule of the sweeps on several threads (schedule()): disjoint subtrees of the supernodal
@@ -60,5 +80,13 @@ constexpr int kGroups = 2;
 CholeskyFactor cholesky(const Eigen::SparseMatrix<double>& A, bool use_cholmod);
 
 bool cholmod_available();
+
+/// Unknowns from which CHOLMOD tries METIS's ordering beside AMD's and keeps the one with less
+/// fill (bench/results/blender.md, "Ordering"); the memory estimate analyses the same way.
+constexpr long long kMetisMinUnknowns = 10000;
+
+/// Held while CHOLMOD orders: METIS keeps its random state in globals, so orderings computed at
+/// once by two threads would depend on timing (and so would a factor's round-off).
+std::mutex& ordering_mutex();
 
 }  // namespace mbi::interp::detail

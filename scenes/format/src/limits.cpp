@@ -19,20 +19,20 @@ std::string gib(double bytes) {
 }
 }  // namespace
 
-double estimate_run_bytes(long long dense_vertices, long long control_vertices,
-                          long long control_elements, int d) {
+double minimum_run_bytes(long long dense_vertices, long long control_vertices, long long control_elements, int d) {
   const double p = static_cast<double>(dense_vertices), n = static_cast<double>(control_vertices);
   const double e = static_cast<double>(control_elements), dd = d;
-  // dense: rest + a few per-frame position/normal buffers (double), embedding (element,
-  // d + 1 coordinates), float copies for the evaluators
-  const double dense = p * (8.0 * dd * 6 + 4.0 + 8.0 * (dd + 1) + 4.0 * dd * 4);
-  // control: per-element dense blocks ((d+1) d)^2 as triplets (16 bytes) for assembly, twice
-  // (simulator and interpolation); the sparse matrices themselves and the factor's fill
-  const double block = ((dd + 1) * dd) * ((dd + 1) * dd);
-  const double assembly = 2.0 * e * block * 16.0;
-  const double fill = d == 3 ? std::pow(n, 4.0 / 3.0) * dd * dd * 12.0 * 4
-                             : n * std::log2(std::max(n, 2.0)) * dd * dd * 12.0 * 4;
-  return dense + assembly + fill + n * 1024.0;
+  // dense: positions and the embedding; control: positions, elements, the m-block's entries
+  // (value and index) and the simulator's blocks of each element
+  return p * (8.0 * dd + 4.0 + 8.0 * (dd + 1)) + n * 8.0 * dd + e * 4.0 * (dd + 1) +
+         n * dd * dd * (dd + 2) * 12.0 + e * ((dd + 1) * dd) * ((dd + 1) * dd) * 8.0;
+}
+
+std::string over_memory_floor(long long dense_vertices, long long control_vertices, long long control_elements, int d) {
+  const double need = minimum_run_bytes(dense_vertices, control_vertices, control_elements, d);
+  const double have = usable_memory_bytes();
+  if (have <= 0 || need <= have) return "";
+  return "needs at least " + gib(need) + " of memory, more than the " + gib(have) + " this process may take";
 }
 
 double physical_memory_bytes() {
@@ -115,23 +115,33 @@ double usable_memory_bytes() {
   return usable_memory(by_group);
 }
 
-void check_run_size(const std::string& where, long long dense_vertices, long long control_vertices,
-                    long long control_elements, int d) {
-  const char* kind = d == 3 ? " tetrahedra" : " triangles";
-  if (control_vertices > kMaxControlVertices || control_elements > kMaxControlElements)
-    throw Error(where + ": the control mesh has " + std::to_string(control_vertices) +
-                     " vertices and " + std::to_string(control_elements) + kind +
-                     ", over the cap of " + std::to_string(kMaxControlVertices) + " vertices and " +
-                     std::to_string(kMaxControlElements) + kind +
-                     " (the precompute grows about as n^2.5; see docs/limits.md)");
-  const double need = estimate_run_bytes(dense_vertices, control_vertices, control_elements, d);
+double memory_limit(double max_memory, std::string& name) {
+  if (max_memory > 0) {
+    name = "--max-memory";
+    return max_memory;
+  }
   bool by_group = false;
-  const double have = usable_memory(by_group);
-  if (have > 0 && need > 0.75 * have)
-    throw Error(where + ": the run needs about " + gib(need) + " of memory (" +
-                     std::to_string(dense_vertices) + " dense vertices, " +
-                     std::to_string(control_vertices) + " control vertices), over 3/4 of " +
-                     (by_group ? "this process's control group limit of " : "this machine's ") + gib(have));
+  const double usable = usable_memory(by_group), available = interp::available_memory_bytes();
+  if (available > 0 && (usable <= 0 || available <= usable)) {
+    name = "MemAvailable (/proc/meminfo)";
+    return available;
+  }
+  name = by_group ? "this process's control group limit" : "this machine's memory";
+  return usable;
+}
+
+interp::MemoryEstimate check_run_size(const std::string& where, long long dense_vertices, const Eigen::MatrixXd& U,
+                                      const Eigen::MatrixXi& T, double max_memory, const interp::Options& options,
+                                      bool simulation) {
+  interp::MemoryEstimate e = interp::estimate_memory(U, T, dense_vertices, options);
+  if (simulation) {  // the simulator's 12 x 12 (2D: 6 x 6) blocks of each element, as triplets
+    const double block = static_cast<double>((U.cols() + 1) * U.cols());
+    e.peak_bytes += static_cast<double>(T.rows()) * block * block * 16.0;
+  }
+  std::string name;
+  const double limit = memory_limit(max_memory, name);
+  interp::check_memory(e, limit, name, where);
+  return e;
 }
 
 }  // namespace mbi::scenes

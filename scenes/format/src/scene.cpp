@@ -364,12 +364,10 @@ Eigen::Vector3i parse_cells(Table& t, ControlBuiltin builtin) {
                nz = static_cast<long long>(c.z());
     const long long verts = (nx + 1) * (ny + 1) * (flat ? 1 : nz + 1);
     const long long elems = flat ? 2 * nx * ny : 6 * nx * ny * nz;
-    if (verts > kMaxControlVertices || elems > kMaxControlElements)
-      t.fail("cells", "makes " + std::to_string(verts) + " control vertices and " +
-                          std::to_string(elems) + (flat ? " triangles" : " tetrahedra") +
-                          ", over the cap of " + std::to_string(kMaxControlVertices) +
-                          " vertices and " + std::to_string(kMaxControlElements) +
-                          " elements (see docs/limits.md)");
+    const std::string over = over_memory_floor(0, verts, elems, flat ? 2 : 3);
+    if (!over.empty())
+      t.fail("cells", "makes " + std::to_string(verts) + " control vertices and " + std::to_string(elems) +
+                          (flat ? " triangles" : " tetrahedra") + ", which " + over + " (see docs/limits.md)");
   }
   return c.cast<int>();
 }
@@ -378,11 +376,9 @@ void parse_control(Table t, ControlSpec& c) {
   if (t.has("path")) c.path = t.string("path", "");
   c.builtin = t.choice("builtin", ControlBuiltin::None, kControlBuiltinNames);
   c.generate_vertices = t.integer("generate_vertices", 0, 4, 1 << 30);
-  if (c.generate_vertices > kMaxControlVertices)
-    t.fail("generate_vertices",
-           std::to_string(c.generate_vertices) + " control vertices exceed the cap of " +
-               std::to_string(kMaxControlVertices) +
-               " (the precompute grows about as n^2.5; see docs/limits.md)");
+  // a generated mesh has about 3 to 6 tetrahedra a vertex: 6 for the floor's check
+  if (const std::string over = over_memory_floor(0, c.generate_vertices, 6LL * c.generate_vertices, 3); !over.empty())
+    t.fail("generate_vertices", std::to_string(c.generate_vertices) + " control vertices " + over + " (see docs/limits.md)");
   c.mesher = t.choice("mesher", generate::Mesher::Voxel, generate::kMesherNames);
   const int given = int(!c.path.empty()) + int(c.builtin != ControlBuiltin::None) +
                     int(c.generate_vertices > 0);
