@@ -366,7 +366,7 @@ TEST_CASE("potential: with the exact Hessian product, Newton on a weak surrogate
   CHECK(weak_iterations > 20);  // the blocks alone: about 35
 }
 
-TEST_CASE("potential: Newton's first guess extrapolates the last substep's change of velocity; "
+TEST_CASE("potential: Newton's first guess extrapolates the last substep's change of velocity, and "
           "a state set from outside starts from the old velocity again", "[sim][potential]") {
   // Free fall over a floor far below (no energy there): v_n = n h g exactly, a translation the
   // elastic forces do not see. From rest the first iterate is the answer and the second Newton
