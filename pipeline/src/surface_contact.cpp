@@ -96,7 +96,11 @@ void SurfaceContact::set_time(double time) {
   time_ = time;
   reference_ = false;  // the distances of begin_substep_at are of another pose
   posed_.clear();
-  for (const Collider& c : colliders_) posed_.push_back(posed(c, time));
+  unit_normal_.clear();
+  for (const Collider& c : colliders_) {
+    posed_.push_back(posed(c, time));
+    unit_normal_.push_back(posed_.back().normal / posed_.back().normal.norm());  // as signed_distance divides
+  }
   forget();
 }
 
@@ -161,7 +165,7 @@ void SurfaceContact::begin_substep_at(double start_time, double end_time, const 
   interp::parallel_for(rows, 1024, [&](long long b, long long e) {
     for (long long i = b; i < e; ++i)
       for (size_t c = 0; c < C; ++c) {
-        const Distance d = signed_distance(posed_[c], S.P.row(i).transpose(), end_time);
+        const Distance d = distance(c, S.P.row(i).transpose());
         least[static_cast<size_t>(i)] = std::min(least[static_cast<size_t>(i)], d.value);
         dist[static_cast<size_t>(i) * C + c] = d;
       }
@@ -286,7 +290,7 @@ double SurfaceContact::hull_lower(const Eigen::Ref<const interp::BezierPoints>& 
   const Collider& col = posed_[k];
   if (col.shape == ColliderShape::Plane) {  // linear: least at a Bezier point
     double lower = kInf;
-    for (Eigen::Index j = 0; j < Be.rows(); ++j) lower = std::min(lower, signed_distance(col, Be.row(j).transpose(), time_).value);
+    for (Eigen::Index j = 0; j < Be.rows(); ++j) lower = std::min(lower, distance(k, Be.row(j).transpose()).value);
     return lower;
   }
   const Eigen::RowVector3d c = Be.colwise().mean();
@@ -330,11 +334,18 @@ void SurfaceContact::gather(const interp::BezierPoints& B, const Eigen::VectorXd
       take_[u] = i - first;
     }
   }, deformer_->options().threads);
+  // each element's prefix is one run of the points; then the points outside every hull and with
+  // friction, in runs of their elements as they come
   std::vector<Eigen::Index>& points = S.points;
   points.clear();
-  for (int e = 0; e < m; ++e)
-    for (int i = element_start_[e]; i < element_start_[e] + take_[static_cast<size_t>(e)]; ++i)
-      points.push_back(element_points_[static_cast<size_t>(i)]);
+  S.runs.clear();
+  for (int e = 0; e < m; ++e) {
+    const int first = element_start_[e], take = take_[static_cast<size_t>(e)];
+    if (take == 0) continue;
+    S.runs.push_back(static_cast<int>(points.size()));
+    points.insert(points.end(), element_points_.begin() + first, element_points_.begin() + first + take);
+  }
+  const size_t tail = points.size();
   for (Eigen::Index p : unbounded_) points.push_back(p);
   const interp::Embedding& emb = deformer_->embedding();
   for (size_t i = 0; i < slips_.size(); ++i) {  // friction energy is never 0
@@ -342,9 +353,8 @@ void SurfaceContact::gather(const interp::BezierPoints& B, const Eigen::VectorXd
     if (slip_first_[static_cast<size_t>(p)] == static_cast<int>(i) && in_hull(emb, p) && !near_[static_cast<size_t>(emb.element(p))])
       points.push_back(p);
   }
-  S.runs.clear();
-  for (size_t i = 0; i < points.size(); ++i)
-    if (i == 0 || emb.element(points[i]) != emb.element(points[i - 1])) S.runs.push_back(static_cast<int>(i));
+  for (size_t i = tail; i < points.size(); ++i)
+    if (i == tail || emb.element(points[i]) != emb.element(points[i - 1])) S.runs.push_back(static_cast<int>(i));
   S.runs.push_back(static_cast<int>(points.size()));
 }
 

@@ -107,7 +107,7 @@ const SurfaceContact::Sample& SurfaceContact::sample(const Eigen::Ref<const Eige
       bool close = slip_first_[static_cast<size_t>(p)] >= 0;  // friction energy is never 0
       double s = 1.0;
       for (size_t c = 0; c < C; ++c) {
-        const double d = signed_distance(posed_[c], q, time_).value;
+        const double d = distance(c, q).value;
         close = close || d < lipschitz_[c] * line_reach;
         if (capped && !std::isinf(depth(p, c))) s = std::min(s, contact::advance(posed_[c], q, dq, time_, max_depth_, d));
       }
@@ -150,7 +150,7 @@ int SurfaceContact::touching(const Eigen::Ref<const Eigen::VectorXd>& x) const {
 SurfaceContact::Term SurfaceContact::term(Eigen::Index p, const Eigen::Vector3d& q, bool full) const {
   Term t;
   for (size_t c = 0; c < colliders_.size(); ++c) {
-    const Distance d = signed_distance(posed_[c], q, time_);
+    const Distance d = distance(c, q);
     if (d.value >= 0) continue;
     const contact::Law law = contact::normal_energy(d.value, stiffness_, depth(p, c));
     t.energy += law.value;

@@ -159,6 +159,14 @@ class SurfaceContact : public sim::Potential {
   /// per run of S in order, so the same for every thread count.
   void add_transpose(const Sample& S, const Rows3& G, const std::vector<char>& use, Eigen::Ref<Eigen::VectorXd> out) const;
   double depth(Eigen::Index point, size_t collider) const;        // guarded depth or infinity
+  /// signed_distance(posed_[c], q, time()): the same values, a plane's from its unit normal kept.
+  Distance distance(size_t c, const Eigen::Vector3d& q) const {
+    if (posed_[c].shape != ColliderShape::Plane) return signed_distance(posed_[c], q, time_);
+    Distance d;
+    d.normal = unit_normal_[c];
+    d.value = d.normal.dot(q - posed_[c].point);
+    return d;
+  }
   /// One point's energy (J), gradient (N) and Hessian or PSD surrogate (N/m) at position q, all
   /// colliders and its slips; the energy alone unless `full`.
   struct Term {
@@ -176,6 +184,7 @@ class SurfaceContact : public sim::Potential {
   std::shared_ptr<const Deformer> deformer_;
   std::vector<Collider> colliders_;
   std::vector<Collider> posed_;  // colliders_ at time_, static: the same distances, cheaper
+  std::vector<Eigen::Vector3d> unit_normal_;  // posed_'s normals over their length (planes)
   // how fast each collider's distance can change per unit moved (1: exact; a mesh's level set more)
   std::vector<double> lipschitz_;
   double steepest_ = 1.0;  // their largest
