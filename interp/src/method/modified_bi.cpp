@@ -3,14 +3,17 @@
 
 #include "method/detail.hpp"
 #include "linalg/factor.hpp"
+#include "linalg/iterative.hpp"
 #include "runtime/cpu.hpp"
 #include "runtime/threads.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <mutex>
 #include <numeric>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace mbi::interp {
@@ -22,6 +25,29 @@ namespace {
 // Solve path threshold: the dense operator is used when (unknowns per component) x n is at most
 // this many entries. Measured with mbi-bench (BM_Solve*, see bench/bench_interp.cpp).
 constexpr long long kDenseOperatorMaxEntries = 1LL << 21;
+
+// SolvePath::Automatic takes the iterative path when this says the direct factor would not fit.
+bool factor_would_not_fit(const Eigen::Ref<const Eigen::MatrixXd>&, const Eigen::Ref<const Eigen::MatrixXi>&,
+                          const Options&) {
+  return false;
+}
+
+// max over elements of h^2 / sqrt(|t|), h the element's longest edge: a change dm of M moves x(u)
+// inside the control mesh by at most this / (4 sqrt(alpha)) times dm's A-norm (fact 19).
+double position_scale(const Eigen::MatrixXd& U, const Eigen::MatrixXi& T) {
+  const int d = static_cast<int>(U.cols());
+  double s = 0;
+  for (Eigen::Index e = 0; e < T.rows(); ++e) {
+    double h = 0;
+    Eigen::MatrixXd E(d, d);
+    for (int k = 0; k < d; ++k) E.col(k) = (U.row(T(e, k + 1)) - U.row(T(e, 0))).transpose();
+    for (Eigen::Index a = 0; a <= d; ++a)
+      for (Eigen::Index b = a + 1; b <= d; ++b) h = std::max(h, (U.row(T(e, a)) - U.row(T(e, b))).norm());
+    const double volume = std::abs(E.determinant()) / (d == 3 ? 6.0 : 2.0);
+    s = std::max(s, h * h / std::sqrt(volume));
+  }
+  return s;
+}
 
 // The rows (and, with cols, the columns) of H that the maps keep (map[k] >= 0: the new index,
 // increasing in k, the kept columns numbered 0..ncols-1 without gaps), in one pass over H: what
@@ -487,6 +513,74 @@ struct ModifiedBI::Impl {
   bool dense = false;
   // dense operator -H^-1 H_mx, row-major (n_red x n): row a holds reduced unknown a's weights
   std::vector<double> K;
+  // the iterative path (fact 19): PCG in place of F, its stopping residual for the forward solve
+  bool iterative = false;
+  std::unique_ptr<detail::PcgSolver> pcg;
+  double model_size = 0, position_scale = 0;
+  // per calling thread: its last solution (n_red x d, the next solve's start) and iterations
+  struct Warm {
+    std::thread::id thread;
+    Eigen::MatrixXd sol;
+    int iterations = 0;
+  };
+  mutable std::mutex warm_mutex;
+  mutable std::vector<Warm> warm;
+
+  int max_iterations() const { return opt.max_iterations > 0 ? opt.max_iterations : 20000; }
+
+  // Where PCG stops so that the positions x(u) (u in the control mesh) are within 1e-6 of the
+  // model size (fact 19): |dx_c(u)| <= position_scale / (4 sqrt(alpha)) |dm_c|_A per component.
+  detail::PcgSolver::Tolerance forward_tolerance() const {
+    return {1e-6 * model_size / std::sqrt(static_cast<double>(d)) * 4 * std::sqrt(alpha) / position_scale, false};
+  }
+
+  Warm take_warm() const {
+    std::lock_guard<std::mutex> lock(warm_mutex);
+    for (Warm& w : warm)
+      if (w.thread == std::this_thread::get_id()) return std::move(w);
+    return {std::this_thread::get_id(), Eigen::MatrixXd::Zero(n_red, d), 0};
+  }
+  void keep_warm(Warm&& w) const {
+    std::lock_guard<std::mutex> lock(warm_mutex);
+    for (Warm& v : warm)
+      if (v.thread == w.thread) {
+        v = std::move(w);
+        return;
+      }
+    warm.push_back(std::move(w));
+  }
+
+  // y (n_red x d, row-major) = A^-1 y by PCG from zero, each column's error 1e-6 of its
+  // solution's A-norm (estimated as the forward solve's is)
+  void adjoint_solve(std::vector<double>& y) const {
+    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> Y(y.data(), n_red, d);
+    const Eigen::MatrixXd B = Y;
+    Eigen::MatrixXd Z = Eigen::MatrixXd::Zero(n_red, d);
+    pcg->solve(B, Z, {1e-6, true}, max_iterations());
+    Y = Z;
+  }
+
+  // Rows [row0, row0 + n d) of M for one pose X (n x d) by PCG from the thread's last solution.
+  void iterative_solve(const MatrixIn& X, MatrixOut& M, Eigen::Index row0) const {
+    Eigen::MatrixXd B(n_red, d);
+    for (int c = 0; c < d; ++c) B.col(c) = rhs_op * X.col(c);
+    Warm w = take_warm();
+    if (w.sol.rows() != n_red) w.sol = Eigen::MatrixXd::Zero(n_red, d);
+    try {
+      w.iterations = pcg->solve(B, w.sol, forward_tolerance(), max_iterations());
+    } catch (...) {
+      w.sol.setZero();  // a failed solve is no start for the next one
+      keep_warm(std::move(w));
+      throw;
+    }
+    for (int i = 0; i < n; ++i)
+      for (int r = 0; r < d; ++r) {
+        const int a = reduced[static_cast<size_t>(i) * d + r];
+        if (a >= 0)
+          for (int c = 0; c < d; ++c) M(row0 + i * d + c, r) = w.sol(a, c);
+      }
+    keep_warm(std::move(w));
+  }
 
   bool use_cholmod() const {
     switch (opt.factorization) {
@@ -538,6 +632,10 @@ struct ModifiedBI::Impl {
   void solve_frames(const MatrixIn& X, Eigen::Index frames, MatrixOut& M) const {
     M.setZero();
     if (n_red == 0) return;
+    if (iterative) {
+      for (Eigen::Index f = 0; f < frames; ++f) iterative_solve(X.middleRows(f * n, n), M, f * n * d);
+      return;
+    }
     thread_local std::vector<double> sol, cols;
     if (!dense) {
       const int group = 8 / d;  // the factor's 8 columns at a time
@@ -593,6 +691,14 @@ struct ModifiedBI::Impl {
       return;
     }
     const SpMat A = a * R.vibr_mm + beta * R.disc_mm;
+    if (iterative) {
+      auto P = std::make_unique<detail::PcgSolver>(A);
+      alpha = a;
+      pcg = std::move(P);
+      std::lock_guard<std::mutex> lock(warm_mutex);
+      warm.clear();  // the starts belong to the old matrix
+      return;
+    }
     detail::CholeskyFactor Fa = detail::cholesky(A, use_cholmod());
     std::vector<double> Ka;
     if (dense) {
@@ -658,9 +764,15 @@ ModifiedBI::ModifiedBI(const Eigen::Ref<const Eigen::MatrixXd>& U,
   switch (options.solve_path) {
     case SolvePath::Dense: I.dense = true; break;
     case SolvePath::Sparse: I.dense = false; break;
+    case SolvePath::Iterative: I.iterative = true; break;
     case SolvePath::Automatic:
       I.dense = static_cast<long long>(I.n_red) * n <= kDenseOperatorMaxEntries;
+      I.iterative = !I.dense && factor_would_not_fit(U, T, options);
       break;
+  }
+  if (I.iterative) {
+    I.model_size = (I.U.colwise().maxCoeff() - I.U.colwise().minCoeff()).norm();
+    I.position_scale = position_scale(I.U, I.T);
   }
   I.rhs_op = -I.beta * R.disc_mx;
   if (I.dense && static_cast<long long>(I.n_red) * n > (1LL << 28))
@@ -697,12 +809,27 @@ bool ModifiedBI::pin_boundary() const { return impl_->opt.pin_boundary; }
 int ModifiedBI::null_space_dim() const { return impl_->null_dim; }
 int ModifiedBI::unknowns() const { return impl_->n_red; }
 bool ModifiedBI::dense_operator() const { return impl_->dense; }
-std::string ModifiedBI::factorization() const { return impl_->F.method; }
-long long ModifiedBI::factor_nonzeros() const { return impl_->F.nonzeros(); }
+SolvePath ModifiedBI::solve_path() const {
+  return impl_->iterative ? SolvePath::Iterative : impl_->dense ? SolvePath::Dense : SolvePath::Sparse;
+}
+std::string ModifiedBI::factorization() const {
+  return impl_->iterative ? "none: PCG, incomplete Cholesky (AMD) preconditioner" : impl_->F.method;
+}
+int ModifiedBI::iterations() const {
+  const Impl& I = *impl_;
+  std::lock_guard<std::mutex> lock(I.warm_mutex);
+  for (const Impl::Warm& w : I.warm)
+    if (w.thread == std::this_thread::get_id()) return w.iterations;
+  return 0;
+}
+long long ModifiedBI::factor_nonzeros() const {
+  return impl_->pcg ? impl_->pcg->preconditioner_nonzeros() : impl_->F.nonzeros();
+}
 long long ModifiedBI::memory_bytes() const {
   const Impl& I = *impl_;
   const auto bytes = [](auto count, size_t each) { return static_cast<long long>(count) * static_cast<long long>(each); };
-  return static_cast<long long>(I.F.bytes()) + bytes(I.K.size(), sizeof(double)) +
+  return static_cast<long long>(I.F.bytes()) + static_cast<long long>(I.pcg ? I.pcg->bytes() : 0) +
+         bytes(I.K.size(), sizeof(double)) +
          bytes(I.rhs_op.nonZeros(), sizeof(double) + sizeof(int)) + bytes(I.rhs_op.outerSize() + 1, sizeof(int)) +
          bytes(I.reduced.size(), sizeof(int)) + bytes(I.U.size(), sizeof(double)) + bytes(I.T.size(), sizeof(int));
 }
@@ -780,7 +907,8 @@ void ModifiedBI::solve_transpose(const Eigen::Ref<const Eigen::MatrixXd>& G, Eig
       for (int c = 0; c < d; ++c) y[static_cast<size_t>(a) * d + c] = G(i * d + c, r);
     }
   // sol = -beta A^-1 R H_mx X with A symmetric: dL/dX = (-beta R H_mx)^T A^-1 dL/dsol
-  I.F.solve(y.data(), d);
+  if (I.iterative) I.adjoint_solve(y);
+  else I.F.solve(y.data(), d);
   for (int a = 0; a < I.n_red; ++a)
     for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(I.rhs_op, a); it; ++it)
       for (int c = 0; c < d; ++c) GX(it.col(), c) += it.value() * y[static_cast<size_t>(a) * d + c];

@@ -20,12 +20,15 @@
 namespace mbi::interp {
 
 /// How solve() maps X to M (fact 11): sparse triangular solves with the cached Cholesky factor,
-/// or one dense product with the precomputed operator -H_mm^-1 H_mx ((d n) x n doubles).
-/// Automatic picks the dense operator for small meshes (see modified_bi.cpp for the measured
-/// threshold) and the sparse path otherwise.
-enum class SolvePath { Automatic, Sparse, Dense };
-inline constexpr auto kSolvePathNames = name_table<SolvePath>(
-    {{SolvePath::Automatic, "automatic"}, {SolvePath::Sparse, "sparse"}, {SolvePath::Dense, "dense"}});
+/// one dense product with the precomputed operator -H_mm^-1 H_mx ((d n) x n doubles), or, with
+/// no factor at all, preconditioned conjugate gradients warm-started from the calling thread's
+/// previous solve, accurate to 1e-6 of the model size (fact 19). Automatic picks the dense
+/// operator for small meshes (see modified_bi.cpp for the measured threshold), the iterative path
+/// when the factor's memory estimate exceeds the memory available, and the sparse path otherwise.
+enum class SolvePath { Automatic, Sparse, Dense, Iterative };
+inline constexpr auto kSolvePathNames =
+    name_table<SolvePath>({{SolvePath::Automatic, "automatic"}, {SolvePath::Sparse, "sparse"},
+                           {SolvePath::Dense, "dense"}, {SolvePath::Iterative, "iterative"}});
 
 /// Which sparse Cholesky factorization the precompute runs (the result is the same up to
 /// round-off): Eigen's SimplicialLLT with AMD (always built), or CHOLMOD's supernodal
@@ -44,6 +47,8 @@ struct Options {
   bool pin_boundary = false;  ///< M_i = 0 on boundary vertices (fact 9)
   SolvePath solve_path = SolvePath::Automatic;
   Factorization factorization = Factorization::Automatic;  ///< Cholmod without CHOLMOD: Error
+  /// Iterative path: most PCG iterations a solve may take before it throws Error (0: 20000).
+  int max_iterations = 0;
 };
 
 /// Default alpha for dimension d (0.1 in 3D, 0.2 in 2D).
@@ -106,14 +111,22 @@ class ModifiedBI {
   int unknowns() const;
   /// True when solve() uses the dense operator -H_mm^-1 H_mx.
   bool dense_operator() const;
-  /// The factorization used: "Eigen SimplicialLLT (AMD)", "CHOLMOD supernodal (METIS)", ...
+  /// The path solve() takes: Sparse, Dense or Iterative (never Automatic).
+  SolvePath solve_path() const;
+  /// The factorization used: "Eigen SimplicialLLT (AMD)", "CHOLMOD supernodal (METIS)", ...; on
+  /// the iterative path "none: PCG, incomplete Cholesky (AMD) preconditioner".
   std::string factorization() const;
-  /// Entries of the Cholesky factor L, and the bytes the precompute keeps (factor, dense
-  /// operator, the right-hand-side operator, the rest mesh).
+  /// Iterative path: the PCG iterations of the calling thread's last solve() (the largest over
+  /// the d components; of the last pose for solve_batch); 0 on the other paths.
+  int iterations() const;
+  /// Entries of the Cholesky factor L (of the incomplete one on the iterative path), and the
+  /// bytes the precompute keeps (factor, dense operator, the right-hand-side operator, the rest
+  /// mesh; on the iterative path the matrix and its preconditioner).
   long long factor_nonzeros() const;
   long long memory_bytes() const;
 
-  /// M for deformed control positions X (n x d). Throws Error on a size mismatch or NaN.
+  /// M for deformed control positions X (n x d). Throws Error on a size mismatch or NaN, and on
+  /// the iterative path when PCG does not converge within Options::max_iterations.
   VertexMatrices solve(const Eigen::Ref<const Eigen::MatrixXd>& X) const;
   /// The same into caller memory M ((n d) x d already, Error otherwise). Its temporaries are kept
   /// per thread: after the first call on a thread it allocates nothing.
@@ -127,7 +140,9 @@ class ModifiedBI {
 
   /// The transpose of solve(), which is linear in X (fact 11): dL/dX (n x d) from
   /// G = dL/dM ((n d) x d). One solve with the cached factor (the system is symmetric) and one
-  /// product with H_mx^T. Throws Error on a size mismatch or NaN.
+  /// product with H_mx^T. On the iterative path the solve is PCG from zero, so the result is the
+  /// transpose to the solve's tolerance (fact 19), not exactly. Throws Error on a size mismatch
+  /// or NaN.
   Eigen::MatrixXd solve_transpose(const VertexMatrices& G) const;
   /// The same into caller memory GX (n x d already); no allocation after the first call on a thread.
   void solve_transpose(const Eigen::Ref<const Eigen::MatrixXd>& G, Eigen::Ref<Eigen::MatrixXd> GX) const;
