@@ -65,17 +65,30 @@ VertexGraph vertex_graph(const Eigen::MatrixXi& T, const std::vector<int>& index
       }
     add(size);
   }
-  std::sort(pairs.begin(), pairs.end());
-  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  // bucketed by column, then each column's few rows sorted: no sort of all the pairs
   VertexGraph G;
   G.n = n_kept;
-  G.colp.assign(static_cast<size_t>(n_kept) + 1, 0);
-  G.rows.resize(pairs.size());
-  for (size_t k = 0; k < pairs.size(); ++k) {
-    ++G.colp[(pairs[k] >> 32) + 1];
-    G.rows[k] = static_cast<int>(pairs[k] & 0xffffffffu);
+  std::vector<long long> start(static_cast<size_t>(n_kept) + 1, 0);
+  for (std::uint64_t q : pairs) ++start[(q >> 32) + 1];
+  for (int j = 0; j < n_kept; ++j) start[j + 1] += start[j];
+  std::vector<int> rows(pairs.size());
+  {
+    std::vector<long long> next(start.begin(), start.end() - 1);
+    for (std::uint64_t q : pairs) rows[static_cast<size_t>(next[q >> 32]++)] = static_cast<int>(q & 0xffffffffu);
   }
-  for (int j = 0; j < n_kept; ++j) G.colp[j + 1] += G.colp[j];
+  pairs = {};
+  G.colp.assign(static_cast<size_t>(n_kept) + 1, 0);
+  long long out = 0;
+  for (int j = 0; j < n_kept; ++j) {
+    int* b = rows.data() + start[j];
+    int* e = rows.data() + start[j + 1];
+    std::sort(b, e);
+    e = std::unique(b, e);
+    for (int* r = b; r != e; ++r) rows[static_cast<size_t>(out++)] = *r;  // out <= r: moves left
+    G.colp[j + 1] = out;
+  }
+  rows.resize(static_cast<size_t>(out));
+  G.rows = std::move(rows);
   return G;
 }
 
