@@ -50,15 +50,14 @@ py::object evaluate_fast(Fast& f, const py::object& B, const py::object& out, bo
   const Input b = bezier_points_arg(B, fe.dim(), false);
   Output32 pos = float32_output(out, "out", fe.size(), fe.dim());
   check_disjoint(pos, {&b});
-  Eigen::MatrixXd scratch;
   if (!normals && normals_out.is_none()) {
-    f.run([&](FastEvaluator& e) { e.evaluate(columns(b.map, scratch), pos.map.data(), nullptr); });
+    f.run([&](FastEvaluator& e) { e.evaluate(b.map, pos.map.data(), nullptr); });
     return pos.finish();
   }
   Output32 nrm = float32_output(normals_out, "normals_out", fe.size(), fe.dim());
   check_disjoint(nrm, {&b});
   check_disjoint(pos, nrm);
-  f.run([&](FastEvaluator& e) { e.evaluate(columns(b.map, scratch), pos.map.data(), nrm.map.data()); });
+  f.run([&](FastEvaluator& e) { e.evaluate(b.map, pos.map.data(), nrm.map.data()); });
   return py::make_tuple(pos.finish(), nrm.finish());
 }
 

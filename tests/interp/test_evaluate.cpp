@@ -97,7 +97,8 @@ TEST_CASE("evaluate rejects inconsistent input", "[evaluate]") {
   CHECK_THROWS_AS(jacobian(s.M.U, s.M.T, s.B, -1, Eigen::Vector4d(0.25, 0.25, 0.25, 0.25)), Error);
 }
 
-TEST_CASE("evaluate reads the Bezier points in any layout: row-major, a column block, every other row", "[evaluate]") {
+TEST_CASE("evaluate and FastEvaluator read the Bezier points in any layout: row-major, a column block, every other row",
+          "[evaluate]") {
   for (int d : {2, 3}) {
     const Setup s = make(d, 3000);
     Eigen::MatrixXd nr = random_matrix(s.P.rows(), d, 43);
@@ -116,6 +117,10 @@ TEST_CASE("evaluate reads the Bezier points in any layout: row-major, a column b
         Strided(rows.data(), s.B.rows(), d, Eigen::Stride<Eigen::Dynamic, Eigen::Dynamic>(1, d)),
         Strided(wide.data() + wide.rows() + 3, s.B.rows(), d, Eigen::Stride<Eigen::Dynamic, Eigen::Dynamic>(wide.rows(), 1)),
         Strided(twice.data(), s.B.rows(), d, Eigen::Stride<Eigen::Dynamic, Eigen::Dynamic>(twice.rows(), 2))};
+    FastEvaluator fast(s.emb, 2);
+    fast.set_rest_normals(nr);
+    RowMatrixXf fp0, fn0;
+    fast.evaluate(s.B, fp0, fn0);
     for (const Strided& B : layouts) {
       INFO(d << "D, strides " << B.innerStride() << ", " << B.outerStride());
       Eigen::MatrixXd p, n;
@@ -125,6 +130,10 @@ TEST_CASE("evaluate reads the Bezier points in any layout: row-major, a column b
       CHECK((p - p0).cwiseAbs().maxCoeff() == 0.0);
       CHECK((n - n0).cwiseAbs().maxCoeff() == 0.0);
       CHECK((f - f0).cwiseAbs().maxCoeff() == 0.0f);
+      RowMatrixXf fp, fn;
+      fast.evaluate(B, fp, fn);
+      CHECK((fp - fp0).cwiseAbs().maxCoeff() == 0.0f);
+      CHECK((fn - fn0).cwiseAbs().maxCoeff() == 0.0f);
     }
   }
 }

@@ -237,7 +237,7 @@ int FastEvaluator::threads() const {
   return detail::thread_count(p_, kBlock, threads_);
 }
 
-void FastEvaluator::prepare(const Eigen::Ref<const BezierPoints>& B, bool normals) {
+void FastEvaluator::prepare(const MatrixIn& B, bool normals) {
   const int d = d_;
   const int K = (d + 1) * (d + 2) / 2;
   if (B.cols() != d || B.rows() % K != 0 || B.rows() / K < m_)
@@ -290,18 +290,18 @@ const float* FastEvaluator::rest_normals_for(const float* positions, const float
   return normals_.data() + moff_;
 }
 
-void FastEvaluator::evaluate(const Eigen::Ref<const BezierPoints>& B, RowMatrixXf& positions) {
+void FastEvaluator::evaluate(const MatrixIn& B, RowMatrixXf& positions) {
   if (positions.rows() != p_ || positions.cols() != d_) positions.resize(p_, d_);
   evaluate(B, positions.data(), nullptr);
 }
 
-void FastEvaluator::evaluate(const Eigen::Ref<const BezierPoints>& B, RowMatrixXf& positions, RowMatrixXf& normals) {
+void FastEvaluator::evaluate(const MatrixIn& B, RowMatrixXf& positions, RowMatrixXf& normals) {
   if (positions.rows() != p_ || positions.cols() != d_) positions.resize(p_, d_);
   if (normals.rows() != p_ || normals.cols() != d_) normals.resize(p_, d_);
   evaluate(B, positions.data(), normals.data());
 }
 
-void FastEvaluator::evaluate(const Eigen::Ref<const BezierPoints>& B, float* positions, float* normals) {
+void FastEvaluator::evaluate(const MatrixIn& B, float* positions, float* normals) {
   const bool with_normals = normals != nullptr;
   prepare(B, with_normals);
   if (p_ == 0) return;

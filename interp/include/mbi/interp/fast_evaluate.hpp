@@ -79,16 +79,16 @@ class FastEvaluator {
   /// Positions from B ((m K) x d, interp::BezierPoints layout; read where it is, e.g. a numpy
   /// array). `positions` is resized to p x d
   /// when its shape differs (no allocation when the same matrix is passed every frame).
-  void evaluate(const Eigen::Ref<const BezierPoints>& B, RowMatrixXf& positions);
+  void evaluate(const MatrixIn& B, RowMatrixXf& positions);
   /// Positions and mapped normals (cof(J) n, renormalised; 0 where J is singular), as
   /// interp::evaluate does. Needs set_rest_normals().
-  void evaluate(const Eigen::Ref<const BezierPoints>& B, RowMatrixXf& positions, RowMatrixXf& normals);
+  void evaluate(const MatrixIn& B, RowMatrixXf& positions, RowMatrixXf& normals);
   /// Same into caller memory (e.g. a mapped GPU buffer): positions and normals (nullptr: no
   /// normals) each hold size() * dim() floats, 16-byte aligned for the fastest (streaming) stores.
-  void evaluate(const Eigen::Ref<const BezierPoints>& B, float* positions, float* normals);
+  void evaluate(const MatrixIn& B, float* positions, float* normals);
 
  private:
-  void prepare(const Eigen::Ref<const BezierPoints>& B, bool normals);
+  void prepare(const MatrixIn& B, bool normals);
   const float* rest_normals_for(const float* positions, const float* normals);
   static constexpr std::size_t kSlack = 1024;  // floats (4 KiB) to move the rest-normal block in
 
