@@ -14,22 +14,23 @@ namespace mbi::interp::detail {
 
 namespace {
 
-// Q = A P, rows in parallel (A row-major, P and Q n x w column-major).
+// Q = A P, rows in parallel (A row-major, P and Q n x w column-major, w <= 3): one pass over A
+// serves all the columns.
 void product(const Eigen::SparseMatrix<double, Eigen::RowMajor>& A, const Eigen::MatrixXd& P, Eigen::MatrixXd& Q) {
   const int* outer = A.outerIndexPtr();
   const int* inner = A.innerIndexPtr();
   const double* val = A.valuePtr();
   const Eigen::Index n = A.rows(), w = P.cols();
+  if (w > 3) throw Error("the iterative solve takes at most 3 right-hand sides at once");
   const int nt = thread_count(A.nonZeros() * w, 1 << 15);
+  const double* p = P.data();
+  double* q = Q.data();
   parallel_blocks(n, 1024, nt, [&](long long r0, long long r1) {
-    for (Eigen::Index c = 0; c < w; ++c) {
-      const double* p = P.data() + c * n;
-      double* q = Q.data() + c * n;
-      for (long long r = r0; r < r1; ++r) {
-        double s = 0;
-        for (int k = outer[r]; k < outer[r + 1]; ++k) s += val[k] * p[inner[k]];
-        q[r] = s;
-      }
+    for (long long r = r0; r < r1; ++r) {
+      double s[3] = {0, 0, 0};
+      for (int k = outer[r]; k < outer[r + 1]; ++k)
+        for (Eigen::Index c = 0; c < w; ++c) s[c] += val[k] * p[c * n + inner[k]];
+      for (Eigen::Index c = 0; c < w; ++c) q[c * n + r] = s[c];
     }
   });
 }

@@ -29,7 +29,7 @@ class PcgSolver {
   };
   static constexpr int kDelay = 8;
 
-  /// Solves A X = B column by column into X (n x w), starting from X as given (a column whose
+  /// Solves A X = B column by column into X (n x w, w <= 3), starting from X as given (a column whose
   /// start is worse than zero starts from zero). Returns the largest iteration count of the
   /// columns. Throws Error when a column has not stopped after max_iterations, or when the
   /// residual is not finite.
