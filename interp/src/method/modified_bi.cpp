@@ -554,6 +554,7 @@ struct ModifiedBI::Impl {
         v = std::move(w);
         return;
       }
+    if (warm.size() >= 64) warm.erase(warm.begin());  // threads that come and go: keep the latest
     warm.push_back(std::move(w));
   }
 
