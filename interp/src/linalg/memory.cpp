@@ -280,12 +280,12 @@ std::string format_bytes(double bytes) {
 
 void check_memory(const MemoryEstimate& e, double limit, const std::string& limit_name, const std::string& where) {
   if (!(limit > 0) || e.peak_bytes <= limit) return;
+  char nonzeros[32];
+  std::snprintf(nonzeros, sizeof nonzeros, "%.1fM", static_cast<double>(e.factor_nonzeros) / 1e6);
   std::ostringstream s;
-  s.precision(3);
   s << where << ": the modified-BI precompute would need about " << format_bytes(e.peak_bytes)
     << " of memory, more than the " << format_bytes(limit) << " of " << limit_name << " (" << e.unknowns
-    << " unknowns; its Cholesky factor holds " << static_cast<double>(e.factor_nonzeros) / 1e6
-    << "M nonzeros, " << format_bytes(e.factor_bytes) << ", with the " << e.ordering << " ordering; the matrices "
+    << " unknowns; its Cholesky factor holds " << nonzeros << " nonzeros, " << format_bytes(e.factor_bytes) << ", with the " << e.ordering << " ordering; the matrices "
     << "while it is computed " << format_bytes(e.assembly_bytes) << "; the dense model and the frames "
     << format_bytes(e.model_bytes);
   if (e.dense_operator_bytes > 0) s << "; the dense operator " << format_bytes(e.dense_operator_bytes);
