@@ -33,8 +33,8 @@ struct MemoryEstimate {
 /// with `options` (its solve path and factorization count) and the evaluation of `dense_points`
 /// points a frame (>= 0). An upper bound of the factor's stored values on meshes whose vertex
 /// blocks are full (the ordering is that of the vertex graph, which CHOLMOD's AMD also finds on
-/// the m-block); within about 25% of the measured peak from 1,000 to 100,000 control vertices
-/// (docs/performance.md). Throws Error on shapes other than those or on indices out of range.
+/// the m-block); the peak an upper bound within 13% of the measured one from 1,000 to 140,000
+/// control vertices (docs/performance.md, "Memory"). Throws Error on shapes other than those or on indices out of range.
 /// Cost: the vertex graph (O(m) pairs, sorted) and one symbolic analysis of it (n vertices: AMD,
 /// and METIS from 10,000 unknowns as the factorization does) with CHOLMOD; without CHOLMOD one
 /// numeric factorization of the n x n vertex graph with Eigen (about 1/27 of the real one's flops).
