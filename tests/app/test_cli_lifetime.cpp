@@ -4,6 +4,7 @@
 // written and names the user's file; outputs are the same bytes for the same inputs; every
 // output is checked before any work; the small option checks (--fps, --threads).
 #include <catch2/catch.hpp>
+#include <common/files.hpp>
 
 #include <mbi/io/io.hpp>
 
@@ -26,19 +27,12 @@ using mbi::test::TempDir;
 
 namespace {
 
-fs::path data(const std::string& name) { return mbi::test::source_dir() / "tests" / "data" / "vtu" / name; }
+fs::path vtu_data(const std::string& name) { return mbi::test::source_dir() / "tests" / "data" / "vtu" / name; }
 
 // twist.pc2: 3 frames of box.node's 27 nodes; sphere.obj: 144 vertices inside
-std::string deform(const fs::path& deformed, const std::string& outs, const std::string& more = "") {
-  return "deform --control " + q(data("box.node")) + " --mesh " + q(data("sphere.obj")) + " --deformed " + q(deformed) +
+std::string deform_outs(const fs::path& deformed, const std::string& outs, const std::string& more = "") {
+  return "deform --control " + q(vtu_data("box.node")) + " --mesh " + q(vtu_data("sphere.obj")) + " --deformed " + q(deformed) +
          " --out " + outs + " " + more;
-}
-
-int temporaries(const fs::path& dir) {
-  int n = 0;
-  for (const auto& e : fs::directory_iterator(dir))
-    if (e.path().filename().string().rfind(".mbi-tmp.", 0) == 0) ++n;
-  return n;
 }
 
 // The JSON chunk of a .glb.
@@ -69,11 +63,11 @@ TEST_CASE("lifetime: a signal at every stage of a sequence leaves the finished o
       TempDir dir("life");
       const fs::path out = dir / "out";
       fs::create_directory(out);
-      const auto r = run_mbi(deform(data("twist.pc2"), q(out / kind), "--stats " + q(out / "s.json")), dir,
+      const auto r = run_mbi(deform_outs(vtu_data("twist.pc2"), q(out / kind), "--stats " + q(out / "s.json")), dir,
                              "MBI_TEST_SIGNAL_AT=" + stage);
       INFO(r.err);
       CHECK(r.code == 128 + (stage == "frame:TERM" ? SIGTERM : SIGINT));
-      CHECK(temporaries(out) == 0);
+      CHECK(mbi::test::temporaries(out) == 0);
       if (stage == "load" || stage == "precompute") {
         CHECK(fs::is_empty(out));  // exits at once: nothing written
       } else if (stage == "finish") {
@@ -96,11 +90,11 @@ TEST_CASE("lifetime: a signal at every stage of one pose leaves the finished out
     TempDir dir("life");
     const fs::path out = dir / "out";
     fs::create_directory(out);
-    const auto r = run_mbi(deform(data("twist_0001.txt"), q(out / "o.obj"), "--stats " + q(out / "s.json")), dir,
+    const auto r = run_mbi(deform_outs(vtu_data("twist_0001.txt"), q(out / "o.obj"), "--stats " + q(out / "s.json")), dir,
                            "MBI_TEST_SIGNAL_AT=" + stage);
     INFO(r.err);
     CHECK(r.code == 128 + (stage == "frame:TERM" ? SIGTERM : SIGINT));
-    CHECK(temporaries(out) == 0);
+    CHECK(mbi::test::temporaries(out) == 0);
     if (stage == "load" || stage == "precompute") {
       CHECK(fs::is_empty(out));  // exits at once: nothing written
       continue;
@@ -118,8 +112,8 @@ TEST_CASE("lifetime: two identical runs into x.glb give identical bytes, the roo
   fs::create_directory(dir / "a");
   fs::create_directory(dir / "b");
   for (const std::string sub : {"a", "b"}) {
-    REQUIRE(run_mbi(deform(data("twist.pc2"), q(dir / sub / "x.glb")), dir).code == 0);  // an animation
-    REQUIRE(run_mbi(deform(data("twist_0001.txt"), q(dir / sub / "y.glb")), dir).code == 0);  // one pose
+    REQUIRE(run_mbi(deform_outs(vtu_data("twist.pc2"), q(dir / sub / "x.glb")), dir).code == 0);  // an animation
+    REQUIRE(run_mbi(deform_outs(vtu_data("twist_0001.txt"), q(dir / sub / "y.glb")), dir).code == 0);  // one pose
   }
   for (const std::string name : {"x.glb", "y.glb"}) {
     INFO(name);
@@ -136,14 +130,14 @@ TEST_CASE("lifetime: a full disk keeps the frames written and names the user's f
     INFO(kind);
     TempDir dir("life");
     const std::string cmd = "cd " + q(dir.path()) + " && sh -c 'ulimit -f 8; exec \"$0\" \"$@\"' " + q(MBI_EXE) + " " +
-                            deform(data("twist.pc2"), q(kind)) + " > out.txt 2> err.txt";
+                            deform_outs(vtu_data("twist.pc2"), q(kind)) + " > out.txt 2> err.txt";
     const int status = std::system(cmd.c_str());
     const std::string err = slurp(dir / "err.txt");
     INFO(err);
     CHECK(WEXITSTATUS(status) == (kind == "n_%d.obj" ? 2 : 3));
     CHECK_THAT(err, Catch::Contains("write error (File too large)"));
     CHECK(err.find(".mbi-tmp") == std::string::npos);
-    CHECK(temporaries(dir.path()) == 0);
+    CHECK(mbi::test::temporaries(dir.path()) == 0);
     if (kind != "n_%d.obj") {
       CHECK_THAT(err, Catch::Contains("frame 2: " + kind + ": write error") && Catch::Contains("(outputs up to frame 1 kept)"));
       CHECK(frames_in(dir.path(), kind) == 2);
@@ -153,9 +147,9 @@ TEST_CASE("lifetime: a full disk keeps the frames written and names the user's f
 
 TEST_CASE("lifetime: every output is checked before any work, together", "[app][sequence]") {
   TempDir dir("life");
-  fs::copy(data("sphere.obj"), dir / "s2.obj");
-  const std::string two = "deform --control " + q(data("box.node")) + " --mesh " + q(data("sphere.obj")) + " --mesh " +
-                          q(dir / "s2.obj") + " --deformed " + q(data("twist.pc2"));
+  fs::copy(vtu_data("sphere.obj"), dir / "s2.obj");
+  const std::string two = "deform --control " + q(vtu_data("box.node")) + " --mesh " + q(vtu_data("sphere.obj")) + " --mesh " +
+                          q(dir / "s2.obj") + " --deformed " + q(vtu_data("twist.pc2"));
   // two series that expand to the same names
   auto r = run_mbi(two + " --out " + q(dir / "z_%d.obj") + " --out " + q(dir / "z_%01d.obj"), dir);
   CHECK(r.code == 2);
@@ -167,34 +161,34 @@ TEST_CASE("lifetime: every output is checked before any work, together", "[app][
   CHECK_THAT(r.err, Catch::Contains("q_1.glb: is also another output of this command"));
   // a glob that matches a folder: refused before any work
   fs::create_directory(dir / "g");
-  for (int k = 0; k < 3; ++k) fs::copy(data("twist_000" + std::to_string(k) + ".txt"), dir / "g" / ("t_" + std::to_string(k) + ".txt"));
+  for (int k = 0; k < 3; ++k) fs::copy(vtu_data("twist_000" + std::to_string(k) + ".txt"), dir / "g" / ("t_" + std::to_string(k) + ".txt"));
   fs::create_directory(dir / "g" / "t_3.txt");
-  r = run_mbi(deform(dir / "g" / "t_*.txt", q(dir / "g.pc2")), dir);
+  r = run_mbi(deform_outs(dir / "g" / "t_*.txt", q(dir / "g.pc2")), dir);
   CHECK(r.code == 2);
   CHECK_THAT(r.err, Catch::Contains("t_3.txt: frame 3 of") && Catch::Contains("is a folder"));
   CHECK(!fs::exists(dir / "g.pc2"));
   // a '%' that is no printf pattern is part of a plain name
-  r = run_mbi(deform(data("twist_0001.txt"), q(dir / "100%.obj")), dir);
+  r = run_mbi(deform_outs(vtu_data("twist_0001.txt"), q(dir / "100%.obj")), dir);
   INFO(r.err);
   CHECK(r.code == 0);
   CHECK(mbi::io::read_surface(dir / "100%.obj").V.rows() == 144);
-  CHECK(temporaries(dir.path()) == 0);
+  CHECK(mbi::test::temporaries(dir.path()) == 0);
 }
 
 TEST_CASE("lifetime: --fps and --threads take what they can use, saying the range readably", "[app][sequence]") {
   TempDir dir("life");
   for (const std::string fps : {"1e-300", "1e308"}) {
     INFO(fps);
-    const auto r = run_mbi(deform(data("twist.pc2"), q(dir / "x.glb"), "--fps " + fps), dir);
+    const auto r = run_mbi(deform_outs(vtu_data("twist.pc2"), q(dir / "x.glb"), "--fps " + fps), dir);
     CHECK(r.code == 2);
     CHECK_THAT(r.err, Catch::Contains("not finite and increasing as float32; give a rate from 5.88e-39 to 8.51e+37"));
     CHECK(!fs::exists(dir / "x.glb"));
   }
-  auto r = run_mbi(deform(data("twist.pc2"), q(dir / "x.glb"), "--fps 1e400"), dir);
+  auto r = run_mbi(deform_outs(vtu_data("twist.pc2"), q(dir / "x.glb"), "--fps 1e400"), dir);
   CHECK(r.code == 2);
   CHECK_THAT(r.err, Catch::Contains("--fps 1e400: give a number of frames per second > 0"));
   CHECK(r.err.size() < 200);
-  r = run_mbi(deform(data("twist.pc2"), q(dir / "x.pc2"), "--threads 0x10"), dir);
+  r = run_mbi(deform_outs(vtu_data("twist.pc2"), q(dir / "x.pc2"), "--threads 0x10"), dir);
   CHECK(r.code == 2);
   CHECK_THAT(r.err, Catch::Contains("--threads 0x10: give a whole number of threads in decimal digits"));
 }
@@ -217,7 +211,7 @@ TEST_CASE("lifetime: a 2^31-frame PC2 is streamed under a 1 GiB memory limit", "
   fs::resize_file(dir / "huge.pc2", 32 + 12ull * points * samples, ec);
   if (ec) mbi::test::skip("this file system holds no sparse file of 695 GB");
   const std::string cmd = "cd " + q(dir.path()) + " && MBI_TEST_SIGNAL_AT=frame sh -c 'ulimit -v 1048576; exec \"$0\" \"$@\"' " +
-                          q(MBI_EXE) + " " + deform("huge.pc2", "o.pc2") + " > out.txt 2> err.txt";
+                          q(MBI_EXE) + " " + deform_outs("huge.pc2", "o.pc2") + " > out.txt 2> err.txt";
   const int status = std::system(cmd.c_str());
   const std::string err = slurp(dir / "err.txt");
   INFO(err);
@@ -225,7 +219,7 @@ TEST_CASE("lifetime: a 2^31-frame PC2 is streamed under a 1 GiB memory limit", "
   CHECK(mbi::io::read_pc2(dir / "o.pc2").frames.size() == 2);
   // an MDD output needs every frame's time: refused before any work, naming the limit
   const std::string mdd = "cd " + q(dir.path()) + " && sh -c 'ulimit -v 1048576; exec \"$0\" \"$@\"' " + q(MBI_EXE) + " " +
-                          deform("huge.pc2", "o.mdd") + " > out.txt 2> err.txt";
+                          deform_outs("huge.pc2", "o.mdd") + " > out.txt 2> err.txt";
   CHECK(WEXITSTATUS(std::system(mdd.c_str())) == 2);
   CHECK_THAT(slurp(dir / "err.txt"), Catch::Contains("--out o.mdd: 2147483647 frames of huge.pc2 are more than the 16777216"));
   CHECK(!fs::exists(dir / "o.mdd"));
@@ -235,7 +229,7 @@ TEST_CASE("lifetime: a 2^31-frame PC2 is streamed under a 1 GiB memory limit", "
   fs::resize_file(dir / "huge.mdd", 8 + (4 + 12ull * points) * samples, ec);
   REQUIRE(!ec);
   const std::string from_mdd = "cd " + q(dir.path()) + " && sh -c 'ulimit -v 1048576; exec \"$0\" \"$@\"' " + q(MBI_EXE) + " " +
-                               deform("huge.mdd", "m.pc2") + " > out.txt 2> err.txt";
+                               deform_outs("huge.mdd", "m.pc2") + " > out.txt 2> err.txt";
   CHECK(WEXITSTATUS(std::system(from_mdd.c_str())) == 2);
   CHECK_THAT(slurp(dir / "err.txt"), Catch::Contains("2147483647 frames of huge.mdd are more than the 16777216"));
   CHECK(!fs::exists(dir / "m.pc2"));
@@ -261,7 +255,7 @@ open(sys.argv[1], 'wb').write(xml + head + b''.join(blocks) + b'</AppendedData><
   std::ofstream(dir / "make.py") << py;
   REQUIRE(std::system(("/usr/bin/python3 " + q(dir / "make.py") + " " + q(dir / "big.vtu")).c_str()) == 0);
   const std::string cmd = "cd " + q(dir.path()) + " && sh -c 'ulimit -v 786432; exec \"$0\" \"$@\"' " + q(MBI_EXE) + " " +
-                          deform("big.vtu", "o.obj") + " > out.txt 2> err.txt";
+                          deform_outs("big.vtu", "o.obj") + " > out.txt 2> err.txt";
   const int status = std::system(cmd.c_str());
   const std::string err = slurp(dir / "err.txt");
   INFO(err);

@@ -3,6 +3,7 @@
 // second signal (at once, no temporaries), a full disk (RLIMIT_FSIZE: the frame is taken back
 // everywhere, errors name the user's files), and resident memory over 10,000 frames.
 #include <catch2/catch.hpp>
+#include <common/files.hpp>
 
 #include <mbi/io/image.hpp>
 #include <mbi/io/io.hpp>
@@ -116,13 +117,6 @@ bool appears(const fs::path& p) {
   return true;
 }
 
-int temporaries(const fs::path& dir) {
-  int n = 0;
-  for (const auto& e : fs::directory_iterator(dir))
-    if (e.path().filename().string().rfind(".mbi-tmp.", 0) == 0) ++n;
-  return n;
-}
-
 json metrics(const fs::path& dir) { return json::parse(slurp(dir / "metrics.json")); }
 
 }  // namespace
@@ -187,7 +181,7 @@ TEST_CASE("SIGINT or SIGTERM during a run: the next frame is the last, every out
     CHECK(mbi::io::read_pc2(o / "dense.pc2").frames.size() == static_cast<std::size_t>(last + 1));
     CHECK(mbi::io::read_surface(mbi::io::frame_path(o / "mesh", last, ".obj")).V.rows() == 8);
     CHECK(fs::exists(mbi::io::frame_path(o / "control", last, ".vtk")));
-    CHECK(temporaries(o) == 0);
+    CHECK(mbi::test::temporaries(o) == 0);
   }
 }
 
@@ -204,7 +198,7 @@ TEST_CASE("a second signal ends the run at once: no temporaries, no partial file
   REQUIRE(appears(o / "frame_0000.png"));  // finishing: drawing the pictures
   ::kill(r.pid, SIGINT);
   CHECK(wait_for(r) == 130);
-  CHECK(temporaries(o) == 0);
+  CHECK(mbi::test::temporaries(o) == 0);
   CHECK_FALSE(fs::exists(o / "metrics.json"));  // not reached
   for (const auto& e : fs::directory_iterator(o)) {
     const std::string name = e.path().filename().string();
@@ -230,7 +224,7 @@ TEST_CASE("a full disk fails the frame everywhere: dense.pc2 and metrics.json li
   CHECK(j["frames"].empty());
   CHECK(mbi::io::read_pc2(dir / "o" / "dense.pc2").frames.empty());
   CHECK_FALSE(fs::exists(dir / "o" / "mesh_0000.obj"));  // the frame's other files are taken back
-  CHECK(temporaries(dir / "o") == 0);
+  CHECK(mbi::test::temporaries(dir / "o") == 0);
 }
 
 TEST_CASE("deform and cage on a full disk: the error names --out's file, nothing is left",

@@ -28,4 +28,12 @@ inline void write_text(const std::filesystem::path& file, const std::string& tex
   std::ofstream(file, std::ios::binary) << text;
 }
 
+/// Files of unfinished writes (.mbi-tmp.*) in `dir`.
+inline int temporaries(const std::filesystem::path& dir) {
+  int n = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    if (e.path().filename().string().rfind(".mbi-tmp.", 0) == 0) ++n;
+  return n;
+}
+
 }  // namespace mbi::test

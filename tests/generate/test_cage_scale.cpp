@@ -15,16 +15,16 @@ using namespace mbi::generate;
 
 namespace {
 
-struct Surf {
+struct ScaleSurf {
   Eigen::MatrixXd V;
   Eigen::MatrixXi F;
 };
 
 // A closed, deliberately unsymmetric surface: a UV ellipsoid (semi-axes 1, 0.8, 0.6) with a bump,
 // centred off the origin (no vertex on a grid plane by symmetry).
-Surf blob() {
+ScaleSurf blob() {
   const int nu = 24, nv = 12;
-  Surf s;
+  ScaleSurf s;
   s.V.resize(2 + nu * (nv - 1), 3);
   s.V.row(0) << 0.1, 0.05, 0.6;
   s.V.row(1) << 0.1, 0.05, -0.6;
@@ -62,7 +62,7 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 TEST_CASE("cages are scale-free: tiny, huge and far-offset models give the unit cage scaled",
           "[cage][scale]") {
-  const Surf s = blob();
+  const ScaleSurf s = blob();
   // relative tolerance on vertex positions, in units of the model size: the cage is built on
   // normalised coordinates, so only the rounding of the offset (1e3 x size here: ~1e-13) differs
   const double tol = 1e-9;
@@ -111,14 +111,14 @@ TEST_CASE("degenerate models are refused with a clear message", "[cage][scale]")
     const Eigen::MatrixXi tri = (Eigen::MatrixXi(1, 3) << 0, 1, 2).finished();
     CHECK_THROWS_WITH(make_cage(equal, tri, opt), Catch::Contains("same point"));
     // an extent below the precision left at the offset
-    const Surf s = blob();
+    const ScaleSurf s = blob();
     const Eigen::MatrixXd far = (s.V * 1e-3).array() + 1e12;
     CHECK_THROWS_WITH(make_cage(far, s.F, opt), Catch::Contains("precision"));
   }
 }
 
 TEST_CASE("mostly empty models are refused quickly: bounded cell-size search", "[cage][scale]") {
-  const Surf s = blob();
+  const ScaleSurf s = blob();
   Eigen::MatrixXd two(2, 3);
   two << 0, 0, 0, 1, 1, 1;
   Eigen::MatrixXd stray(s.V.rows() + 1, 3);  // one vertex at 1e160

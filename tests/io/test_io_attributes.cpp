@@ -6,6 +6,7 @@
 #include "common/temp_dir.hpp"
 
 #include <catch2/catch.hpp>
+#include <common/files.hpp>
 
 #include <algorithm>
 #include <bit>
@@ -24,11 +25,6 @@ namespace {
 void write_bytes(const fs::path& p, const std::string& s) {
   std::ofstream out(p, std::ios::binary);
   out << s;
-}
-
-std::string read_bytes(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
 std::vector<std::string> lines_of(const std::string& s) {
@@ -106,7 +102,7 @@ TEST_CASE("OBJ keeps vt, groups, objects, materials, smoothing, vertex colours, 
 
   SECTION("unchanged mesh: every record but the comment comes back, in order") {
     write_surface(tmp / "out.obj", m);
-    const std::string out = read_bytes(tmp / "out.obj");
+    const std::string out = mbi::test::slurp(tmp / "out.obj");
     const auto keys = {"mtllib", "o", "vt", "g", "usemtl", "s", "l"};
     CHECK(records(out, keys) == records(kObj, keys));
     // vertex colours kept after the positions; one vn per vertex
@@ -123,7 +119,7 @@ TEST_CASE("OBJ keeps vt, groups, objects, materials, smoothing, vertex colours, 
     d.N = Eigen::MatrixXd::Zero(5, 3);
     d.N.col(1).setOnes();
     write_surface(tmp / "out.obj", d);
-    const std::string out = read_bytes(tmp / "out.obj");
+    const std::string out = mbi::test::slurp(tmp / "out.obj");
     const auto keys = {"mtllib", "o", "vt", "g", "usemtl", "s", "l"};
     CHECK(records(out, keys) == records(kObj, keys));
     const SurfaceMesh r = read_surface(tmp / "out.obj");
@@ -136,7 +132,7 @@ TEST_CASE("OBJ keeps vt, groups, objects, materials, smoothing, vertex colours, 
     SurfaceMesh d = m;
     d.N.resize(0, 0);
     write_surface(tmp / "out.obj", d);
-    const std::string out = read_bytes(tmp / "out.obj");
+    const std::string out = mbi::test::slurp(tmp / "out.obj");
     CHECK(records(out, {"vn"}).empty());
     CHECK(records(out, {"f"})[1] == "f 4/4 3/3 5/5");
     CHECK(read_surface(tmp / "out.obj").N.size() == 0);
@@ -154,7 +150,7 @@ TEST_CASE("OBJ keeps vt, groups, objects, materials, smoothing, vertex colours, 
     d.N.resize(0, 0);
     d.polygons = {{0, 1, 2, 3}};
     write_surface(tmp / "out.obj", d);
-    CHECK(records(read_bytes(tmp / "out.obj"), {"vt", "g"}).empty());
+    CHECK(records(mbi::test::slurp(tmp / "out.obj"), {"vt", "g"}).empty());
     CHECK(read_surface(tmp / "out.obj").V == d.V);
   }
 }
@@ -183,7 +179,7 @@ TEST_CASE("a mesh without faces writes a vertices-only OBJ", "[io][attributes]")
   SurfaceMesh m;
   m.V = Eigen::MatrixXd::Random(7, 3);
   write_surface(tmp / "p.obj", m);
-  const std::string out = read_bytes(tmp / "p.obj");
+  const std::string out = mbi::test::slurp(tmp / "p.obj");
   CHECK(records(out, {"v"}).size() == 7);
   CHECK(lines_of(out).size() == 7);
   const SurfaceMesh r = read_surface(tmp / "p.obj");
@@ -215,14 +211,14 @@ TEST_CASE("ASCII PLY: extra properties and elements come back byte-equal", "[io]
   REQUIRE(m.N.rows() == 4);
   SECTION("unchanged: the whole file") {
     write_surface(tmp / "out.ply", m);
-    CHECK(read_bytes(tmp / "out.ply") == ply);
+    CHECK(mbi::test::slurp(tmp / "out.ply") == ply);
   }
   SECTION("deformed: positions and normals replaced, every other value as it was") {
     SurfaceMesh d = m;
     d.V = moved(m.V);
     d.N.col(2) *= -1.0;
     write_surface(tmp / "out.ply", d);
-    const auto in = lines_of(ply), out = lines_of(read_bytes(tmp / "out.ply"));
+    const auto in = lines_of(ply), out = lines_of(mbi::test::slurp(tmp / "out.ply"));
     REQUIRE(in.size() == out.size());
     for (std::size_t i = 0; i < in.size(); ++i) {
       if (i >= 23 && i < 27) {  // vertex lines: colours and texture coordinates kept
@@ -242,10 +238,10 @@ TEST_CASE("ASCII PLY: extra properties and elements come back byte-equal", "[io]
   }
   SECTION("written binary and read back: the same values") {
     write_surface(tmp / "b.ply", m, Encoding::binary);
-    CHECK(read_bytes(tmp / "b.ply").find("format binary_little_endian 1.0") != std::string::npos);
+    CHECK(mbi::test::slurp(tmp / "b.ply").find("format binary_little_endian 1.0") != std::string::npos);
     const SurfaceMesh b = read_surface(tmp / "b.ply");
     write_surface(tmp / "a.ply", b, Encoding::ascii);
-    CHECK(read_bytes(tmp / "a.ply") == ply);
+    CHECK(mbi::test::slurp(tmp / "a.ply") == ply);
   }
 }
 
@@ -272,13 +268,13 @@ TEST_CASE("binary PLY stays binary with the same endianness, every byte of extra
     write_bytes(tmp / "in.ply", ply);
     const SurfaceMesh m = read_surface(tmp / "in.ply");
     write_surface(tmp / "out.ply", m);
-    CHECK(read_bytes(tmp / "out.ply") == ply);  // as read: binary, same endianness, same types
+    CHECK(mbi::test::slurp(tmp / "out.ply") == ply);  // as read: binary, same endianness, same types
     write_surface(tmp / "bin.ply", m, Encoding::binary);
-    CHECK(read_bytes(tmp / "bin.ply") == ply);
+    CHECK(mbi::test::slurp(tmp / "bin.ply") == ply);
     SurfaceMesh d = m;
     d.V = moved(m.V);
     write_surface(tmp / "d.ply", d);
-    const std::string out = read_bytes(tmp / "d.ply");
+    const std::string out = mbi::test::slurp(tmp / "d.ply");
     REQUIRE(out.size() == ply.size());
     const std::size_t body = ply.find("end_header\n") + 11;
     for (int i = 0; i < 3; ++i)  // quality and u of each vertex: bytes 12..22 of its record
@@ -304,11 +300,11 @@ TEST_CASE("STL: binary stays binary with its header and attribute words, ASCII k
   write_bytes(tmp / "in.stl", stl);
   const SurfaceMesh m = read_surface(tmp / "in.stl");
   write_surface(tmp / "out.stl", m);
-  CHECK(read_bytes(tmp / "out.stl") == stl);
+  CHECK(mbi::test::slurp(tmp / "out.stl") == stl);
   SurfaceMesh d = m;
   d.V = moved(m.V);
   write_surface(tmp / "d.stl", d);
-  const std::string out = read_bytes(tmp / "d.stl");
+  const std::string out = mbi::test::slurp(tmp / "d.stl");
   REQUIRE(out.size() == stl.size());  // binary
   CHECK(out.compare(0, 84, stl, 0, 84) == 0);
   for (int t = 0; t < 2; ++t) CHECK(out.compare(84 + 50 * t + 48, 2, stl, 84 + 50 * t + 48, 2) == 0);
@@ -318,7 +314,7 @@ TEST_CASE("STL: binary stays binary with its header and attribute words, ASCII k
               "solid my part\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
               "vertex 0 1 0\nendloop\nendfacet\nendsolid my part\n");
   write_surface(tmp / "a2.stl", read_surface(tmp / "a.stl"));
-  const std::string a2 = read_bytes(tmp / "a2.stl");
+  const std::string a2 = mbi::test::slurp(tmp / "a2.stl");
   CHECK(a2.rfind("solid my part\n", 0) == 0);
   CHECK(a2.find("endsolid my part\n") != std::string::npos);
 }

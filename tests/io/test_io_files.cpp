@@ -11,6 +11,7 @@
 #include "common/temp_dir.hpp"
 
 #include <catch2/catch.hpp>
+#include <common/files.hpp>
 
 #include <signal.h>
 #include <sys/resource.h>
@@ -29,11 +30,6 @@ using mbi::test::TempDir;
 namespace {
 
 void write_bytes(const fs::path& p, const std::string& s) { std::ofstream(p, std::ios::binary) << s; }
-
-std::string read_bytes(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
 
 int temporaries(const fs::path& dir) {
   int n = 0;
@@ -231,7 +227,7 @@ TEST_CASE("PLY integer positions take deformed positions as double, ASCII and bi
       m.V *= 1.37;  // deformed: not integers, some over 255
       m.V(1, 0) = 300.25;
       write_surface(tmp / "out.ply", m);
-      const std::string out = read_bytes(tmp / "out.ply");
+      const std::string out = mbi::test::slurp(tmp / "out.ply");
       CHECK(out.find("property double x\nproperty double y\nproperty double z\nproperty uchar red\n") !=
             std::string::npos);
       CHECK(out.find("property " + type + " x") == std::string::npos);

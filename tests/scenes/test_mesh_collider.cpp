@@ -56,7 +56,7 @@ std::string at(const fs::path& file, const std::string& text, const std::string&
   return file.string() + ":" + std::to_string(std::count(text.begin(), text.begin() + static_cast<long>(k) + 1, '\n') + 1);
 }
 
-double diagonal(const Eigen::MatrixXd& P) { return (P.colwise().maxCoeff() - P.colwise().minCoeff()).norm(); }
+double collider_diagonal(const Eigen::MatrixXd& P) { return (P.colwise().maxCoeff() - P.colwise().minCoeff()).norm(); }
 
 }  // namespace
 
@@ -160,7 +160,7 @@ TEST_CASE("shape = \"mesh\": a ball dropped on the steps rests on a tread within
   const mbi::pipeline::Collider& steps = loaded.colliders.at(0);
   const SceneModels m = load_models(sc);
   mbi::pipeline::FramePipeline pipe = make_pipeline(sc, m, mbi::interp::embed(m.U, m.T, m.dense.V));
-  const double diag = diagonal(m.dense.V), dt = sc.simulation.parameters.dt;
+  const double diag = collider_diagonal(m.dense.V), dt = sc.simulation.parameters.dt;
   Eigen::MatrixXd before = m.dense.V;
   for (int k = 1; k <= frames; ++k) {
     INFO("frame " << k);

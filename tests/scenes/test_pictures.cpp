@@ -37,7 +37,7 @@ const std::string kRising = "ground = -0.55\n[[colliders]]\nshape = \"sphere\"\n
                             "motion = { velocity = [0, 3, 0] }\n";
 
 // Runs `text`; the pictures' folder.
-fs::path run_text(const std::string& text, const mbi::test::TempDir& dir, const std::string& name) {
+fs::path run_picture_text(const std::string& text, const mbi::test::TempDir& dir, const std::string& name) {
   return mbi::test::run_scene_text(text, dir, name);
 }
 
@@ -86,7 +86,7 @@ TEST_CASE("pictures: a contact scene shows its collider at each frame's pose abo
   mbi::test::TempDir dir("pictures-contact");
   for (const std::string gpu : {"off", "on"}) {  // the CPU rasteriser, the GPU renderer (CI: Mesa llvmpipe)
     INFO("gpu = " << gpu);
-    const fs::path out = run_text(still_ball("surface", kRising, gpu), dir, "rising-" + gpu);
+    const fs::path out = run_picture_text(still_ball("surface", kRising, gpu), dir, "rising-" + gpu);
     const Image first = picture(out, 0), last = picture(out, 2);
     int width = 0;
     for (int x0 : panel_starts(first, width)) {
@@ -122,9 +122,9 @@ TEST_CASE("pictures: the ground and a large collider far from the model move nei
           "and without colliders the model is alone",
           "[scenes][pictures]") {
   mbi::test::TempDir dir("pictures-ground");
-  const fs::path bare = run_text(still_ball("control", "", "off"), dir, "bare");
-  const fs::path floor = run_text(still_ball("surface", "ground = -0.55\n", "off"), dir, "floor");
-  const fs::path far = run_text(still_ball("surface", "[[colliders]]\nshape = \"box\"\ncenter = [0, -30, 0]\n"
+  const fs::path bare = run_picture_text(still_ball("control", "", "off"), dir, "bare");
+  const fs::path floor = run_picture_text(still_ball("surface", "ground = -0.55\n", "off"), dir, "floor");
+  const fs::path far = run_picture_text(still_ball("surface", "[[colliders]]\nshape = \"box\"\ncenter = [0, -30, 0]\n"
                                                       "half_extents = [20, 20, 20]\n", "off"), dir, "far");
   const Image a = picture(bare, 2), b = picture(floor, 2);
   int width = 0;

@@ -1,5 +1,6 @@
 // Scene files: every shipped scene parses; bad files give one-line errors naming file, line, key.
 #include <catch2/catch.hpp>
+#include <common/files.hpp>
 
 #include <mbi/scenes/scene.hpp>
 
@@ -12,12 +13,6 @@ namespace fs = std::filesystem;
 using mbi::scenes::load_scene;
 
 namespace {
-
-fs::path source_dir() {
-  const char* s = std::getenv("MBI_SOURCE_DIR");
-  REQUIRE(s != nullptr);
-  return s;
-}
 
 fs::path write(const mbi::test::TempDir& dir, const std::string& text) {
   const fs::path p = dir / "scene.toml";
@@ -46,7 +41,7 @@ std::string error_of(const fs::path& p) {
 
 TEST_CASE("every shipped scene parses", "[scene]") {
   int n = 0;
-  for (const auto& entry : fs::directory_iterator(source_dir() / "scenes")) {
+  for (const auto& entry : fs::directory_iterator(mbi::test::source_dir() / "scenes")) {
     if (entry.path().extension() != ".toml") continue;
     INFO(entry.path());
     const auto sc = load_scene(entry.path());

@@ -16,9 +16,9 @@ using mbi::scenes::parse_scene;
 
 namespace {
 
-const std::string minimal = "[dense]\nbuiltin = \"paper-bar\"\n[control]\nbuiltin = \"paper-bar\"\n";
+const std::string minimal_text = "[dense]\nbuiltin = \"paper-bar\"\n[control]\nbuiltin = \"paper-bar\"\n";
 
-std::string error_of(const std::string& text) {
+std::string text_error(const std::string& text) {
   try {
     parse_scene(text, "s.toml");
   } catch (const mbi::scenes::Error& e) {
@@ -32,35 +32,35 @@ std::string error_of(const std::string& text) {
 TEST_CASE("scene nesting: 100,000 deep is refused naming the line, not a stack overflow",
           "[scene][hardening]") {
   for (const char* open_close : {"[]", "{}"}) {
-    std::string deep = minimal + "\n# a comment [[[[\nx = ";
+    std::string deep = minimal_text + "\n# a comment [[[[\nx = ";
     for (int i = 0; i < 100000; ++i) deep += open_close[0] == '[' ? "[" : "{a=";
     deep += "1";
     deep += std::string(100000, open_close[1]);
     INFO(open_close);
-    REQUIRE_THAT(error_of(deep),
+    REQUIRE_THAT(text_error(deep),
                  Catch::StartsWith("s.toml:7: arrays and inline tables nest deeper than 16 levels"));
   }
   // 16 levels pass the pre-scan (and the key is then unknown), 17 do not
-  const std::string at16 = minimal + "x = " + std::string(16, '[') + std::string(16, ']') + "\n";
-  const std::string at17 = minimal + "x = " + std::string(17, '[') + std::string(17, ']') + "\n";
-  REQUIRE_THAT(error_of(at16), !Catch::Contains("nest deeper") && Catch::Contains("x"));
-  REQUIRE_THAT(error_of(at17), Catch::Contains("s.toml:5: arrays and inline tables nest deeper"));
+  const std::string at16 = minimal_text + "x = " + std::string(16, '[') + std::string(16, ']') + "\n";
+  const std::string at17 = minimal_text + "x = " + std::string(17, '[') + std::string(17, ']') + "\n";
+  REQUIRE_THAT(text_error(at16), !Catch::Contains("nest deeper") && Catch::Contains("x"));
+  REQUIRE_THAT(text_error(at17), Catch::Contains("s.toml:5: arrays and inline tables nest deeper"));
 }
 
 TEST_CASE("scene nesting: dotted keys and table headers of 100,000 parts are refused",
           "[scene][hardening]") {
   std::string dotted = "a";
   for (int i = 0; i < 100000; ++i) dotted += ".a";
-  REQUIRE_THAT(error_of(minimal + dotted + " = 1\n"),
+  REQUIRE_THAT(text_error(minimal_text + dotted + " = 1\n"),
                Catch::StartsWith("s.toml:5: dotted keys nest deeper than 16 levels"));
-  REQUIRE_THAT(error_of(minimal + "[" + dotted + "]\n"),
+  REQUIRE_THAT(text_error(minimal_text + "[" + dotted + "]\n"),
                Catch::StartsWith("s.toml:5: dotted keys nest deeper than 16 levels"));
-  REQUIRE_THAT(error_of(minimal + "x = {" + dotted + " = 1}\n"),
+  REQUIRE_THAT(text_error(minimal_text + "x = {" + dotted + " = 1}\n"),
                Catch::StartsWith("s.toml:5: dotted keys nest deeper than 16 levels"));
   // dots in values (numbers, strings) are not key parts
   std::string floats = "x = [";
   for (int i = 0; i < 100; ++i) floats += "1.5, ";
-  REQUIRE_THAT(error_of(minimal + floats + "2.5]\ny = {a = 1.5, b = \"a.b.c.d.e.f.g.h.i.j.k.l.m.n.o.p.q.r\"}\n"),
+  REQUIRE_THAT(text_error(minimal_text + floats + "2.5]\ny = {a = 1.5, b = \"a.b.c.d.e.f.g.h.i.j.k.l.m.n.o.p.q.r\"}\n"),
                !Catch::Contains("nest deeper"));
 }
 
@@ -70,27 +70,27 @@ TEST_CASE("scene nesting: brackets in strings and comments are not counted", "[s
                            "\"  # " + many + "\nnote2 = '''\n" + many + "\n'''\n" +
                            "[control]\nbuiltin = \"paper-bar\"\n";
   // no nesting error: the scene is read up to its unknown key
-  REQUIRE_THAT(error_of(text), !Catch::Contains("nest deeper") && Catch::Contains("note"));
-  REQUIRE_THAT(error_of("[dense]\nbuiltin = 'paper-bar'\nnote = \"a\\\"[[[[[[[[[[[[[[[[[[\"\n"),
+  REQUIRE_THAT(text_error(text), !Catch::Contains("nest deeper") && Catch::Contains("note"));
+  REQUIRE_THAT(text_error("[dense]\nbuiltin = 'paper-bar'\nnote = \"a\\\"[[[[[[[[[[[[[[[[[[\"\n"),
                !Catch::Contains("nest deeper") && Catch::Contains("note"));
 }
 
 TEST_CASE("scene text: byte-order mark and CR LF line ends are read", "[scene][hardening]") {
   std::string crlf;
-  for (char c : minimal) crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
+  for (char c : minimal_text) crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
   REQUIRE_NOTHROW(parse_scene("\xEF\xBB\xBF" + crlf, "s.toml"));
 }
 
 TEST_CASE("scene text: bytes that are not UTF-8 and control characters are refused, naming the line",
           "[scene][hardening]") {
-  REQUIRE_THAT(error_of(minimal + "name = \"\xF8\x9B\"\n"),
+  REQUIRE_THAT(text_error(minimal_text + "name = \"\xF8\x9B\"\n"),
                Catch::StartsWith("s.toml:5: syntax error: not UTF-8 text (byte 0xF8)"));
-  REQUIRE_THAT(error_of(minimal + "# \x1C\n"),
+  REQUIRE_THAT(text_error(minimal_text + "# \x1C\n"),
                Catch::StartsWith("s.toml:5: syntax error: control character (byte 0x1C)"));
-  REQUIRE_THAT(error_of(minimal + "x = 1\ry = 2\n"),
+  REQUIRE_THAT(text_error(minimal_text + "x = 1\ry = 2\n"),
                Catch::StartsWith("s.toml:5: syntax error: a CR not followed by LF"));
   // UTF-8 in strings and comments, and tabs, are fine: the error is the unknown key
-  REQUIRE_THAT(error_of(minimal + "note =\t\"\xC3\xA9t\xC3\xA9 \xE2\x82\xAC \xF0\x9F\x98\x80\"  # caf\xC3\xA9\n"),
+  REQUIRE_THAT(text_error(minimal_text + "note =\t\"\xC3\xA9t\xC3\xA9 \xE2\x82\xAC \xF0\x9F\x98\x80\"  # caf\xC3\xA9\n"),
                Catch::Contains("note") && !Catch::Contains("syntax error"));
 }
 

@@ -28,7 +28,6 @@ namespace {
 
 fs::path cube() { return fs::path(source_dir()) / "tests" / "viewer" / "cube.obj"; }
 
-std::string q(const fs::path& p) { return mbi::test::quoted(p); }
 
 // Plays, grabs the middle of the one view (480 x 360, no panel) and pulls up and right.
 std::string poke_script() {
@@ -47,7 +46,7 @@ nlohmann::json view_and_poke(const std::string& model, const TempDir& dir) {
   std::ofstream(dir / "poke.txt") << poke_script();
   const fs::path rep = dir / "report.json";
   const mbi::test::ViewRun r =
-      mbi::test::view(model + kSmall + " --script " + q(dir / "poke.txt") + " --report " + q(rep) + " --force", dir);
+      mbi::test::view(model + kSmall + " --script " + mbi::test::quoted(dir / "poke.txt") + " --report " + mbi::test::quoted(rep) + " --force", dir);
   INFO(model << ": " << r.err);
   REQUIRE(r.code == 0);
   const nlohmann::json frames = mbi::test::read_report(rep);
@@ -96,7 +95,7 @@ TEST_CASE("mbi view MODEL: every real model starts paused, is poked and closes",
   if (mbi::test::kSanitized && files.size() > 2) files.resize(2);
   REQUIRE(!files.empty());
   TempDir dir("view-models");
-  for (const fs::path& f : files) view_and_poke(q(f), dir);
+  for (const fs::path& f : files) view_and_poke(mbi::test::quoted(f), dir);
 }
 
 TEST_CASE("mbi view MODEL: a flat model (a sheet) is poked in 3D", "[viewer][xvfb]") {
@@ -111,7 +110,7 @@ TEST_CASE("mbi view MODEL: a flat model (a sheet) is poked in 3D", "[viewer][xvf
       obj << "f " << a << " " << b << " " << d << "\nf " << a << " " << d << " " << c << "\n";
     }
   obj.close();
-  view_and_poke(q(dir / "sheet.obj"), dir);
+  view_and_poke(mbi::test::quoted(dir / "sheet.obj"), dir);
 }
 
 TEST_CASE("mbi view: a multi-part glTF and a scene of several [[dense]] models show every part", "[viewer][xvfb]") {
@@ -122,17 +121,17 @@ TEST_CASE("mbi view: a multi-part glTF and a scene of several [[dense]] models s
   const long long parts = mbi::io::read_surface(dir / "parts.glb").V.rows();
   const long long sphere = mbi::io::read_surface(dir / "sphere.obj").V.rows();
   // the glTF's parts as one model
-  nlohmann::json frames = view_and_poke(q(dir / "parts.glb"), dir);
+  nlohmann::json frames = view_and_poke(mbi::test::quoted(dir / "parts.glb"), dir);
   CHECK(frames.back()["dense_points"].get<long long>() == parts);
   // both files in one control mesh, as a scene
-  const std::string cage = "cd " + q(dir.path()) + " && \"" + MBI_EXE + "\" cage parts.glb sphere.obj -n 80 -o two > /dev/null";
+  const std::string cage = "cd " + mbi::test::quoted(dir.path()) + " && \"" + MBI_EXE + "\" cage parts.glb sphere.obj -n 80 -o two > /dev/null";
   REQUIRE(std::system(cage.c_str()) == 0);
   std::ofstream(dir / "two.toml") << "name = \"two\"\n[[dense]]\npath = \"parts.glb\"\n[[dense]]\npath = \"sphere.obj\"\n"
                                      "[control]\npath = \"two.node\"\n[simulation]\ndt = 0.04\ngravity = [0, -9.81, 0]\n"
                                      "[[constraints]]\ntype = \"fixed\"\n"
                                      "select = { box_relative = { min = [0, 0.9, 0], max = [1, 1, 1] } }\n";
   const mbi::test::ViewRun r =
-      mbi::test::view(q(dir / "two.toml") + kSmall + " --report " + q(dir / "two.json"), dir);
+      mbi::test::view(mbi::test::quoted(dir / "two.toml") + kSmall + " --report " + mbi::test::quoted(dir / "two.json"), dir);
   INFO(r.err);
   REQUIRE(r.code == 0);
   frames = mbi::test::read_report(dir / "two.json");
@@ -152,7 +151,7 @@ TEST_CASE("mbi view: a scripted drop loads the model, a bad one is said and the 
                                    << "3 drop " << (dir / "notes.txt").string() << "  # a comment\n"
                                    << "5 drop " << (dir / "octahedron.obj").string() << "\n";
   const mbi::test::ViewRun r = mbi::test::view(
-      q(cube()) + kSmall + " --script " + q(dir / "drop.txt") + " --report " + q(dir / "r.json"), dir);
+      mbi::test::quoted(cube()) + kSmall + " --script " + mbi::test::quoted(dir / "drop.txt") + " --report " + mbi::test::quoted(dir / "r.json"), dir);
   INFO(r.err);
   REQUIRE(r.code == 0);
   CHECK(r.err.find("missing.obj") != std::string::npos);
@@ -167,17 +166,17 @@ TEST_CASE("mbi view --video: ffprobe reads the frames and size asked for, and wi
   const fs::path video = dir / "out.mp4";
   const int frames = mbi::test::kSanitized ? 6 : 12;
   const mbi::test::ViewRun r = mbi::test::view(
-      q(cube()) + " --width 321 --height 240 --no-panel --frames " + std::to_string(frames) + " --video " + q(video) +
-          " --screenshot " + q(dir / "last.png"),
+      mbi::test::quoted(cube()) + " --width 321 --height 240 --no-panel --frames " + std::to_string(frames) + " --video " + mbi::test::quoted(video) +
+          " --screenshot " + mbi::test::quoted(dir / "last.png"),
       dir);
   INFO(r.err);
   REQUIRE(r.code == 0);
   CHECK(r.err.find("320 x 240 at 30 fps") != std::string::npos);  // even sizes for the codec
   const std::string probe = "ffprobe -v error -count_frames -select_streams v:0 -show_entries "
-                            "stream=width,height,nb_read_frames -of csv=p=0 " + q(video) + " > " + q(dir / "probe.txt");
+                            "stream=width,height,nb_read_frames -of csv=p=0 " + mbi::test::quoted(video) + " > " + mbi::test::quoted(dir / "probe.txt");
   REQUIRE(std::system(probe.c_str()) == 0);
   CHECK(mbi::test::slurp(dir / "probe.txt") == "320,240," + std::to_string(frames) + "\n");
-  const std::string decode = "ffmpeg -v error -sseof -0.04 -i " + q(video) + " -frames:v 1 " + q(dir / "decoded.png");
+  const std::string decode = "ffmpeg -v error -sseof -0.04 -i " + mbi::test::quoted(video) + " -frames:v 1 " + mbi::test::quoted(dir / "decoded.png");
   REQUIRE(std::system(decode.c_str()) == 0);
   const mbi::io::Image shot = mbi::io::read_png(dir / "last.png"), decoded = mbi::io::read_png(dir / "decoded.png");
   const double upright = video_difference(shot, decoded, false), flipped = video_difference(shot, decoded, true);
@@ -187,17 +186,17 @@ TEST_CASE("mbi view --video: ffprobe reads the frames and size asked for, and wi
   // the o key: a video from one press to the next, in the current folder, named by the frame
   std::ofstream(dir / "o.txt") << "1 key o\n6 key o\n";
   const mbi::test::ViewRun o = mbi::test::view(
-      q(cube()) + " --width 320 --height 240 --no-panel --frames 8 --script " + q(dir / "o.txt"), dir, true, dir.path());
+      mbi::test::quoted(cube()) + " --width 320 --height 240 --no-panel --frames 8 --script " + mbi::test::quoted(dir / "o.txt"), dir, true, dir.path());
   INFO(o.err);
   REQUIRE(o.code == 0);
   const std::string probe_o = "ffprobe -v error -count_frames -select_streams v:0 -show_entries "
-                              "stream=width,height,nb_read_frames -of csv=p=0 " + q(dir / "mbi-video-0001.mp4") +
-                              " > " + q(dir / "probe-o.txt");
+                              "stream=width,height,nb_read_frames -of csv=p=0 " + mbi::test::quoted(dir / "mbi-video-0001.mp4") +
+                              " > " + mbi::test::quoted(dir / "probe-o.txt");
   REQUIRE(std::system(probe_o.c_str()) == 0);
   CHECK(mbi::test::slurp(dir / "probe-o.txt") == "320,240,5\n");
   // without ffmpeg on PATH: refused before any window (no display needed), nothing written
-  const std::string cmd = "env -u DISPLAY PATH=/nonexistent \"" + std::string(MBI_EXE) + "\" view " + q(cube()) + " --video " +
-                          q(dir / "none.mp4") + " 2> " + q(dir / "err.txt");
+  const std::string cmd = "env -u DISPLAY PATH=/nonexistent \"" + std::string(MBI_EXE) + "\" view " + mbi::test::quoted(cube()) + " --video " +
+                          mbi::test::quoted(dir / "none.mp4") + " 2> " + mbi::test::quoted(dir / "err.txt");
   CHECK(std::system(cmd.c_str()) != 0);
   CHECK(mbi::test::slurp(dir / "err.txt").find("needs ffmpeg") != std::string::npos);
   CHECK_FALSE(fs::exists(dir / "none.mp4"));
@@ -209,8 +208,8 @@ TEST_CASE("mbi view --video: an ffmpeg that never reads its input is an error af
   std::ofstream(dir / "bin" / "ffmpeg") << "#!/bin/sh\nexec sleep 300\n";  // holds its input open, reads nothing
   fs::permissions(dir / "bin" / "ffmpeg", fs::perms::owner_all);
   const mbi::test::ViewRun r = mbi::test::view(
-      q(cube()) + " --width 640 --height 480 --no-panel --frames 3 --video " + q(dir / "v.mp4"), dir, true, {},
-      "PATH=" + q(dir / "bin") + ":\"$PATH\" timeout 120");
+      mbi::test::quoted(cube()) + " --width 640 --height 480 --no-panel --frames 3 --video " + mbi::test::quoted(dir / "v.mp4"), dir, true, {},
+      "PATH=" + mbi::test::quoted(dir / "bin") + ":\"$PATH\" timeout 120");
   const std::string& err = r.err;
   INFO(err);
   CHECK(r.code == 2);  // timeout(1) would give 124
