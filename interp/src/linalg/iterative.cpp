@@ -104,7 +104,8 @@ std::ptrdiff_t PcgSolver::preconditioner_nonzeros() const {
 
 std::size_t PcgSolver::bytes() const {
   const auto sparse = [](auto nnz, auto rows) {
-    return static_cast<std::size_t>(nnz) * (sizeof(double) + sizeof(int)) + static_cast<std::size_t>(rows + 1) * sizeof(int);
+    return static_cast<std::size_t>(nnz) * (sizeof(double) + sizeof(int)) +
+           static_cast<std::size_t>(rows + 1) * sizeof(int);
   };
   return sparse(A_.nonZeros(), A_.rows()) + sparse(preconditioner_nonzeros(), A_.rows()) +
          static_cast<std::size_t>(A_.rows()) * (sizeof(double) + 2 * sizeof(int));
