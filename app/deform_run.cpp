@@ -183,7 +183,9 @@ void run_frames(Frames& frames, const Model& m, pipeline::Deformer& deformer, Fr
       if (k == signal_frame) test_signal_at("frame");
       run_frame(k, frames, m, deformer, out, run, positions, normals, xyz);
     } catch (const std::exception& e) {
-      const std::string what = outputs.name_targets(e.what()), frame = "frame " + std::to_string(k);
+      const bool oom = dynamic_cast<const std::bad_alloc*>(&e) != nullptr;  // named, not "std::bad_alloc"
+      const std::string what = outputs.name_targets(oom ? "out of memory while deforming the frame" : e.what()),
+                        frame = "frame " + std::to_string(k);
       run.failure = !run.trajectory || what.find(frame) != std::string::npos ? what : frame + ": " + what;
       break;
     }
