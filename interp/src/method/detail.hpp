@@ -1,6 +1,7 @@
 #pragma once
 // Internal helpers of mbi::interp (not installed).
 #include <mbi/interp/mesh.hpp>
+#include <mbi/interp/modified_bi.hpp>
 
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
@@ -13,6 +14,12 @@ namespace mbi::interp::detail {
 /// Cheaper than validate_mesh (no degeneracy test).
 void check_shapes(const Eigen::Ref<const Eigen::MatrixXd>& U,
                   const Eigen::Ref<const Eigen::MatrixXi>& T);
+
+/// The Bezier points B ((m K) x d) of the elements T from X (n x d) and, when M is not null,
+/// modified-BI's M ((n d) x d) at rest positions U (fact 5); M null: BI's edge midpoints. Shapes
+/// and indices checked by the caller. On the library's threads (bezier_kernel.cpp).
+void bezier_rows(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
+                 const Eigen::Ref<const Eigen::MatrixXd>& X, const MatrixIn* M, MatrixOut B);
 
 /// Throws Error naming the first non-finite entry of A (row `what` r).
 void check_finite(const char* what, const Eigen::Ref<const Eigen::MatrixXd>& A);

@@ -950,7 +950,6 @@ void bezier_bi(const Eigen::Ref<const Eigen::MatrixXd>& X, const Eigen::Ref<cons
   const int d = static_cast<int>(X.cols());
   if ((d != 2 && d != 3) || T.cols() != d + 1)
     throw Error("X must be n x d (d = 2, 3) and T m x (d+1)");
-  const auto& edges = bezier_edges(d);
   const int K = (d + 1) * (d + 2) / 2;
   check_out("the Bezier points", B.rows(), B.cols(), T.rows() * K, d);
   for (Eigen::Index e = 0; e < T.rows(); ++e)
@@ -958,11 +957,7 @@ void bezier_bi(const Eigen::Ref<const Eigen::MatrixXd>& X, const Eigen::Ref<cons
       if (T(e, k) < 0 || T(e, k) >= X.rows())
         throw Error("element " + std::to_string(e) + " has vertex index " +
                     std::to_string(T(e, k)) + " outside [0, " + std::to_string(X.rows()) + ")");
-  for (Eigen::Index e = 0; e < T.rows(); ++e) {
-    for (int k = 0; k <= d; ++k) B.row(e * K + k) = X.row(T(e, k));
-    for (size_t s = 0; s < edges.size(); ++s)
-      B.row(e * K + d + 1 + s) = 0.5 * (X.row(T(e, edges[s].first)) + X.row(T(e, edges[s].second)));
-  }
+  detail::bezier_rows(X, T, X, nullptr, B);
 }
 
 BezierPoints bezier_points(const Eigen::Ref<const Eigen::MatrixXd>& U,
@@ -980,21 +975,9 @@ void bezier_points(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<
   const int d = static_cast<int>(U.cols());
   const int n = static_cast<int>(U.rows());
   check_xm(n, d, X, M);
-  const auto& edges = bezier_edges(d);
   const int K = (d + 1) * (d + 2) / 2;
   check_out("the Bezier points", B.rows(), B.cols(), T.rows() * K, d);
-  for (Eigen::Index e = 0; e < T.rows(); ++e) {
-    for (int k = 0; k <= d; ++k) B.row(e * K + k) = X.row(T(e, k));
-    for (size_t s = 0; s < edges.size(); ++s) {
-      const int i = T(e, edges[s].first), j = T(e, edges[s].second);
-      // P_ij = (x_i + x_j)/2 + (M_i - M_j)(u_j - u_i)/2  (fact 5)
-      for (int c = 0; c < d; ++c) {
-        double v = X(i, c) + X(j, c);
-        for (int r = 0; r < d; ++r) v += (M(i * d + c, r) - M(j * d + c, r)) * (U(j, r) - U(i, r));
-        B(e * K + d + 1 + static_cast<Eigen::Index>(s), c) = 0.5 * v;
-      }
-    }
-  }
+  detail::bezier_rows(U, T, X, &M, B);
 }
 
 Eigen::VectorXd evaluate_reference(const Eigen::Ref<const Eigen::MatrixXd>& U,
