@@ -611,7 +611,7 @@ TEST_CASE("deform --stats has the documented keys for each method, ratio null at
   const std::set<std::string> want = {"method", "dim", "alpha", "beta", "pin_boundary", "control_vertices",
                                       "elements", "points", "outside_points", "max_outside_distance",
                                       "null_space_dim", "disc", "e_vibr", "e_disc", "e_total", "frames",
-                                      "frames_in_trajectory", "timings_ms"};
+                                      "frames_in_trajectory", "timings_ms", "memory_estimate", "factor"};
   for (const std::string method : {"bi", "modified-bi", "phong"})
     for (const std::string x : {"rest", "bent"}) {
       INFO(method << " " << x);
@@ -624,8 +624,8 @@ TEST_CASE("deform --stats has the documented keys for each method, ratio null at
       const json j = json::parse(slurp(dir / stats));
       CHECK(keys(j) == want);
       CHECK(keys(j["timings_ms"]) ==
-            std::set<std::string>{"embed", "precompute", "phong_precompute", "read", "deform", "write", "read_per_frame",
-                                  "deform_per_frame", "write_per_frame"});
+            std::set<std::string>{"embed", "precompute", "phong_precompute", "memory_estimate", "solve", "read", "deform",
+                                  "write", "read_per_frame", "deform_per_frame", "write_per_frame"});
       check_disc(j["disc"], true, x == "rest");
       std::vector<std::string> found;
       nulls(j, "", found);

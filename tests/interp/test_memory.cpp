@@ -64,7 +64,7 @@ TEST_CASE("memory estimate: the dense operator counted when that path is chosen"
   CHECK(estimate_memory(mesh.U, mesh.T, 2000000).model_bytes > estimate_memory(mesh.U, mesh.T, 1000000).model_bytes);
 }
 
-TEST_CASE("memory estimate: a run over the limit is refused, naming the sizes; bad input named", "[memory]") {
+TEST_CASE("memory estimate: a run over the limit is refused, naming the sizes, and bad input named", "[memory]") {
   const mbi::test::Mesh mesh = mbi::test::box_tet_mesh(6, 5, 4);
   const MemoryEstimate e = estimate_memory(mesh.U, mesh.T, 5000);
   CHECK_THROWS_WITH(check_memory(e, 1024.0 * 1024, "--max-memory", "cage.node"),

@@ -28,7 +28,7 @@ fs::path write_scene(const std::string& name, const std::string& text) {
 }
 }  // namespace
 
-TEST_CASE("scenes whose control mesh cannot fit are refused at load within a second; no cap on the counts", "[limits]") {
+TEST_CASE("scenes whose control mesh cannot fit are refused at load within a second, and no cap on the counts", "[limits]") {
   const std::string head = "[dense]\nbuiltin = \"paper-bar\"\n[control]\n";
   // sizes whose floor alone (minimum_run_bytes) is terabytes: refused before anything is built
   const std::vector<std::pair<std::string, std::string>> cases{

@@ -132,8 +132,11 @@ Symbolic analyse_cholmod(const VertexGraph& G, int d) {
   if (A) cholmod_free_sparse(&A, &c);
   cholmod_finish(&c);
   if (s.ordering.empty())
-    throw Error("memory estimate: CHOLMOD's symbolic analysis failed (status " + std::to_string(status) +
-                (status == CHOLMOD_OUT_OF_MEMORY ? ": out of memory)" : ")"));
+    throw Error(status == CHOLMOD_TOO_LARGE
+                    ? "memory estimate: the factor of " + std::to_string(G.n) +
+                          " control vertices is too large for CHOLMOD's 32-bit indices"
+                    : "memory estimate: CHOLMOD's symbolic analysis failed (status " + std::to_string(status) +
+                          (status == CHOLMOD_OUT_OF_MEMORY ? ": out of memory)" : ")"));
   return s;
 }
 #endif
@@ -238,6 +241,9 @@ MemoryEstimate estimate_memory(const Eigen::Ref<const Eigen::MatrixXd>& U,
 }
 
 double available_memory_bytes() {
+#ifdef __EMSCRIPTEN__  // the page has no /proc: its heap's limit is the caller's to check
+  return 0.0;
+#endif
   std::ifstream in("/proc/meminfo");
   std::string key, unit;
   double value = 0;

@@ -133,7 +133,12 @@ double memory_limit(double max_memory, std::string& name) {
 interp::MemoryEstimate check_run_size(const std::string& where, long long dense_vertices, const Eigen::MatrixXd& U,
                                       const Eigen::MatrixXi& T, double max_memory, const interp::Options& options,
                                       bool simulation) {
-  interp::MemoryEstimate e = interp::estimate_memory(U, T, dense_vertices, options);
+  interp::MemoryEstimate e;
+  try {
+    e = interp::estimate_memory(U, T, dense_vertices, options);
+  } catch (const mbi::Error& err) {  // a size the estimate itself cannot take: named where it came from
+    throw Error(where + ": " + err.what());
+  }
   if (simulation) {  // the simulator's 12 x 12 (2D: 6 x 6) blocks of each element, as triplets
     const double block = static_cast<double>((U.cols() + 1) * U.cols());
     e.peak_bytes += static_cast<double>(T.rows()) * block * block * 16.0;
