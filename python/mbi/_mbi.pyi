@@ -131,7 +131,7 @@ class Deformer:
 class ModifiedBI:
     """Modified-BI's precompute (assembly, gauge, sparse Cholesky factor)."""
     def __init__(self, U: ArrayLike, T: ArrayLike, *, alpha: Optional[float] = None, beta: float = 0.0,
-                 pin_boundary: bool = False, solve_path: Literal["automatic", "sparse", "dense"] = "automatic",
+                 pin_boundary: bool = False, solve_path: Literal["automatic", "sparse", "dense", "iterative"] = "automatic",
                  factorization: Literal["automatic", "eigen", "cholmod"] = "automatic") -> None: ...
     def solve(self, X: ArrayLike, *, out: Optional[AnyArray] = None) -> FloatArray: """M ((n d), d) at X (n, d)"""
     def bezier(self, X: ArrayLike, M: ArrayLike, *, out: Optional[AnyArray] = None) -> FloatArray: ...

@@ -64,7 +64,7 @@ void bind_modified_bi(py::module_& m) {
         "pin_boundary"_a = false, "solve_path"_a = "automatic", "factorization"_a = "automatic",
         "U (n, d) rest vertices, T (m, d+1) elements. alpha: weight of E_vibr (None: 0.1 in 3D, 0.2 in 2D); "
         "beta: weight of E_disc (0: automatic); pin_boundary: M = 0 on boundary vertices; solve_path: "
-        "automatic, sparse or dense; factorization: automatic, eigen or cholmod.");
+        "automatic, sparse, dense or iterative; factorization: automatic, eigen or cholmod.");
   c.def(
       "solve",
       [](Solver& s, const py::object& X, const py::object& out) {

@@ -198,6 +198,16 @@ def test_solve_paths_and_factorizations_agree(mesh):
     assert pinned.pin_boundary and pinned.null_space_dim == 0
 
 
+
+def test_iterative_path_is_within_1e_6_of_the_model_size_of_the_factor(mesh):
+    U, T = mesh
+    X = meshes.pose(U)
+    embedding = mbi.embed(U, T, U[T].mean(axis=1))  # element centroids: inside the control mesh
+    size = np.linalg.norm(X.max(axis=0) - X.min(axis=0))
+    direct, iterative = (mbi.ModifiedBI(U, T, solve_path=p) for p in ("sparse", "iterative"))
+    at = [mbi.evaluate(s.bezier(X, s.solve(X)), embedding) for s in (direct, iterative)]
+    assert 0 < np.abs(at[1] - at[0]).max() <= 1e-6 * size
+
 def test_box_mesh_fills_its_box_with_positive_tetrahedra():
     U, T = mbi.box_mesh(3, 2, 4, (3.0, 1.0, 2.0))
     assert U.shape == (4 * 3 * 5, 3) and T.shape == (6 * 3 * 2 * 4, 4) and T.dtype == np.int32
