@@ -45,19 +45,14 @@ BarMesh bench_mesh(int which) {
   }
 }
 
-void BM_SimStep(benchmark::State& state) {
-  const BarMesh M = bench_mesh(static_cast<int>(state.range(0)));
-  mbi::sim::Parameters p;
-  p.dt = 1.0 / 60.0;
-  p.newton_iterations = 1;
-  p.solver = state.range(1) == 1 ? mbi::sim::LinearSolver::LDLT : mbi::sim::LinearSolver::PCG;
-  p.pcg_tolerance = std::pow(10.0, -static_cast<double>(state.range(2)));
-  mbi::sim::Simulator sim(M.U, M.T, mbi::sim::Material{1e5, 0.45, 1000.0}, p);
+// Fixes the bar's x = 0 end, takes `warm` steps (the bar starts to sag), then times one step
+// per benchmark iteration and sets the per-step counters.
+void time_steps(benchmark::State& state, mbi::sim::Simulator& sim, const BarMesh& M, int warm) {
   std::vector<int> fixed;
   for (Eigen::Index i = 0; i < M.U.rows(); ++i)
     if (M.U(i, 0) == 0.0) fixed.push_back(static_cast<int>(i));
   sim.fix(fixed);
-  for (int s = 0; s < 5; ++s) sim.step();  // warm start, bar starts to sag
+  for (int s = 0; s < warm; ++s) sim.step();
   double newton = 0, iters = 0, assemble = 0, solve = 0;
   long steps = 0;
   for (auto _ : state) {
@@ -78,6 +73,17 @@ void BM_SimStep(benchmark::State& state) {
   state.counters["pcg_iters_per_step"] = iters * k;
   state.counters["assemble_ms"] = assemble * k;
   state.counters["solve_ms"] = solve * k;
+}
+
+void BM_SimStep(benchmark::State& state) {
+  const BarMesh M = bench_mesh(static_cast<int>(state.range(0)));
+  mbi::sim::Parameters p;
+  p.dt = 1.0 / 60.0;
+  p.newton_iterations = 1;
+  p.solver = state.range(1) == 1 ? mbi::sim::LinearSolver::LDLT : mbi::sim::LinearSolver::PCG;
+  p.pcg_tolerance = std::pow(10.0, -static_cast<double>(state.range(2)));
+  mbi::sim::Simulator sim(M.U, M.T, mbi::sim::Material{1e5, 0.45, 1000.0}, p);
+  time_steps(state, sim, M, 5);
 }
 
 // Quick mode (CI): the two smaller meshes only.
@@ -107,29 +113,7 @@ void BM_SimStepSize(benchmark::State& state) {
   const auto t0 = std::chrono::steady_clock::now();
   mbi::sim::Simulator sim(M.U, M.T, mbi::sim::Material{1e5, 0.45, 1000.0}, p);
   const double setup_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::vector<int> fixed;
-  for (Eigen::Index i = 0; i < M.U.rows(); ++i)
-    if (M.U(i, 0) == 0.0) fixed.push_back(static_cast<int>(i));
-  sim.fix(fixed);
-  for (int s = 0; s < 3; ++s) sim.step();  // warm start, bar starts to sag
-  double iters = 0, assemble = 0, solve = 0;
-  long steps = 0;
-  for (auto _ : state) {
-    const mbi::sim::StepResult r = sim.step();
-    if (!r.success) {
-      state.SkipWithError(r.message.c_str());
-      break;
-    }
-    iters += r.solver_iterations;
-    assemble += r.assemble_ms;
-    solve += r.solve_ms;
-    ++steps;
-  }
-  const double k = steps > 0 ? 1.0 / static_cast<double>(steps) : 0.0;
-  state.counters["tets"] = static_cast<double>(M.T.rows());
-  state.counters["pcg_iters_per_step"] = iters * k;
-  state.counters["assemble_ms"] = assemble * k;
-  state.counters["solve_ms"] = solve * k;
+  time_steps(state, sim, M, 3);
   state.counters["setup_s"] = setup_s;
 }
 
