@@ -581,12 +581,7 @@ struct ModifiedBI::Impl {
       keep_warm(std::move(w));
       throw;
     }
-    for (int i = 0; i < n; ++i)
-      for (int r = 0; r < d; ++r) {
-        const int a = reduced[static_cast<size_t>(i) * d + r];
-        if (a >= 0)
-          for (int c = 0; c < d; ++c) M(row0 + i * d + c, r) = w.sol(a, c);
-      }
+    scatter([&](int a, int c) { return w.sol(a, c); }, M, row0);
     keep_warm(std::move(w));
   }
 
@@ -624,14 +619,19 @@ struct ModifiedBI::Impl {
     F.solve(sol.data(), static_cast<int>(W));
   }
 
-  // Rows [row0, row0 + n d) of M from a reduced solution (row a: the d components from sol + a W).
-  void scatter(const double* sol, Eigen::Index W, MatrixOut& M, Eigen::Index row0) const {
+  // Rows [row0, row0 + n d) of M from a reduced solution: sol(a, c) is unknown a's component c.
+  template <class Sol>
+  void scatter(const Sol& sol, MatrixOut& M, Eigen::Index row0) const {
     for (int i = 0; i < n; ++i)
       for (int r = 0; r < d; ++r) {
         const int a = reduced[static_cast<size_t>(i) * d + r];
         if (a < 0) continue;
-        for (int c = 0; c < d; ++c) M(row0 + i * d + c, r) = sol[a * W + c];
+        for (int c = 0; c < d; ++c) M(row0 + i * d + c, r) = sol(a, c);
       }
+  }
+  // a row-major reduced solution whose rows are W doubles apart
+  static auto rows_of(const double* sol, Eigen::Index W) {
+    return [sol, W](int a, int c) { return sol[a * W + c]; };
   }
 
   // M ((frames n d) x d) of `frames` poses X ((frames n) x d), checked by the caller. The map is
@@ -650,7 +650,8 @@ struct ModifiedBI::Impl {
       for (Eigen::Index f0 = 0; f0 < frames; f0 += group) {
         const int g = static_cast<int>(std::min<Eigen::Index>(group, frames - f0));
         sparse_solve(X.middleRows(f0 * n, g * n), g, sol);
-        for (int f = 0; f < g; ++f) scatter(sol.data() + f * d, static_cast<Eigen::Index>(g) * d, M, (f0 + f) * n * d);
+        for (int f = 0; f < g; ++f)
+          scatter(rows_of(sol.data() + f * d, static_cast<Eigen::Index>(g) * d), M, (f0 + f) * n * d);
       }
       return;
     }
@@ -678,7 +679,7 @@ struct ModifiedBI::Impl {
                      std::min<long long>(r + tile, b));
         }
     });
-    for (Eigen::Index f = 0; f < frames; ++f) scatter(s0 + f * sn, 3, M, f * n * d);
+    for (Eigen::Index f = 0; f < frames; ++f) scatter(rows_of(s0 + f * sn, 3), M, f * n * d);
   }
 
   // The blocks on the reduced unknowns: R H R^T and R H_mx with R (n_red x d n) selecting them.
