@@ -23,6 +23,15 @@ namespace fs = std::filesystem;
 namespace mbi::cli {
 namespace {
 
+// The interpolation's options from the command's: one place for the estimate and the precompute.
+interp::Options interp_options(const DeformArgs& a) {
+  interp::Options o;
+  o.alpha = a.alpha;
+  o.pin_boundary = a.pin_boundary;
+  o.max_memory = a.max_memory;
+  return o;
+}
+
 // SIGINT and SIGTERM while the frames run: the loop stops after the frame in progress (the one
 // signal policy of every command, signals.hpp); a second signal ends the process at once.
 class StopOnSignal {
@@ -123,9 +132,7 @@ pipeline::Deformer make_deformer(const DeformArgs& a, const Model& m, bool norma
     throw std::runtime_error(m.control_name + ": the control mesh has no interior face (one element); "
                              "modified-BI minimises the discontinuity across interior faces and needs at "
                              "least two face-adjacent elements (--method bi or phong take it)");
-  pipeline::DeformerOptions opt{.method = a.method, .interp = {}};
-  opt.interp.alpha = a.alpha;
-  opt.interp.pin_boundary = a.pin_boundary;
+  const pipeline::DeformerOptions opt{.method = a.method, .interp = interp_options(a)};
   const auto t0 = Clock::now();
   try {
     pipeline::Deformer deformer(m.U, m.T, std::move(emb), opt, normals ? m.dense.normals() : Eigen::MatrixXd());
@@ -231,11 +238,9 @@ int deform_frames(const DeformArgs& a, Frames& frames, const std::vector<Out>& o
   });
   // the estimate against the memory there is, before the embedding and the precompute allocate
   // (docs/limits.md)
-  interp::Options io;
-  io.pin_boundary = a.pin_boundary;
   const auto t_estimate = Clock::now();
   const interp::MemoryEstimate estimate = in_stage("estimating the memory", [&] {
-    return scenes::check_run_size(m.control_name, m.P.rows(), m.U, m.T, a.max_memory, io);
+    return scenes::check_run_size(m.control_name, m.P.rows(), m.U, m.T, interp_options(a));
   });
   const double estimate_ms = ms_since(t_estimate);
   if (frames.count() == 0) throw std::runtime_error(a.deformed + ": no frames");

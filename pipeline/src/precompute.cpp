@@ -14,6 +14,7 @@ Precompute::Precompute(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::
   interp::validate_mesh(U_, T_);
   interp::resolve_alpha(options_, dim());
   interp::check_beta(options_);
+  interp::check_max_memory(options_);
   if (needs_solve(method)) solver();
   if (needs_phong(method)) phong();
 }

@@ -121,3 +121,17 @@ TEST_CASE("iterative: a solve that does not converge within its cap is an error,
   CHECK(iter.solve(X).allFinite());
   CHECK(kSolvePathNames.parse("iterative", "solve_path") == SolvePath::Iterative);
 }
+
+TEST_CASE("iterative: the automatic path takes it when the factor would exceed max_memory",
+          "[modified_bi][iterative][memory]") {
+  const Mesh M = IterFixture::mesh(3, 11, 75);  // 1,728 vertices: above the dense operator's size
+  Options o;
+  o.max_memory = 1024.0 * 1024;  // below any run's estimate (the process alone counts 56 MiB)
+  CHECK(ModifiedBI(M.U, M.T, o).solve_path() == SolvePath::Iterative);
+  o.max_memory = 0;  // the memory there is: this mesh factors directly
+  CHECK(ModifiedBI(M.U, M.T, o).solve_path() != SolvePath::Iterative);
+  for (const double bad : {-1.0, std::nan(""), HUGE_VAL}) {
+    o.max_memory = bad;
+    CHECK_THROWS_WITH(ModifiedBI(M.U, M.T, o), Catch::Contains("max_memory"));
+  }
+}

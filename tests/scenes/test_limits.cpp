@@ -26,6 +26,13 @@ fs::path write_scene(const std::string& name, const std::string& text) {
   std::ofstream(p) << text;
   return p;
 }
+
+// Options that let the run take `bytes`.
+mbi::interp::Options limited(double bytes) {
+  mbi::interp::Options o;
+  o.max_memory = bytes;
+  return o;
+}
 }  // namespace
 
 TEST_CASE("scenes whose control mesh cannot fit are refused at load within a second, and no cap on the counts", "[limits]") {
@@ -72,57 +79,19 @@ TEST_CASE("scene values outside their physical range name the key", "[limits]") 
 TEST_CASE("run size: the memory estimate against the limit, no cap on the counts", "[limits]") {
   // 21 x 21 x 20 cells: 22 * 22 * 21 = 10164 vertices, 52920 tetrahedra
   const mbi::test::Mesh box = mbi::test::box_tet_mesh(21, 21, 20);
-  const mbi::interp::MemoryEstimate e = check_run_size("s", 250000, box.U, box.T, 64.0 * 1024 * 1024 * 1024);
+  const mbi::interp::MemoryEstimate e = check_run_size("s", 250000, box.U, box.T, limited(64.0 * 1024 * 1024 * 1024));
   CHECK(e.peak_bytes > e.factor_bytes);
-  CHECK_THROWS_WITH(check_run_size("s", 250000, box.U, box.T, 1024.0 * 1024),
+  CHECK_THROWS_WITH(check_run_size("s", 250000, box.U, box.T, limited(1024.0 * 1024)),
                     Catch::StartsWith("s: the modified-BI precompute would need about") &&
                         Catch::Contains("of --max-memory") && Catch::Contains("30492 unknowns"));
   // the simulator's blocks count when the scene simulates
   const double limit = e.peak_bytes * 1.001;
-  CHECK_NOTHROW(check_run_size("s", 250000, box.U, box.T, limit));
-  CHECK_THROWS(check_run_size("s", 250000, box.U, box.T, limit, {}, true));
-  std::string name;
-  CHECK(memory_limit(5e9, name) == 5e9);
-  CHECK(name == "--max-memory");
-  CHECK(memory_limit(0, name) > 0);
-  CHECK(name != "--max-memory");
+  CHECK_NOTHROW(check_run_size("s", 250000, box.U, box.T, limited(limit)));
+  CHECK_THROWS(check_run_size("s", 250000, box.U, box.T, limited(limit), true));
   // the floor grows with every size and counts in 64 bits
   CHECK(minimum_run_bytes(2000000, 450, 2000, 3) > minimum_run_bytes(1000000, 450, 2000, 3));
   CHECK(minimum_run_bytes(1000, 20000, 120000, 3) > minimum_run_bytes(1000, 10000, 60000, 3));
   CHECK(minimum_run_bytes(3000000000LL, 10, 10, 3) > 3e9 * 8);
   CHECK(over_memory_floor(1000, 1000, 5000, 3).empty());
   CHECK_THAT(over_memory_floor(1000000000000LL, 450, 2000, 3), Catch::Contains("needs at least"));
-}
-
-// A container's memory limit (cgroup) counts like a smaller machine.
-TEST_CASE("run size: the control group's memory limit, cgroup v1 and v2", "[limits]") {
-  mbi::test::TempDir dir("cgroup");
-  const std::filesystem::path root = dir.path();
-  auto put = [&](const std::filesystem::path& rel, const std::string& text) {
-    std::filesystem::create_directories((root / rel).parent_path());
-    std::ofstream(root / rel) << text;
-  };
-  // nothing mounted: no limit
-  CHECK(cgroup_memory_limit("0::/user.slice\n", root) == 0.0);
-  // v2: the smallest memory.max on the path up to the mount; "max" is no limit
-  put("a/b/memory.max", "max\n");
-  put("a/memory.max", "2147483648\n");
-  put("memory.max", "8589934592\n");
-  CHECK(cgroup_memory_limit("0::/a/b\n", root) == 2147483648.0);
-  CHECK(cgroup_memory_limit("0::/\n", root) == 8589934592.0);
-  // v1 (memory controller among others); about 2^63 means unlimited
-  put("memory/docker/x/memory.limit_in_bytes", "9223372036854771712\n");
-  put("memory/memory.limit_in_bytes", "1073741824\n");
-  CHECK(cgroup_memory_limit("12:cpu,cpuacct:/docker/x\n4:memory:/docker/x\n", root) == 1073741824.0);
-  // hybrid: v2 under unified/ beside v1; the smaller wins
-  put("unified/s/memory.max", "536870912\n");
-  CHECK(cgroup_memory_limit("4:memory:/docker/x\n0::/s\n", root) == 536870912.0);
-  // malformed lines and files are no limit, not an error
-  put("memory/bad/memory.limit_in_bytes", "lots\n");
-  CHECK(cgroup_memory_limit("garbage\n4:memory\n4:memory:relative\n4:memory:/../etc\n", root) == 0.0);
-  CHECK(cgroup_memory_limit("4:memory:/bad\n", root) == 1073741824.0);  // the parent's limit
-  // this process: positive, and never more than the machine
-  const double usable = usable_memory_bytes();
-  CHECK(usable > 0);
-  CHECK(usable <= physical_memory_bytes());
 }

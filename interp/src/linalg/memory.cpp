@@ -240,20 +240,6 @@ MemoryEstimate estimate_memory(const Eigen::Ref<const Eigen::MatrixXd>& U,
   return e;
 }
 
-double available_memory_bytes() {
-#ifdef __EMSCRIPTEN__  // the page has no /proc: its heap's limit is the caller's to check
-  return 0.0;
-#endif
-  std::ifstream in("/proc/meminfo");
-  std::string key, unit;
-  double value = 0;
-  while (in >> key >> value) {
-    std::getline(in, unit);
-    if (key == "MemAvailable:") return value * 1024.0;  // the file's unit: kB
-  }
-  return 0.0;
-}
-
 double parse_memory_size(const std::string& text) {
   const auto bad = [&] {
     return Error("memory size '" + text + "': expected a number > 0 with an optional unit K, M, G or T "

@@ -28,12 +28,14 @@ namespace {
 constexpr long long kDenseOperatorMaxEntries = 1LL << 21;
 
 // SolvePath::Automatic takes the iterative path when the precompute's estimated peak (memory.hpp)
-// exceeds the memory available. The estimate (a symbolic analysis) runs only where a rough upper
-// bound, 100 MB (n / 1000)^1.5 (above the measured peaks from 1,000 to 20,000 vertices), exceeds
-// half of it, so smaller meshes pay nothing for the check.
+// exceeds the memory the run may take (options.max_memory, or what memory_limit finds). The
+// estimate (a symbolic analysis) runs only where a rough upper bound, 100 MB (n / 1000)^1.5
+// (above the measured peaks from 1,000 to 20,000 vertices), exceeds half of it, so smaller
+// meshes pay nothing for the check.
 bool factor_would_not_fit(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
                           const Options& options) {
-  const double available = available_memory_bytes();
+  std::string name;
+  const double available = memory_limit(options.max_memory, name);
   if (!(available > 0)) return false;
   if (100e6 * std::pow(static_cast<double>(U.rows()) / 1000.0, 1.5) <= 0.5 * available) return false;
   return estimate_memory(U, T, 0, options).peak_bytes > available;
@@ -747,6 +749,7 @@ ModifiedBI::ModifiedBI(const Eigen::Ref<const Eigen::MatrixXd>& U,
   const int d = I.d, n = I.n;
   I.alpha = resolve_alpha(options, d);
   check_beta(options);
+  check_max_memory(options);
 
   const detail::Hessians H = detail::assemble(I.U, I.T);
   if (H.disc_mm.nonZeros() == 0)

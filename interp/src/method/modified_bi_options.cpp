@@ -27,4 +27,10 @@ void check_beta(const Options& options) {
     throw Error("beta must be > 0 (0 selects the automatic rule), got " + std::to_string(options.beta));
 }
 
+void check_max_memory(const Options& options) {
+  if (!(options.max_memory >= 0) || !std::isfinite(options.max_memory))
+    throw Error("max_memory must be a finite number of bytes >= 0 (0: the memory available), got " +
+                std::to_string(options.max_memory));
+}
+
 }  // namespace mbi::interp

@@ -187,7 +187,7 @@ SceneModels with_control(const Scene& sc, SceneModels m, bool more, bool force_3
     throw Error(where + ": the control mesh is " + std::to_string(m.U.cols()) +
                      "D but the dense model is " + std::to_string(m.dense.V.cols()) + "D");
   // before the embedding, the assembly and the factorisation allocate anything
-  check_run_size(where, m.dense.V.rows(), m.U, m.T, 0, {}, true);
+  check_run_size(where, m.dense.V.rows(), m.U, m.T, {}, true);
   return m;
 }
 

@@ -8,6 +8,7 @@
 //   const interp::MemoryEstimate e = interp::estimate_memory(U, T, P.rows());
 //   interp::check_memory(e, interp::parse_memory_size("8G"), "--max-memory", "cage.node");
 #include <mbi/interp/modified_bi.hpp>
+#include <mbi/interp/system_memory.hpp>
 
 #include <Eigen/Dense>
 #include <string>
@@ -42,9 +43,6 @@ struct MemoryEstimate {
 MemoryEstimate estimate_memory(const Eigen::Ref<const Eigen::MatrixXd>& U,
                                const Eigen::Ref<const Eigen::MatrixXi>& T, long long dense_points,
                                const Options& options = {});
-
-/// Bytes this process may still take: /proc/meminfo's MemAvailable, or 0 when it cannot be read.
-double available_memory_bytes();
 
 /// "8G", "512M", "1.5GiB", "300MB", "2e9" -> bytes (K, M, G, T: powers of 1024, with or without
 /// "B" or "iB"; a plain number is bytes). Throws Error naming `text` unless it is such a number

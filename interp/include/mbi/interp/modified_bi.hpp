@@ -49,6 +49,10 @@ struct Options {
   Factorization factorization = Factorization::Automatic;  ///< Cholmod without CHOLMOD: Error
   /// Iterative path: most PCG iterations a solve may take before it throws Error (0: 20000).
   int max_iterations = 0;
+  /// Bytes the run may take (0: memory_limit's default, MemAvailable or the control group's
+  /// limit): SolvePath::Automatic takes the iterative path when the factor's estimated peak
+  /// exceeds it. check_max_memory() bounds it.
+  double max_memory = 0;
 };
 
 /// Default alpha for dimension d (0.1 in 3D, 0.2 in 2D).
@@ -60,6 +64,8 @@ double check_alpha(double alpha);
 double resolve_alpha(const Options& options, int d);
 /// beta's check: throws Error unless options.beta is finite and >= 0 (0 = automatic).
 void check_beta(const Options& options);
+/// max_memory's check: throws Error unless options.max_memory is finite and >= 0.
+void check_max_memory(const Options& options);
 
 /// Per-vertex matrices M: (n d) x d; rows [i d, i d + d) hold M_i (d x d). Row c of M_i is m_i
 /// of output component c.
