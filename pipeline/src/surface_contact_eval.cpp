@@ -17,37 +17,24 @@ namespace mbi::pipeline {
 namespace {
 
 constexpr long long kBlock = 512;  // points per block of a parallel pass
+constexpr int kBezier = 10;        // Bezier points per element (3D)
 
-using RowsK = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+using Rows = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+using Strides = Eigen::Stride<Eigen::Dynamic, Eigen::Dynamic>;
 
-/// The quadratic Bezier simplex's Bernstein weights at barycentric b, in the order of an
-/// element's Bezier points (method.md fact 5: the 4 vertices, then the edges 01 02 03 12 13 23).
-std::array<double, 10> bernstein(const interp::Embedding& emb, Eigen::Index p) {
-  const double b0 = emb.bary(p, 0), b1 = emb.bary(p, 1), b2 = emb.bary(p, 2), b3 = emb.bary(p, 3);
-  return {b0 * b0, b1 * b1, b2 * b2, b3 * b3, 2 * b0 * b1, 2 * b0 * b2, 2 * b0 * b3, 2 * b1 * b2, 2 * b1 * b3, 2 * b2 * b3};
+/// Row-major rows as interp's points (p x 3 in any strides), to write or to read.
+Eigen::Map<Eigen::MatrixXd, 0, Strides> as_points(Rows& R) {
+  return Eigen::Map<Eigen::MatrixXd, 0, Strides>(R.data(), R.rows(), 3, Strides(1, 3));
 }
-
-/// sum_k w_k B_k over an element's 10 Bezier points (rows of Br from `first`).
-Eigen::Vector3d combine(const RowsK& Br, Eigen::Index first, const std::array<double, 10>& w) {
-  Eigen::Vector3d x = Eigen::Vector3d::Zero();
-  for (int k = 0; k < 10; ++k) x += w[static_cast<size_t>(k)] * Br.row(first + k).transpose();
-  return x;
+Eigen::Map<const Eigen::MatrixXd, 0, Strides> as_points(const Rows& R) {
+  return Eigen::Map<const Eigen::MatrixXd, 0, Strides>(R.data(), R.rows(), 3, Strides(1, 3));
 }
-
-constexpr int kBezier = 10;  // Bezier points per element (3D)
 
 }  // namespace
 
 void SurfaceContact::evaluate(const interp::BezierPoints& B, const std::vector<Eigen::Index>& points, Rows3& out) const {
-  const interp::Embedding& emb = deformer_->embedding();
-  const RowsK Br = B;
   out.resize(static_cast<Eigen::Index>(points.size()), 3);
-  interp::parallel_for(static_cast<long long>(points.size()), kBlock, [&](long long b, long long e) {
-    for (long long i = b; i < e; ++i) {
-      const Eigen::Index p = points[static_cast<size_t>(i)];
-      out.row(i) = combine(Br, emb.element(p) * kBezier, bernstein(emb, p)).transpose();
-    }
-  }, deformer_->options().threads);
+  interp::evaluate(B, deformer_->embedding(), points, as_points(out), deformer_->options().threads);
 }
 
 const SurfaceContact::Sample& SurfaceContact::sample(const Eigen::Ref<const Eigen::VectorXd>& x) const {
@@ -70,7 +57,7 @@ const SurfaceContact::Sample& SurfaceContact::sample(const Eigen::Ref<const Eige
   check_size(dx);
   if (along_.valid && along_.x == x && along_.dx == dx) return along_;
   along_.valid = false;
-  const bool kept = at_.valid && at_.x == x;  // its positions at x are reused (a point's evaluation is its own)
+  const bool kept = at_.valid && at_.x == x;
   along_.B = kept ? at_.B : deformer_->bezier(nodes(x));
   const interp::BezierPoints BD = deformer_->bezier(nodes(dx));
   // A point moves by at most its element's largest Bezier move; the cap needs 0.9 of its room
@@ -80,28 +67,18 @@ const SurfaceContact::Sample& SurfaceContact::sample(const Eigen::Ref<const Eige
   Eigen::VectorXd reach(m);
   for (int e = 0; e < m; ++e) reach(e) = BD.middleRows(e * K, K).rowwise().norm().maxCoeff() / 0.9;
   gather(along_.B, reach, along_);
-  if (kept)
-    for (size_t j = 0; j < at_.points.size(); ++j) row_of_[static_cast<size_t>(at_.points[j])] = static_cast<int>(j);
-  const interp::Embedding& emb = deformer_->embedding();
-  const RowsK Br = along_.B, BDr = BD;
+  evaluate(along_.B, along_.points, along_.P);  // a point's evaluation is its own: at x as in at_, to the bit
+  evaluate(BD, along_.points, along_.D);
   const size_t C = colliders_.size();
   const bool capped = started_ && !std::isinf(max_depth_);
   const long long rows = static_cast<long long>(along_.points.size());
-  along_.P.resize(rows, 3);
-  along_.D.resize(rows, 3);
   std::vector<double> caps(static_cast<size_t>(rows), 1.0);
   std::vector<char> near(static_cast<size_t>(rows), 0);
-  // one pass: positions, move, the cap's advance and whether the point can touch along the line
+  // one pass: the cap's advance and whether the point can touch along the line
   interp::parallel_for(rows, kBlock, [&](long long b, long long e) {
     for (long long i = b; i < e; ++i) {
       const Eigen::Index p = along_.points[static_cast<size_t>(i)];
-      const std::array<double, 10> w = bernstein(emb, p);
-      const Eigen::Index first = emb.element(p) * kBezier;
-      const int j = kept ? row_of_[static_cast<size_t>(p)] : -1;
-      const Eigen::Vector3d q = j >= 0 ? Eigen::Vector3d(at_.P.row(j).transpose()) : combine(Br, first, w);
-      const Eigen::Vector3d dq = combine(BDr, first, w);
-      along_.P.row(i) = q.transpose();
-      along_.D.row(i) = dq.transpose();
+      const Eigen::Vector3d q = along_.P.row(i).transpose(), dq = along_.D.row(i).transpose();
       // d(q + s dq) >= d(q) - L |dq| for s in [0, 1]; the margin covers W (x + s dx) != q + s W dx
       const double line_reach = dq.norm() + 1e-6 * (diagonal_ + q.norm() + dq.norm());
       bool close = slip_first_[static_cast<size_t>(p)] >= 0;  // friction energy is never 0
@@ -115,8 +92,6 @@ const SurfaceContact::Sample& SurfaceContact::sample(const Eigen::Ref<const Eige
       near[static_cast<size_t>(i)] = close;
     }
   }, deformer_->options().threads);
-  if (kept)
-    for (Eigen::Index p : at_.points) row_of_[static_cast<size_t>(p)] = -1;
   along_.cap = 1.0;
   along_.near.clear();
   for (size_t i = 0; i < caps.size(); ++i) {
@@ -186,7 +161,14 @@ const std::vector<SurfaceContact::Term>& SurfaceContact::terms(const Eigen::Ref<
     }
   }, deformer_->options().threads);
   terms_valid_ = true;
-  for (char a : active_) counts_.active += a;
+  active_rows_.clear();
+  active_points_.clear();
+  for (size_t i = 0; i < active_.size(); ++i)
+    if (active_[i]) {
+      active_rows_.push_back(i);
+      active_points_.push_back(S.points[i]);
+    }
+  counts_.active += static_cast<long long>(active_rows_.size());
   return terms_;
 }
 
@@ -200,36 +182,18 @@ double SurfaceContact::energy(const Eigen::Ref<const Eigen::VectorXd>& x) const 
 void SurfaceContact::add_gradient(const Eigen::Ref<const Eigen::VectorXd>& x,
                                   Eigen::Ref<Eigen::VectorXd> gradient) const {
   const std::vector<Term>& T = terms(x);
-  if (std::find(active_.begin(), active_.end(), 1) == active_.end()) return;  // no term: no solve
-  Rows3 G(static_cast<Eigen::Index>(T.size()), 3);
-  for (size_t i = 0; i < T.size(); ++i) G.row(static_cast<Eigen::Index>(i)) = T[i].gradient.transpose();
+  if (active_rows_.empty()) return;  // no term: no solve
+  Rows3 G(static_cast<Eigen::Index>(active_rows_.size()), 3);
+  for (size_t j = 0; j < active_rows_.size(); ++j) G.row(static_cast<Eigen::Index>(j)) = T[active_rows_[j]].gradient.transpose();
   // W^T restricted to the points with a term (the others have zero rows): exact, fact 11
-  add_transpose(at_, G, active_, gradient);
+  add_transpose(G, gradient);
 }
 
-void SurfaceContact::add_transpose(const Sample& S, const Rows3& G, const std::vector<char>& use,
-                                   Eigen::Ref<Eigen::VectorXd> out) const {
-  const interp::Embedding& emb = deformer_->embedding();
+void SurfaceContact::add_transpose(const Rows3& G, Eigen::Ref<Eigen::VectorXd> out) const {
   const Eigen::MatrixXd& U = deformer_->rest_positions();
   const int m = deformer_->elements();
-  // dL/dB per run of one element's points (on the threads), then added per element in run order
-  const long long runs = static_cast<long long>(S.runs.size()) - 1;
-  std::vector<Eigen::Matrix<double, kBezier, 3>> part(static_cast<size_t>(std::max(runs, 0LL)));
-  interp::parallel_for(runs, 16, [&](long long b, long long e) {
-    for (long long r = b; r < e; ++r) {
-      Eigen::Matrix<double, kBezier, 3>& P = part[static_cast<size_t>(r)];
-      P.setZero();
-      for (int i = S.runs[static_cast<size_t>(r)]; i < S.runs[static_cast<size_t>(r) + 1]; ++i) {
-        if (!use[static_cast<size_t>(i)]) continue;
-        const std::array<double, 10> w = bernstein(emb, S.points[static_cast<size_t>(i)]);
-        for (int k = 0; k < kBezier; ++k) P.row(k) += w[static_cast<size_t>(k)] * G.row(i);
-      }
-    }
-  }, deformer_->options().threads);
-  interp::BezierPoints GB = interp::BezierPoints::Zero(static_cast<Eigen::Index>(m) * kBezier, 3);
-  for (long long r = 0; r < runs; ++r)
-    GB.middleRows(emb.element(S.points[static_cast<size_t>(S.runs[static_cast<size_t>(r)])]) * kBezier, kBezier) +=
-        part[static_cast<size_t>(r)];
+  interp::BezierPoints GB(static_cast<Eigen::Index>(m) * kBezier, 3);
+  interp::evaluate_transpose(deformer_->embedding(), active_points_, as_points(G), m, GB, deformer_->options().threads);
   Eigen::MatrixXd GX(U.rows(), 3), GMX(U.rows(), 3);
   interp::VertexMatrices GM(3 * U.rows(), 3);
   interp::bezier_transpose(U, deformer_->elements_matrix(), GB, GX, GM);
@@ -245,18 +209,13 @@ bool SurfaceContact::add_hessian_product(const Eigen::Ref<const Eigen::VectorXd>
   if (deformer_->method() == Method::BI) return false;  // the blocks are W^T K W already
   check_size(v);
   const std::vector<Term>& T = terms(x);
-  if (std::find(active_.begin(), active_.end(), 1) == active_.end()) return true;
-  const interp::Embedding& emb = deformer_->embedding();
-  const RowsK BV = deformer_->bezier(nodes(v));
-  Rows3 G(static_cast<Eigen::Index>(T.size()), 3);  // K_p (W v)_p at the points with a term (p is linear in x)
-  interp::parallel_for(static_cast<long long>(T.size()), kBlock, [&](long long b, long long e) {
-    for (long long i = b; i < e; ++i) {
-      if (!active_[static_cast<size_t>(i)]) continue;
-      const Eigen::Index p = at_.points[static_cast<size_t>(i)];
-      G.row(i) = (T[static_cast<size_t>(i)].hessian * combine(BV, emb.element(p) * kBezier, bernstein(emb, p))).transpose();
-    }
+  if (active_rows_.empty()) return true;
+  Rows3 G;  // K_p (W v)_p at the points with a term (p is linear in x)
+  evaluate(deformer_->bezier(nodes(v)), active_points_, G);
+  interp::parallel_for(G.rows(), kBlock, [&](long long b, long long e) {
+    for (long long j = b; j < e; ++j) G.row(j) = (T[active_rows_[static_cast<size_t>(j)]].hessian * G.row(j).transpose()).transpose();
   }, deformer_->options().threads);
-  add_transpose(at_, G, active_, out);
+  add_transpose(G, out);
   return true;
 }
 

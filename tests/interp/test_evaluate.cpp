@@ -3,6 +3,10 @@
 
 #include "test_support.hpp"
 
+#include <algorithm>
+#include <limits>
+#include <vector>
+
 using namespace mbi::interp;
 using namespace mbi::test;
 
@@ -136,4 +140,73 @@ TEST_CASE("evaluate and FastEvaluator read the Bezier points in any layout: row-
       CHECK((fn - fn0).cwiseAbs().maxCoeff() == 0.0f);
     }
   }
+}
+
+TEST_CASE("a subset of the points evaluates to the full evaluation's rows, to the bit; its transpose is the full one's "
+          "with the other rows of dL/dpositions zero, the same on every thread count",
+          "[evaluate][adjoint]") {
+  for (int d : {2, 3}) {
+    const Setup s = make(d, 20000);
+    Eigen::MatrixXd full;
+    evaluate<double>(s.B, s.emb, full, 1);
+    const int m = static_cast<int>(s.M.T.rows());
+    // 7,000 picks with repeats in random order, and the same grouped by element (runs of one element)
+    std::mt19937 rng(7);
+    std::uniform_int_distribution<Eigen::Index> pick(0, s.emb.size() - 1);
+    std::vector<Eigen::Index> shuffled(7000);
+    for (Eigen::Index& p : shuffled) p = pick(rng);
+    std::vector<Eigen::Index> grouped = shuffled;
+    std::stable_sort(grouped.begin(), grouped.end(),
+                     [&](Eigen::Index a, Eigen::Index b) { return s.emb.element(a) < s.emb.element(b); });
+    for (const std::vector<Eigen::Index>* points : {&shuffled, &grouped}) {
+      const Eigen::Index n = static_cast<Eigen::Index>(points->size());
+      const Eigen::MatrixXd G = random_matrix(n, d, 3);
+      Eigen::MatrixXd Gfull = Eigen::MatrixXd::Zero(s.emb.size(), d);
+      for (Eigen::Index i = 0; i < n; ++i) Gfull.row((*points)[static_cast<size_t>(i)]) += G.row(i);
+      const BezierPoints want = evaluate_transpose(s.emb, Gfull, m, 1);
+      BezierPoints first;
+      for (int threads : {1, 2, 3, 8}) {
+        Eigen::MatrixXd sub(n, d);
+        evaluate(s.B, s.emb, *points, sub, threads);
+        Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> rows(n, d);  // another layout
+        evaluate(s.B, s.emb, *points, Eigen::Map<Eigen::MatrixXd, 0, Eigen::Stride<Eigen::Dynamic, Eigen::Dynamic>>(
+                                          rows.data(), n, d, Eigen::Stride<Eigen::Dynamic, Eigen::Dynamic>(1, d)),
+                 threads);
+        double worst = 0.0;
+        for (Eigen::Index i = 0; i < n; ++i)
+          worst = std::max(worst, (sub.row(i) - full.row((*points)[static_cast<size_t>(i)])).cwiseAbs().maxCoeff());
+        CHECK(worst == 0.0);
+        CHECK((rows - sub).cwiseAbs().maxCoeff() == 0.0);
+        BezierPoints GB(want.rows(), d);
+        GB.setConstant(7.0);  // overwritten
+        evaluate_transpose(s.emb, *points, G, m, GB, threads);
+        CHECK((GB - want).cwiseAbs().maxCoeff() <= 1e-12 * (1.0 + want.cwiseAbs().maxCoeff()));
+        if (threads == 1) first = GB;
+        CHECK((GB - first).cwiseAbs().maxCoeff() == 0.0);
+      }
+    }
+    // no points: nothing written, dL/dB zero
+    Eigen::MatrixXd none(0, d);
+    evaluate(s.B, s.emb, std::vector<Eigen::Index>{}, none);
+    BezierPoints zero = BezierPoints::Constant(s.B.rows(), d, 1.0);
+    evaluate_transpose(s.emb, std::vector<Eigen::Index>{}, Eigen::MatrixXd(0, d), m, zero);
+    CHECK(zero.cwiseAbs().maxCoeff() == 0.0);
+  }
+}
+
+TEST_CASE("the subset evaluation and its transpose reject bad indices and sizes", "[evaluate][adjoint]") {
+  const Setup s = make(3, 200);
+  const int m = static_cast<int>(s.M.T.rows());
+  Eigen::MatrixXd out(2, 3);
+  CHECK_THROWS_WITH(evaluate(s.B, s.emb, std::vector<Eigen::Index>{0, 200}, out), Catch::Contains("points[1] = 200"));
+  CHECK_THROWS_WITH(evaluate(s.B, s.emb, std::vector<Eigen::Index>{-1, 0}, out), Catch::Contains("points[0] = -1"));
+  Eigen::MatrixXd small(1, 3);
+  CHECK_THROWS_WITH(evaluate(s.B, s.emb, std::vector<Eigen::Index>{0, 1}, small), Catch::Contains("positions must be 2 x 3"));
+  BezierPoints GB(s.B.rows(), 3);
+  const Eigen::MatrixXd G = Eigen::MatrixXd::Ones(2, 3);
+  CHECK_THROWS_WITH(evaluate_transpose(s.emb, std::vector<Eigen::Index>{0}, G, m, GB), Catch::Contains("must be 1 x 3"));
+  CHECK_THROWS_WITH(evaluate_transpose(s.emb, std::vector<Eigen::Index>{5, 200}, G, m, GB), Catch::Contains("points[1] = 200"));
+  Eigen::MatrixXd bad = G;
+  bad(1, 2) = std::numeric_limits<double>::infinity();
+  CHECK_THROWS_WITH(evaluate_transpose(s.emb, std::vector<Eigen::Index>{5, 6}, bad, m, GB), Catch::Contains("row 1"));
 }

@@ -8,6 +8,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <string>
 #include <type_traits>
 
 namespace mbi::interp {
@@ -189,7 +190,45 @@ void run(const MatrixIn& B, const Embedding& emb, int d, const ConstPointsRef<Sc
   else kernel<2, Scalar>(points, is, os, emb, g, normals_rest, positions, normals_out, threads);
 }
 
+// The listed points' positions, row i from points[i]: the full kernel's arithmetic (bezier_eval).
+template <int D>
+void subset_kernel(const MatrixIn& B, const Embedding& emb, std::span<const Eigen::Index> points,
+                   PointsRef<double>& pos, int threads) {
+  constexpr int K = (D + 1) * (D + 2) / 2;
+  const std::ptrdiff_t is = B.innerStride(), os = B.outerStride();
+  const long long n = static_cast<long long>(points.size());
+  detail::parallel_blocks(n, 2048, detail::thread_count(n, 2048, threads), [&](long long begin, long long end) {
+    double b[D + 1], x[D];
+    for (long long i = begin; i < end; ++i) {
+      const Eigen::Index p = points[static_cast<size_t>(i)];
+      for (int k = 0; k <= D; ++k) b[k] = emb.bary(p, k);
+      bezier_eval<D, double>(B.data() + static_cast<std::ptrdiff_t>(emb.element(p)) * K * is, is, os, b, x, nullptr);
+      for (int c = 0; c < D; ++c) pos(i, c) = x[c];
+    }
+  });
+}
+
 }  // namespace
+
+void evaluate(const MatrixIn& B, const Embedding& emb, std::span<const Eigen::Index> points,
+              PointsRef<double> positions, int threads) {
+  const int d = check_inputs(B, emb, false);
+  const long long m = B.rows() / ((d + 1) * (d + 2) / 2);
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Index p = points[i];
+    if (p < 0 || p >= emb.size())
+      throw Error("points[" + std::to_string(i) + "] = " + std::to_string(p) + " is outside [0, " +
+                  std::to_string(emb.size()) + ")");
+    if (emb.element(p) < 0 || emb.element(p) >= m)
+      throw Error("point " + std::to_string(p) + " refers to element " + std::to_string(emb.element(p)) +
+                  " outside [0, " + std::to_string(m) + ")");
+  }
+  if (positions.rows() != static_cast<Eigen::Index>(points.size()) || positions.cols() != d)
+    throw Error("positions must be " + std::to_string(points.size()) + " x " + std::to_string(d) + ", got " +
+                std::to_string(positions.rows()) + " x " + std::to_string(positions.cols()));
+  if (d == 3) subset_kernel<3>(B, emb, points, positions, threads);
+  else subset_kernel<2>(B, emb, points, positions, threads);
+}
 
 template <typename Scalar>
 void evaluate(const MatrixIn& B, const Embedding& emb,

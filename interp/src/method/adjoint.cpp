@@ -13,26 +13,49 @@
 namespace mbi::interp {
 namespace {
 
+// Adds point p's Bernstein weights times g (D values) into its element's K x D block A (row-major).
+template <int D>
+void scatter_point(const Embedding& emb, Eigen::Index p, const double* g, double* A) {
+  constexpr int K = (D + 1) * (D + 2) / 2;
+  static constexpr std::array<std::pair<int, int>, 6> edges3{{{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}}};
+  static constexpr std::array<std::pair<int, int>, 3> edges2{{{0, 1}, {0, 2}, {1, 2}}};
+  double b[D + 1];
+  for (int k = 0; k <= D; ++k) b[k] = emb.bary(p, k);
+  for (int k = 0; k <= D; ++k) {
+    const double w = b[k] * b[k];
+    for (int c = 0; c < D; ++c) A[k * D + c] += w * g[c];
+  }
+  for (int s = 0; s < K - D - 1; ++s) {
+    const auto [i, j] = D == 3 ? edges3[s] : edges2[s];
+    const double w = 2 * b[i] * b[j];
+    for (int c = 0; c < D; ++c) A[(D + 1 + s) * D + c] += w * g[c];
+  }
+}
+
 // Adds each point's Bernstein weights times its row of G into its element's K x D block of acc
 // (row-major, element after element), for the points [begin, end).
 template <int D>
 void scatter(const Embedding& emb, const ConstPointsRef<double>& G, long long begin, long long end, double* acc) {
   constexpr int K = (D + 1) * (D + 2) / 2;
-  static constexpr std::array<std::pair<int, int>, 6> edges3{{{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}}};
-  static constexpr std::array<std::pair<int, int>, 3> edges2{{{0, 1}, {0, 2}, {1, 2}}};
   for (long long p = begin; p < end; ++p) {
-    double b[D + 1], g[D];
-    for (int k = 0; k <= D; ++k) b[k] = emb.bary(p, k);
+    double g[D];
     for (int c = 0; c < D; ++c) g[c] = G(p, c);
-    double* A = acc + static_cast<long long>(emb.element(p)) * K * D;
-    for (int k = 0; k <= D; ++k) {
-      const double w = b[k] * b[k];
-      for (int c = 0; c < D; ++c) A[k * D + c] += w * g[c];
-    }
-    for (int s = 0; s < K - D - 1; ++s) {
-      const auto [i, j] = D == 3 ? edges3[s] : edges2[s];
-      const double w = 2 * b[i] * b[j];
-      for (int c = 0; c < D; ++c) A[(D + 1 + s) * D + c] += w * g[c];
+    scatter_point<D>(emb, p, g, acc + static_cast<long long>(emb.element(p)) * K * D);
+  }
+}
+
+// Sums rows [runs[r], runs[r + 1]) of G (points[i]'s row i) into part r's K x D block, for r in [r0, r1).
+template <int D>
+void scatter_runs(const Embedding& emb, std::span<const Eigen::Index> points, const ConstPointsRef<double>& G,
+                  const std::vector<long long>& runs, long long r0, long long r1, double* part) {
+  constexpr int K = (D + 1) * (D + 2) / 2;
+  for (long long r = r0; r < r1; ++r) {
+    double* A = part + r * K * D;
+    std::fill(A, A + K * D, 0.0);
+    for (long long i = runs[static_cast<size_t>(r)]; i < runs[static_cast<size_t>(r) + 1]; ++i) {
+      double g[D];
+      for (int c = 0; c < D; ++c) g[c] = G(i, c);
+      scatter_point<D>(emb, points[static_cast<size_t>(i)], g, A);
     }
   }
 }
@@ -101,6 +124,57 @@ void evaluate_transpose(const Embedding& emb, const ConstPointsRef<double>& G, i
       finite = finite && std::isfinite(s);
     }
   // a NaN or infinity in G reaches its element's sums whatever its weights (0 * inf is NaN)
+  if (!finite) {
+    const long long p = first_non_finite(G);
+    throw Error(p >= 0 ? "dL/dpositions row " + std::to_string(p) + " has a non-finite value"
+                       : std::string("dL/dpositions is too large: its sums overflow"));
+  }
+}
+
+void evaluate_transpose(const Embedding& emb, std::span<const Eigen::Index> points, const ConstPointsRef<double>& G,
+                        int elements, Eigen::Ref<BezierPoints> out, int threads) {
+  const int d = emb.dim();
+  if (d != 2 && d != 3) throw Error("the embedding must be 2D or 3D");
+  if (G.rows() != static_cast<Eigen::Index>(points.size()) || G.cols() != d)
+    throw Error("dL/dpositions must be " + std::to_string(points.size()) + " x " + std::to_string(d) +
+                ", got " + std::to_string(G.rows()) + " x " + std::to_string(G.cols()));
+  if (elements < 0) throw Error("elements must be >= 0");
+  const int K = (d + 1) * (d + 2) / 2;
+  check_out("dL/dB", out.rows(), out.cols(), static_cast<Eigen::Index>(elements) * K, d);
+  // runs of consecutive points of one element, each summed on one thread, then added in order
+  thread_local std::vector<long long> runs;
+  runs.clear();
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Index p = points[i];
+    if (p < 0 || p >= emb.size())
+      throw Error("points[" + std::to_string(i) + "] = " + std::to_string(p) + " is outside [0, " +
+                  std::to_string(emb.size()) + ")");
+    if (emb.element(p) < 0 || emb.element(p) >= elements)
+      throw Error("point " + std::to_string(p) + " refers to element " + std::to_string(emb.element(p)) +
+                  " outside [0, " + std::to_string(elements) + ")");
+    if (i == 0 || emb.element(p) != emb.element(points[i - 1])) runs.push_back(static_cast<long long>(i));
+  }
+  const long long nr = static_cast<long long>(runs.size());
+  runs.push_back(static_cast<long long>(points.size()));
+  thread_local std::vector<double> part;
+  part.resize(static_cast<size_t>(nr * K * d));
+  // the calling thread's scratch, named here: in the lambda a thread_local would be the pool thread's own
+  const std::vector<long long>& starts = runs;
+  double* partp = part.data();
+  detail::parallel_blocks(nr, 16, detail::thread_count(nr, 16, threads), [&](long long r0, long long r1) {
+    if (d == 3) scatter_runs<3>(emb, points, G, starts, r0, r1, partp);
+    else scatter_runs<2>(emb, points, G, starts, r0, r1, partp);
+  });
+  out.setZero();
+  bool finite = true;
+  for (long long r = 0; r < nr; ++r) {
+    const Eigen::Index first = static_cast<Eigen::Index>(emb.element(points[static_cast<size_t>(runs[static_cast<size_t>(r)])])) * K;
+    for (int k = 0; k < K; ++k)
+      for (int c = 0; c < d; ++c) {
+        out(first + k, c) += partp[(r * K + k) * d + c];
+        finite = finite && std::isfinite(out(first + k, c));
+      }
+  }
   if (!finite) {
     const long long p = first_non_finite(G);
     throw Error(p >= 0 ? "dL/dpositions row " + std::to_string(p) + " has a non-finite value"

@@ -30,6 +30,14 @@ BezierPoints evaluate_transpose(const Embedding& emb, const ConstPointsRef<doubl
 void evaluate_transpose(const Embedding& emb, const ConstPointsRef<double>& G, int elements,
                         Eigen::Ref<BezierPoints> out, int threads = 0);
 
+/// The transpose of the subset evaluate() (evaluate.hpp): dL/dB into out ((m K) x d already,
+/// overwritten) from G (|points| x d, row i for point points[i]). Each run of consecutive listed
+/// points of one element is summed in list order and the runs added in order, so the result is
+/// the same to the bit for every thread count. Costs the listed points and zeroing out. Throws
+/// Error as the full transpose does, and on an index outside [0, p).
+void evaluate_transpose(const Embedding& emb, std::span<const Eigen::Index> points, const ConstPointsRef<double>& G,
+                        int elements, Eigen::Ref<BezierPoints> out, int threads = 0);
+
 /// The two parts of the transpose of bezier_points(U, T, X, M).
 struct BezierTranspose {
   Eigen::MatrixXd X;  ///< n x d: dL/dX through B directly (for BI, M = 0, all of dL/dX)

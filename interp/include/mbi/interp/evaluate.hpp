@@ -10,6 +10,8 @@
 #include <mbi/interp/embed.hpp>
 #include <mbi/interp/modified_bi.hpp>
 
+#include <span>
+
 namespace mbi::interp {
 
 /// Positions of all embedded points: p x d. B: the element Bezier points ((m K) x d,
@@ -47,6 +49,13 @@ void evaluate(const MatrixIn& B, const Embedding& emb, PointsRef<Scalar> positio
 template <typename Scalar>
 void evaluate(const MatrixIn& B, const Embedding& emb, const ConstPointsRef<Scalar>& normals_rest,
               PointsRef<Scalar> positions, PointsRef<Scalar> normals_out, int threads = 0);
+
+/// Positions of the embedded points `points` (indices into emb, any order, repeats allowed), in
+/// that order: row i is row points[i] of evaluate<double>(B, emb, ...), to the bit. positions
+/// must be |points| x d already. Costs the listed points only. threads as above. Throws Error,
+/// before writing, on an index outside [0, p) or a listed point whose element is not one of B's.
+void evaluate(const MatrixIn& B, const Embedding& emb, std::span<const Eigen::Index> points,
+              PointsRef<double> positions, int threads = 0);
 
 /// Jacobian dx/du (d x d) at one embedded point (element e, barycentric b), needs rest U/T for
 /// the basis gradients.

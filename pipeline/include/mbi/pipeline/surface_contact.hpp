@@ -153,11 +153,11 @@ class SurfaceContact : public sim::Potential {
   /// their distance: their own where evaluated, else (carried) the last one less the move since.
   void set_reference(const Sample& S, const std::vector<double>& least, bool carry);
   void index_points();                                          // element_start_ and the rest
-  /// W applied to the Bezier points B at `points`, rows as `points` (on the library's threads).
+  /// W applied to the Bezier points B at `points`, rows as `points` (interp's subset evaluation).
   void evaluate(const interp::BezierPoints& B, const std::vector<Eigen::Index>& points, Rows3& out) const;
-  /// Adds W^T G to out (3 n): G one row per point of S, the rows with use[i] = 0 left out; summed
-  /// per run of S in order, so the same for every thread count.
-  void add_transpose(const Sample& S, const Rows3& G, const std::vector<char>& use, Eigen::Ref<Eigen::VectorXd> out) const;
+  /// Adds W^T G to out (3 n): G one row per point of active_points_ (interp's sums per run of one
+  /// element, so the same for every thread count).
+  void add_transpose(const Rows3& G, Eigen::Ref<Eigen::VectorXd> out) const;
   double depth(Eigen::Index point, size_t collider) const;        // guarded depth or infinity
   /// signed_distance(posed_[c], q, time()): the same values, a plane's from its unit normal kept.
   Distance distance(size_t c, const Eigen::Vector3d& q) const {
@@ -217,6 +217,8 @@ class SurfaceContact : public sim::Potential {
   mutable Sample at_, along_;          // x of the last evaluation; x and dx of the last move
   mutable std::vector<Term> terms_;    // at at_.x, per point of at_
   mutable std::vector<char> active_;   // terms_[i].active
+  mutable std::vector<size_t> active_rows_;          // the rows i of at_ with terms_[i].active
+  mutable std::vector<Eigen::Index> active_points_;  // their points
   mutable bool terms_valid_ = false;
   Eigen::VectorXd line_start_, line_move_;  // begin_line's x and dx
   bool line_valid_ = false;
