@@ -54,8 +54,8 @@ struct Comparison {
   bool built = false;  ///< false: no interior face (one element), modified-BI is not built
   double alpha = 0, beta = 0;
   int null_space_dim = 0;
-  std::string factorization;  ///< of the modified-BI solver, with its factor's nonzeros and kept bytes
-  long long factor_nonzeros = 0, kept_bytes = 0;
+  std::string factorization;  ///< of the modified-BI solver, with its factor's size and kept bytes
+  long long factor_nonzeros = 0, factor_stored_values = 0, factor_index_bytes = 0, kept_bytes = 0;
   bool dense_operator = false;
   interp::DiscontinuityTable table;
   /// Against the closed-form deformation (the example): BI, Phong, modified-BI.

@@ -65,6 +65,8 @@ Comparison compare_methods(const Model& m, const pipeline::Deformer& deformer, R
   const interp::VertexMatrices M_phong = phong->M(X);
   c.factorization = solver->factorization();
   c.factor_nonzeros = solver->factor_nonzeros();
+  c.factor_stored_values = solver->factor_stored_values();
+  c.factor_index_bytes = solver->factor_index_bytes();
   c.kept_bytes = solver->memory_bytes();
   c.dense_operator = solver->dense_operator();
   c.table = interp::discontinuity_table(*solver, X, M_mbi, M_phong);
@@ -101,6 +103,7 @@ nlohmann::json stats_json(const DeformArgs& a, const Model& m, const pipeline::D
   }
   if (built)
     j["factor"] = {{"factorization", c->factorization}, {"nonzeros", c->factor_nonzeros},
+                   {"stored_values", c->factor_stored_values}, {"index_bytes", c->factor_index_bytes},
                    {"kept_bytes", c->kept_bytes}, {"dense_operator", c->dense_operator}};
   j["memory_estimate"] = {{"peak_bytes", run.estimate.peak_bytes},         {"factor_bytes", run.estimate.factor_bytes},
                           {"factor_nonzeros", run.estimate.factor_nonzeros}, {"assembly_bytes", run.estimate.assembly_bytes},

@@ -46,6 +46,11 @@ TEST_CASE("Eigen and CHOLMOD factorizations give the same M to round-off, on bot
       CHECK(rel(a.solve(X), Me) < 1e-10);
       CHECK(c.factor_nonzeros() > 0);
       CHECK(c.memory_bytes() > 0);
+      // Eigen's columns store exactly L; CHOLMOD's supernodes (a vertex's d columns at least)
+      // also store their diagonal blocks' upper triangles
+      CHECK(e.factor_stored_values() == e.factor_nonzeros());
+      CHECK(c.factor_stored_values() > c.factor_nonzeros());
+      CHECK(c.factor_index_bytes() >= 4LL * c.unknowns());  // each column is a row of its supernode
     }
   }
 }

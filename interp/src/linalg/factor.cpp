@@ -51,6 +51,10 @@ std::size_t CholeskyFactor::bytes() const {
          vals.size() * sizeof(double);
 }
 
+std::size_t CholeskyFactor::index_bytes() const {
+  return (rows.size() + super.size()) * sizeof(int) + (rowp.size() + valp.size()) * sizeof(std::ptrdiff_t);
+}
+
 void CholeskyFactor::schedule(int n_groups, std::ptrdiff_t min_nonzeros) {
   bins = 1;
   groups.clear();

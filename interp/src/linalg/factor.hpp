@@ -56,8 +56,13 @@ struct CholeskyFactor {
   std::vector<int> prow;                 ///< like rows; forward-sweep places for grouped supernodes
   std::ptrdiff_t top_split = 1 << 16;    ///< top supernodes of this many entries are shared out
 
-  std::ptrdiff_t nonzeros() const;   ///< entries of L
+  std::ptrdiff_t nonzeros() const;   ///< entries of L (a relaxed supernode's zeros among them)
   std::size_t bytes() const;         ///< memory held
+  /// What the factor stores: every value of the supernodes' nsrow x nscol blocks (the diagonal
+  /// blocks' upper triangles too), and the bytes of the index arrays a sweep reads (rows, super,
+  /// rowp, valp). A sweep streams both; a solve sweeps twice.
+  std::size_t stored_values() const { return vals.size(); }
+  std::size_t index_bytes() const;
 
   /// Splits the sweeps into `groups` groups when that pays: factors of at least `min_nonzeros`
   /// entries (the default: where sharing the work costs less than it saves); called by

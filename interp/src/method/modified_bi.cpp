@@ -837,6 +837,8 @@ int ModifiedBI::iterations() const {
 long long ModifiedBI::factor_nonzeros() const {
   return impl_->pcg ? impl_->pcg->preconditioner_nonzeros() : impl_->F.nonzeros();
 }
+long long ModifiedBI::factor_stored_values() const { return static_cast<long long>(impl_->F.stored_values()); }
+long long ModifiedBI::factor_index_bytes() const { return static_cast<long long>(impl_->F.index_bytes()); }
 long long ModifiedBI::memory_bytes() const {
   const Impl& I = *impl_;
   const auto bytes = [](auto count, size_t each) { return static_cast<long long>(count) * static_cast<long long>(each); };

@@ -130,6 +130,11 @@ class ModifiedBI {
   /// mesh; on the iterative path the matrix and its preconditioner).
   long long factor_nonzeros() const;
   long long memory_bytes() const;
+  /// The factor as stored (sparse and dense paths; 0 on the iterative path): its values (CHOLMOD
+  /// keeps whole supernodal blocks: more than factor_nonzeros()) and the bytes of its index
+  /// arrays. A sparse solve streams both twice (forward and backward sweep).
+  long long factor_stored_values() const;
+  long long factor_index_bytes() const;
 
   /// M for deformed control positions X (n x d). Throws Error on a size mismatch or NaN, and on
   /// the iterative path when PCG does not converge within Options::max_iterations.
