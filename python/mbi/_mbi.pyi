@@ -28,6 +28,8 @@ Vector3 = Union[Sequence[float], npt.NDArray[np.floating[Any]]]
 Out = TypeVar("Out", bound=AnyArray)
 Float64Type = Union[Type[np.float64], Literal["float64"]]
 Float32Type = Union[Type[np.float32], Literal["float32"]]
+MemorySize = Union[int, float, str, None]
+"""bytes, or a size such as "8G" or "512M" (K, M, G, T: powers of 1024); None: the memory available"""
 
 INTEGRATORS: Tuple[Integrator, ...]
 SOLVERS: Tuple[Solver, ...]
@@ -74,7 +76,7 @@ class Deformer:
     def __init__(self, U: ArrayLike, T: ArrayLike, P: ArrayLike, *, method: Method = "modified-bi",
                  alpha: Optional[float] = None, beta: float = 0.0, pin_boundary: bool = False,
                  rest_normals: Optional[ArrayLike] = None, threads: int = 0,
-                 max_outside: Optional[float] = None) -> None: ...
+                 max_outside: Optional[float] = None, max_memory: MemorySize = None) -> None: ...
     @property
     def outside_points(self) -> int: """points outside the control mesh"""
     @property
@@ -132,7 +134,8 @@ class ModifiedBI:
     """Modified-BI's precompute (assembly, gauge, sparse Cholesky factor)."""
     def __init__(self, U: ArrayLike, T: ArrayLike, *, alpha: Optional[float] = None, beta: float = 0.0,
                  pin_boundary: bool = False, solve_path: Literal["automatic", "sparse", "dense", "iterative"] = "automatic",
-                 factorization: Literal["automatic", "eigen", "cholmod"] = "automatic") -> None: ...
+                 factorization: Literal["automatic", "eigen", "cholmod"] = "automatic",
+                 max_memory: MemorySize = None) -> None: ...
     def solve(self, X: ArrayLike, *, out: Optional[AnyArray] = None) -> FloatArray: """M ((n d), d) at X (n, d)"""
     def bezier(self, X: ArrayLike, M: ArrayLike, *, out: Optional[AnyArray] = None) -> FloatArray: ...
     def solve_transpose(self, G: ArrayLike) -> FloatArray: """dL/dX (n, d) from dL/dM ((n d), d)"""
@@ -161,6 +164,38 @@ class ModifiedBI:
     def factor_nonzeros(self) -> int: ...
     @property
     def memory_bytes(self) -> int: ...
+
+class MemoryEstimate:
+    """The estimated peak memory of a modified-BI run and its parts (bytes, counts)."""
+    @property
+    def unknowns(self) -> int: ...
+    @property
+    def matrix_nonzeros(self) -> int: ...
+    @property
+    def factor_nonzeros(self) -> int: ...
+    @property
+    def factor_flops(self) -> float: ...
+    @property
+    def ordering(self) -> str: ...
+    @property
+    def factor_bytes(self) -> float: ...
+    @property
+    def assembly_bytes(self) -> float: ...
+    @property
+    def dense_operator_bytes(self) -> float: ...
+    @property
+    def model_bytes(self) -> float: ...
+    @property
+    def process_bytes(self) -> float: ...
+    @property
+    def peak_bytes(self) -> float: ...
+
+def estimate_memory(U: ArrayLike, T: ArrayLike, dense_points: int = 0, *, pin_boundary: bool = False,
+                    solve_path: Literal["automatic", "sparse", "dense", "iterative"] = "automatic",
+                    factorization: Literal["automatic", "eigen", "cholmod"] = "automatic") -> MemoryEstimate:
+    """ModifiedBI(U, T)'s peak before any numeric work (the factor's symbolic analysis)"""
+def memory_limit(max_memory: MemorySize = None) -> Tuple[float, str]:
+    """(bytes, what they are): max_memory, else MemAvailable or the control group's limit"""
 
 class Phong:
     """Phong deformation's M (James 2020)."""

@@ -15,7 +15,8 @@ using Bound = Guarded<Deformer>;
 
 std::unique_ptr<Bound> make_deformer(const py::object& U, const py::object& T, const py::object& P,
                                      const std::string& method, std::optional<double> alpha, double beta, bool pin_boundary,
-                                     const py::object& rest_normals, int threads, std::optional<double> max_outside) {
+                                     const py::object& rest_normals, int threads, std::optional<double> max_outside,
+                                     const py::object& max_memory) {
   const Mesh c = control_mesh(U, T);
   const Input p = float_matrix(P, "P", {-1, c.U.map.cols()});
   pipeline::DeformerOptions o;
@@ -23,6 +24,7 @@ std::unique_ptr<Bound> make_deformer(const py::object& U, const py::object& T, c
   o.interp.alpha = alpha;
   o.interp.beta = beta;
   o.interp.pin_boundary = pin_boundary;
+  o.interp.max_memory = max_memory_arg(max_memory);
   o.threads = threads;
   Eigen::MatrixXd normals;
   if (!rest_normals.is_none()) normals = float_matrix(rest_normals, "rest_normals", {p.map.rows(), p.map.cols()}).map;
@@ -112,12 +114,13 @@ void bind_deformer(py::module_& m) {
                     "method's precompute, made once; deform() maps poses X (n, d) to positions (p, d).")
       .def(py::init(&make_deformer), "U"_a, "T"_a, "P"_a, py::kw_only(), "method"_a = "modified-bi", "alpha"_a = py::none(),
            "beta"_a = 0.0, "pin_boundary"_a = false, "rest_normals"_a = py::none(), "threads"_a = 0,
-           "max_outside"_a = py::none(),
+           "max_outside"_a = py::none(), "max_memory"_a = py::none(),
            "U (n, d) rest control vertices, T (m, d+1) elements, P (p, d) dense rest points (units of U). method: "
            "bi, modified-bi or phong; alpha (None: 0.1 in 3D, 0.2 in 2D), beta (0: automatic), pin_boundary: modified-BI's; rest_normals: unit "
            "normals (p, d) for deform(..., normals=True); threads: 0 = all cores. Points outside the control mesh "
            "warn (mbi.OutsideWarning); max_outside refuses those farther out than max_outside x the model size "
-           "(the diagonal of P's bounding box), as mbi deform --max-outside.")
+           "(the diagonal of P's bounding box), as mbi deform --max-outside. max_memory: bytes or a size such as '8G' "
+           "that modified-BI's factor may take (else its iterative path; None: the memory available).")
       .def("deform", &deform, "X"_a, py::kw_only(), "out"_a = py::none(), "normals"_a = false,
            "normals_out"_a = py::none(), "dtype"_a = py::none(),
            "Positions (p, d) of pose X (n, d), or (frames, p, d) of a batch X (frames, n, d). normals: also the "

@@ -16,7 +16,8 @@ using interp::Phong;
 using Solver = Guarded<ModifiedBI>;
 
 std::unique_ptr<Solver> make_solver(const py::object& U, const py::object& T, std::optional<double> alpha, double beta,
-                                    bool pin_boundary, const std::string& solve_path, const std::string& factorization) {
+                                    bool pin_boundary, const std::string& solve_path, const std::string& factorization,
+                                    const py::object& max_memory) {
   const Mesh c = control_mesh(U, T);
   interp::Options o;
   o.alpha = alpha;
@@ -24,6 +25,7 @@ std::unique_ptr<Solver> make_solver(const py::object& U, const py::object& T, st
   o.pin_boundary = pin_boundary;
   o.solve_path = interp::kSolvePathNames.parse(solve_path, "solve_path");
   o.factorization = interp::kFactorizationNames.parse(factorization, "factorization");
+  o.max_memory = max_memory_arg(max_memory);
   return without_gil([&] { return std::make_unique<Solver>(c.U.map, c.T, o); });
 }
 
@@ -61,10 +63,12 @@ void bind_modified_bi(py::module_& m) {
                        "Modified-BI's precompute for one rest control mesh (assembly, gauge, sparse Cholesky "
                        "factor); solve() gives M per pose.");
   c.def(py::init(&make_solver), "U"_a, "T"_a, py::kw_only(), "alpha"_a = py::none(), "beta"_a = 0.0,
-        "pin_boundary"_a = false, "solve_path"_a = "automatic", "factorization"_a = "automatic",
+        "pin_boundary"_a = false, "solve_path"_a = "automatic", "factorization"_a = "automatic", "max_memory"_a = py::none(),
         "U (n, d) rest vertices, T (m, d+1) elements. alpha: weight of E_vibr (None: 0.1 in 3D, 0.2 in 2D); "
         "beta: weight of E_disc (0: automatic); pin_boundary: M = 0 on boundary vertices; solve_path: "
-        "automatic, sparse, dense or iterative; factorization: automatic, eigen or cholmod.");
+        "automatic, sparse, dense or iterative (automatic takes it when the factor's estimated peak exceeds "
+        "max_memory: bytes or a size such as '8G'; None: the memory available); factorization: automatic, eigen or "
+        "cholmod.");
   c.def(
       "solve",
       [](Solver& s, const py::object& X, const py::object& out) {

@@ -26,6 +26,11 @@ void bind_contact(py::module_& m);     // bind_contact.cpp: Collider, FramePipel
 void bind_io(py::module_& m);          // bind_io.cpp: file readers and writers
 void bind_cage(py::module_& m);        // bind_cage.cpp: cage
 void bind_scene(py::module_& m);       // bind_scene.cpp: run_scene
+void bind_memory(py::module_& m);      // bind_memory.cpp: estimate_memory, memory_limit
+
+/// The max_memory argument: None -> 0 (the memory there is), bytes > 0, or a size such as "8G"
+/// (interp::parse_memory_size); anything else an Error naming it.
+double max_memory_arg(const py::object& value);
 
 /// Points of P outside the control mesh (emb.outside), as `mbi deform` reports them: Error for
 /// those farther out than max_outside x the model size, else an mbi.OutsideWarning at the

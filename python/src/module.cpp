@@ -36,6 +36,7 @@ PYBIND11_MODULE(_mbi, m) {
   mbi::python::bind_outside(m);
   mbi::python::bind_embedding(m);
   mbi::python::bind_methods(m);
+  mbi::python::bind_memory(m);
   mbi::python::bind_evaluate(m);
   mbi::python::bind_deformer(m);
 #ifdef MBI_PYTHON_TIMING

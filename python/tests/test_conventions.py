@@ -122,10 +122,10 @@ def test_messages_use_the_keyword_names_and_the_docs_letters(bar):
 @pytest.mark.parametrize("call, message", [
     (lambda U, T, P: mbi.Deformer(U, T, P, "bi"),
      "Deformer() takes 3 positional arguments (U, T, P) but 4 were given; name the others: method=, alpha=, beta=, "
-     "pin_boundary=, rest_normals=, threads=, max_outside="),
+     "pin_boundary=, rest_normals=, threads=, max_outside=, max_memory="),
     (lambda U, T, P: mbi.Deformer(U, T, P, methd="bi"),
      "Deformer() got an unexpected keyword argument 'methd' (it takes U, T, P, method, alpha, beta, pin_boundary, "
-     "rest_normals, threads, max_outside)"),
+     "rest_normals, threads, max_outside, max_memory)"),
     (lambda U, T, P: mbi.Deformer(U, T, P, alpha="big"), "Deformer(): alpha must be a number or None, got str"),
     (lambda U, T, P: mbi.Deformer(U, T), "Deformer() is missing the argument P"),
     (lambda U, T, P: mbi.Deformer(U, T, P).deform(U, np.empty((30, 3))),

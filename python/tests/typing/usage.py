@@ -45,7 +45,11 @@ def core(tmp: str) -> None:
     embedding: mbi.Embedding = mbi.embed(U, T, P)
     element: I32 = embedding.element
     assert element.dtype == np.int32 and mbi.embedded_positions(U, T, embedding).shape == P.shape
-    solver = mbi.ModifiedBI(U, T, alpha=mbi.default_alpha(3), solve_path="automatic", factorization="automatic")
+    solver = mbi.ModifiedBI(U, T, alpha=mbi.default_alpha(3), solve_path="automatic", factorization="automatic",
+                            max_memory="8G")
+    estimate: mbi.MemoryEstimate = mbi.estimate_memory(U, T, len(P))
+    limit: Tuple[float, str] = mbi.memory_limit()
+    assert estimate.peak_bytes > estimate.factor_bytes and limit[0] > 0
     M: F64 = solver.solve(U)
     B: F64 = solver.bezier(U, M)
     assert solver.solve_transpose(M).shape == U.shape
