@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cfloat>
 #include <cstdint>
+#include <cstring>
 
 using namespace mbi::interp;
 using namespace mbi::test;
@@ -182,7 +183,7 @@ TEST_CASE("FastEvaluator: thread counts, caller memory and repeated calls give i
 
 // The vector kernels write 16-byte streaming stores where both outputs are 16-byte aligned and
 // plain stores otherwise, in groups of 4 points, each thread its blocks, with the last points of
-// a range written one by one: at every offset from a 64-byte boundary the same values come out,
+// a range copied one by one from a group of 4: at every offset from a 64-byte boundary the same values come out,
 // and nothing before or after the outputs changes.
 TEST_CASE("FastEvaluator: outputs at every offset within a cache line, nothing written outside them", "[fast_evaluate]") {
   const FastSetup s = make_fast(3, 70013, 0.0, 1.0);  // 3 blocks, the last one partial, then a tail
@@ -364,4 +365,72 @@ TEST_CASE("FastEvaluator rejects inconsistent input", "[fast_evaluate]") {
   bad.element(3) = -1;
   CHECK_THROWS_WITH(FastEvaluator(bad), Catch::StartsWith("point 3"));
   CHECK_THROWS_AS(FastEvaluator(s.emb, -1), mbi::Error);
+}
+
+// Points in random order over element terms larger than a cache: the evaluator sorts its records
+// by element and scatters each result to its point's row. Every row is then the same bits as
+// with the points stored by element (no permutation), on every kernel, 1 and 2 threads,
+// positions alone and with normals, and as each point evaluated alone (the last 1-3 points of a
+// range run as a group of 4, as the others).
+TEST_CASE("FastEvaluator: points in random order over a large mesh give each point's row, bit for bit", "[fast_evaluate]") {
+  const Mesh M = box_tet_mesh(30, 30, 30);  // 162,000 tetrahedra: 20.7 MB of element terms
+  const BezierPoints B = bezier_bi(smooth_deform(M.U, 0.5), M.T);
+  const int p = mbi::test::sized(100013);
+  const Embedding emb = embed(M.U, M.T, random_matrix(p, 3, 61).array() * 0.55 + 0.5);  // some outside
+  Eigen::MatrixXd normals = random_matrix(p, 3, 62);
+  normals.rowwise().normalize();
+  std::vector<int> order(static_cast<size_t>(p));
+  for (int i = 0; i < p; ++i) order[static_cast<size_t>(i)] = i;
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return emb.element(a) < emb.element(b); });
+  Embedding sorted = emb;
+  Eigen::MatrixXd snormals = normals;
+  for (int k = 0; k < p; ++k) {
+    sorted.element(k) = emb.element(order[static_cast<size_t>(k)]);
+    sorted.bary.row(k) = emb.bary.row(order[static_cast<size_t>(k)]);
+    snormals.row(k) = normals.row(order[static_cast<size_t>(k)]);
+  }
+  auto same_bits = [](const RowMatrixXf& a, Eigen::Index i, const RowMatrixXf& b, Eigen::Index k) {
+    return std::memcmp(a.row(i).data(), b.row(k).data(), 3 * sizeof(float)) == 0;
+  };
+  Eigen::MatrixXd pd, nd;
+  evaluate<double>(B, emb, normals, pd, nd, 1);
+  for (Simd v : kernels()) for (int threads : {1, 2}) {
+    INFO("kernel " << FastEvaluator::name(v) << ", threads " << threads);
+    FastEvaluator fr(emb, threads, v), fs(sorted, threads, v);
+    REQUIRE(fr.sorted_by_element());
+    REQUIRE_FALSE(fs.sorted_by_element());  // sorted already: no permutation
+    CHECK(fr.coherent() == fs.coherent());
+    fr.set_rest_normals(normals);
+    fs.set_rest_normals(snormals);
+    RowMatrixXf pr, nr, qr, ps, ns, qs;
+    fr.evaluate(B, pr, nr);
+    fr.evaluate(B, qr);
+    fs.evaluate(B, ps, ns);
+    fs.evaluate(B, qs);
+    CHECK((pr.cast<double>() - pd).cwiseAbs().maxCoeff() <= position_tolerance(B));
+    CHECK((nr.cast<double>() - nd).cwiseAbs().maxCoeff() < 2e-5);
+    int differ = 0;
+    for (int k = 0; k < p; ++k) {
+      const int i = order[static_cast<size_t>(k)];
+      differ += !same_bits(pr, i, ps, k) || !same_bits(nr, i, ns, k) || !same_bits(qr, i, qs, k) || !same_bits(qr, i, pr, i);
+    }
+    CHECK(differ == 0);
+    if (threads == 2) continue;
+    for (int i = 0; i < p; i += p / 23 + 1) {  // points alone: a group of 4 of one real record
+      Embedding one;
+      one.element = emb.element.segment(i, 1);
+      one.bary = emb.bary.row(i);
+      one.gradients = emb.gradients;
+      FastEvaluator fe(one, 1, v);
+      fe.set_rest_normals(normals.row(i));
+      RowMatrixXf p1, n1;
+      fe.evaluate(B, p1, n1);
+      CHECK(same_bits(p1, 0, pr, i));
+      // AVX-512 normals: groups of 16 and the last groups of 4 of a range sum in two orders
+      if (v == Simd::Avx512) CHECK((n1.row(0) - nr.row(i)).cwiseAbs().maxCoeff() < 4e-7f);
+      else CHECK(same_bits(n1, 0, nr, i));
+    }
+  }
+  // element terms that fit a cache: the points' own order
+  CHECK_FALSE(FastEvaluator(make_fast(3, 1000, 0.0, 1.0).emb).sorted_by_element());
 }

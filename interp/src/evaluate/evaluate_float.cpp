@@ -119,8 +119,8 @@ __attribute__((target("avx2,fma"))) void unpack_avx2(const float* xyz, long long
 // order need them, points in a mesh's order do not).
 Kernel kernel(bool prefetch) {
 #ifdef MBI_INTERP_X86
-  if (have_avx512()) return avx512_kernels[0][prefetch ? 1 : 0];
-  if (have_avx2_fma()) return avx2_kernels[0][prefetch ? 1 : 0];
+  if (have_avx512()) return avx512_kernels[0][prefetch ? 1 : 0][0];
+  if (have_avx2_fma()) return avx2_kernels[0][prefetch ? 1 : 0][0];
 #endif
   (void)prefetch;
   return nullptr;
@@ -173,9 +173,9 @@ void evaluate_float3(const MatrixIn& B, const Embedding& emb, PointsRef<float> p
         long long done = 0;
         if (const Kernel k = kernel(2 * same < n)) {
           done = n / 4 * 4;
-          k(rec, coef, nullptr, 1.0f, xyz, nullptr, 0, done);
+          k(rec, coef, nullptr, 1.0f, xyz, nullptr, nullptr, 0, done);
         }
-        eval_portable(3, rec, coef, kPairs, nullptr, 1.0f, xyz, nullptr, done, n);
+        eval_portable(3, rec, coef, kPairs, nullptr, 1.0f, xyz, nullptr, nullptr, done, n);
         if (simd) unpack_x86(xyz, b, n, px, py, pz);
         else unpack_plain(xyz, b, n, px, py, pz);
       }

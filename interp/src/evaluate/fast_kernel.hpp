@@ -42,6 +42,9 @@ static_assert(position_terms(3) * 3 + 1 <= coef_stride(3) && position_terms(2) *
 // Records past the last point (element 0): the x86 kernels prefetch the terms of the point
 // kPrefetch ahead without a bounds check.
 constexpr int kPrefetch = 16;
+// Rows past the last of a permutation (row 0): the x86 kernels that scatter prefetch the output
+// rows of the point kRowAhead ahead without a bounds check.
+constexpr int kRowAhead = 32;
 
 // Index of c_k (lin) and c_kl, k <= l (quad), 1-based k, l, in an element's terms (c_0 is term 0).
 // 3D: 0 c0, 1 c1, 2 c11, 3 c12, 4 c13, 5 c2, 6 c22, 7 c23, 8 c3, 9 c33.
@@ -74,11 +77,12 @@ constexpr Layout packed_layout(int d) {
 inline constexpr Layout kPairs = {{3, 0, 8, 16, 24, 4, 12, 20, 7, 28}, {8, 1, 1, 1, 1, 1, 1, 1, 8, 1}};
 inline constexpr Layout kPacked2 = packed_layout(2), kPacked3 = packed_layout(3);
 
-// A kernel: positions (and normals when nout is set) of points [begin, end) from their records
+// A kernel: positions (and normals when nout is set) of records [begin, end) from the records
 // (rec: (d+1) words a point), the element terms (coef, coef_stride(d) floats an element, 64-byte
-// aligned), the rest normals' m (mrest) and the scale sigma of the derivatives.
+// aligned), the rest normals' m (mrest, one per record) and the scale sigma of the derivatives.
+// Record p's results go to output row row[p] (scattered), or to row p where row is nullptr.
 using Kernel = void (*)(const std::int32_t* rec, const float* coef, const float* mrest, float sigma, float* pos,
-                        float* nout, long long begin, long long end);
+                        float* nout, const std::int32_t* row, long long begin, long long end);
 
 // The 3D element terms of B in the pairs layout (m x coef_stride(3) floats at coef, 64-byte
 // aligned), on up to `threads` threads; returns the largest |c_k| (fast_evaluate.cpp).
@@ -86,14 +90,14 @@ double pairs_terms3(const MatrixIn& B, float* coef, int m, int threads);
 
 // The portable loop (d = 2 or 3, terms in layout L), any number of points.
 void eval_portable(int d, const std::int32_t* rec, const float* coef, const Layout& L, const float* mrest,
-                   float sigma, float* pos, float* nout, long long begin, long long end);
+                   float sigma, float* pos, float* nout, const std::int32_t* row, long long begin, long long end);
 
 #ifdef MBI_INTERP_X86
 // The 3D kernels of an instruction set: [positions only, normals, normals with D scaled]
-// [without, with prefetches of the element terms]. They take end - begin a multiple of 4 (the
-// caller runs the rest portably) and read the pairs layout, or with AVX2 and normals the packed
-// one.
-using KernelTable = Kernel[3][2];
+// [without, with prefetches of the element terms][rows in order, scattered]. They take
+// end - begin a multiple of 4 (the caller runs the rest portably) and read the pairs layout, or
+// with AVX2 and normals the packed one.
+using KernelTable = Kernel[3][2][2];
 extern const KernelTable avx2_kernels, avx512_kernels;
 #endif
 

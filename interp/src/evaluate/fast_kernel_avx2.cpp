@@ -6,7 +6,8 @@
 // read the terms from L2, not L1; in a mesh's order the prefetches only cost); the input streams
 // (records, rest normals) are prefetched kStreamAhead points ahead in either order. Groups of 4
 // points are written as 3 aligned 16-byte vectors with streaming stores (the output is not read
-// back by this pass, so it bypasses the caches and saves the write-allocate reads).
+// back by this pass, so it bypasses the caches and saves the write-allocate reads); rows
+// scattered by a permutation take 12-byte stores, their lines prefetched kRowAhead points ahead.
 #include "evaluate/fast_kernel_x86.hpp"
 
 #ifdef MBI_INTERP_X86
@@ -81,10 +82,25 @@ MBI_TARGET_AVX2 inline void pack4(__m128 r0, __m128 r1, __m128 r2, __m128 r3, __
                     _mm_shuffle_ps(r2, r2, _MM_SHUFFLE(2, 2, 2, 2)), 0x1);
 }
 
+// The results (x, y, z, *) of points p .. p + 3 to their rows of out: in order (3 16-byte
+// stores at row p) or scattered (row[p + k]).
+template <bool Scatter>
+MBI_TARGET_AVX2 inline void put4(float* out, const std::int32_t* row, long long p, bool aligned, __m128 r0, __m128 r1,
+                                 __m128 r2, __m128 r3) {
+  if constexpr (Scatter) {
+    scatter4(out, row + p, r0, r1, r2, r3);
+  } else {
+    __m128 o0, o1, o2;
+    pack4(r0, r1, r2, r3, o0, o1, o2);
+    store12(out + 3 * p, aligned, o0, o1, o2);
+  }
+}
+
 // the same, two results to a vector
-MBI_TARGET_AVX2 inline void pack4(__m256 a, __m256 b, __m128& o0, __m128& o1, __m128& o2) {
-  pack4(_mm256_castps256_ps128(a), _mm256_extractf128_ps(a, 1), _mm256_castps256_ps128(b), _mm256_extractf128_ps(b, 1),
-        o0, o1, o2);
+template <bool Scatter>
+MBI_TARGET_AVX2 inline void put4(float* out, const std::int32_t* row, long long p, bool aligned, __m256 a, __m256 b) {
+  put4<Scatter>(out, row, p, aligned, _mm256_castps256_ps128(a), _mm256_extractf128_ps(a, 1),
+                _mm256_castps256_ps128(b), _mm256_extractf128_ps(b, 1));
 }
 
 // Positions and normals, packed layout, points [begin, end) with end - begin a multiple of 4 (the
@@ -92,21 +108,21 @@ MBI_TARGET_AVX2 inline void pack4(__m256 a, __m256 b, __m128& o0, __m128& o1, __
 // iterations: positions and D (this group), cof(D) m (the group before), renormalisation (the
 // one before that). Each stage is a long chain of dependent operations; in one iteration they
 // starve the out-of-order window, staggered they overlap.
-template <bool Scaled, bool Prefetch>
+template <bool Scaled, bool Prefetch, bool Scatter>
 MBI_TARGET_AVX2 void eval_normals(const std::int32_t* rec, const float* coef, const float* mrest, float sigma,
-                                  float* pos, float* nout, long long begin, long long end) {
+                                  float* pos, float* nout, const std::int32_t* row, long long begin, long long end) {
   const __m256 sig = _mm256_set1_ps(sigma);
   const bool aligned = reinterpret_cast<std::uintptr_t>(pos + 3 * begin) % 16 == 0 &&
                        reinterpret_cast<std::uintptr_t>(nout + 3 * begin) % 16 == 0;
   const __m256 zero = _mm256_setzero_ps();
   // D and m of the group at p - 4, cof(D) m of the group at p - 8 (two vectors each)
   __m256 D[2][3] = {{zero, zero, zero}, {zero, zero, zero}}, m[2] = {zero, zero}, o[2] = {zero, zero};
-  __m128 o0, o1, o2;
   long long p = begin;
   for (; p < end; p += 4) {
     prefetch_at(rec + 4 * p, 4LL * 4 * kStreamAhead);  // one 64-byte line of records per 4 points
     prefetch_at(mrest + 3 * p, 4LL * 3 * kStreamAhead);
     if constexpr (Prefetch) prefetch_terms(rec, coef, p);
+    if constexpr (Scatter) prefetch_rows(row, pos, nout, p);
     // stages 3 and 2 (on zeros in the first two iterations: not stored)
     const __m256 n0 = renormalise(o[0]), n1 = renormalise(o[1]);
     o[0] = cof_times(D[0], m[0]);
@@ -114,24 +130,15 @@ MBI_TARGET_AVX2 void eval_normals(const std::int32_t* rec, const float* coef, co
     __m256 x0, x1;
     two_points<Scaled>(rec + 4 * p, coef, sig, x0, D[0]);
     two_points<Scaled>(rec + 4 * (p + 2), coef, sig, x1, D[1]);
-    pack4(x0, x1, o0, o1, o2);
-    store12(pos + 3 * p, aligned, o0, o1, o2);
+    put4<Scatter>(pos, row, p, aligned, x0, x1);
     m[0] = _mm256_loadu2_m128(mrest + 3 * (p + 1), mrest + 3 * p);
     m[1] = _mm256_loadu2_m128(mrest + 3 * (p + 3), mrest + 3 * (p + 2));
-    if (p - begin >= 8) {
-      pack4(n0, n1, o0, o1, o2);
-      store12(nout + 3 * (p - 8), aligned, o0, o1, o2);
-    }
+    if (p - begin >= 8) put4<Scatter>(nout, row, p - 8, aligned, n0, n1);
   }
   // the last two groups: o holds the one at p - 8, D and m the one at p - 4
-  if (p - begin >= 8) {
-    pack4(renormalise(o[0]), renormalise(o[1]), o0, o1, o2);
-    store12(nout + 3 * (p - 8), aligned, o0, o1, o2);
-  }
-  if (p - begin >= 4) {
-    pack4(renormalise(cof_times(D[0], m[0])), renormalise(cof_times(D[1], m[1])), o0, o1, o2);
-    store12(nout + 3 * (p - 4), aligned, o0, o1, o2);
-  }
+  if (p - begin >= 8) put4<Scatter>(nout, row, p - 8, aligned, renormalise(o[0]), renormalise(o[1]));
+  if (p - begin >= 4)
+    put4<Scatter>(nout, row, p - 4, aligned, renormalise(cof_times(D[0], m[0])), renormalise(cof_times(D[1], m[1])));
   _mm_sfence();
 }
 
@@ -157,23 +164,22 @@ MBI_TARGET_AVX2 inline __m128 one_point(const float* C, const std::int32_t* r, _
   return _mm_add_ps(_mm256_castps256_ps128(V), _mm256_extractf128_ps(V, 1));  // lane 3: not a coordinate
 }
 
-template <bool Prefetch>
+template <bool Prefetch, bool Scatter>
 MBI_TARGET_AVX2 void eval_positions(const std::int32_t* rec, const float* coef, const float*, float, float* pos,
-                                    float*, long long begin, long long end) {
+                                    float*, const std::int32_t* row, long long begin, long long end) {
   constexpr int NC = coef_stride(3);
   const __m256i sel12 = _mm256_setr_epi32(1, 1, 1, 1, 2, 2, 2, 2), sel23 = _mm256_setr_epi32(2, 2, 2, 2, 3, 3, 3, 3);
   const bool aligned = reinterpret_cast<std::uintptr_t>(pos + 3 * begin) % 16 == 0;
   for (long long p = begin; p < end; p += 4) {
     prefetch_at(rec + 4 * p, 4LL * 4 * kStreamAhead);
     if constexpr (Prefetch) prefetch_terms(rec, coef, p);
+    if constexpr (Scatter) prefetch_rows(row, pos, nullptr, p);
     __m128 x[4];
     for (int k = 0; k < 4; ++k) {
       const std::int32_t* r = rec + 4 * (p + k);
       x[k] = one_point(coef + static_cast<long long>(r[0]) * NC, r, sel12, sel23);
     }
-    __m128 o0, o1, o2;
-    pack4(x[0], x[1], x[2], x[3], o0, o1, o2);
-    store12(pos + 3 * p, aligned, o0, o1, o2);
+    put4<Scatter>(pos, row, p, aligned, x[0], x[1], x[2], x[3]);
   }
   _mm_sfence();
 }
@@ -181,9 +187,11 @@ MBI_TARGET_AVX2 void eval_positions(const std::int32_t* rec, const float* coef, 
 }  // namespace
 
 const KernelTable avx2_kernels = {
-    {eval_positions<false>, eval_positions<true>},
-    {eval_normals<false, false>, eval_normals<false, true>},
-    {eval_normals<true, false>, eval_normals<true, true>},
+    {{eval_positions<false, false>, eval_positions<false, true>}, {eval_positions<true, false>, eval_positions<true, true>}},
+    {{eval_normals<false, false, false>, eval_normals<false, false, true>},
+     {eval_normals<false, true, false>, eval_normals<false, true, true>}},
+    {{eval_normals<true, false, false>, eval_normals<true, false, true>},
+     {eval_normals<true, true, false>, eval_normals<true, true, true>}},
 };
 
 }  // namespace mbi::interp::detail

@@ -1,6 +1,6 @@
 // The AVX-512 evaluation kernels (see fast_kernel.hpp): two points to a 512-bit vector, each as
 // in the AVX2 positions kernel (pairs layout), positions only (eval_positions) and with normals
-// (eval_normals); prefetches and streaming stores as in the AVX2 kernels.
+// (eval_normals); prefetches and stores (streaming, or scattered rows) as in the AVX2 kernels.
 #include "evaluate/fast_kernel_x86.hpp"
 
 #ifdef MBI_INTERP_X86
@@ -69,25 +69,40 @@ MBI_TARGET_AVX512 inline __m512 pair512(const std::int32_t* r, const float* coef
   return _mm512_add_ps(V, MBI_SWAP512(V));  // (c0 + b1 t1) + (b2 t2 + b3 t3)
 }
 
-// The 12 floats of 4 points from two pair512 results to 3 stores.
-MBI_TARGET_AVX512 inline void store4(float* out, bool aligned, const Idx512& I, __m512 W0, __m512 W1) {
-  const __m512 o = _mm512_permutex2var_ps(W0, I.out, W1);
-  store12(out, aligned, _mm512_castps512_ps128(o), _mm512_extractf32x4_ps(o, 1), _mm512_extractf32x4_ps(o, 2));
+// Points p .. p + 3 from two pair512 results to their rows of out: in order (3 stores at row p)
+// or scattered (row[p + k]).
+template <bool Scatter>
+MBI_TARGET_AVX512 inline void store4(float* out, const std::int32_t* row, long long p, bool aligned, const Idx512& I,
+                                     __m512 W0, __m512 W1) {
+  if constexpr (Scatter) {
+    scatter4(out, row + p, _mm512_castps512_ps128(W0), _mm512_extractf32x4_ps(W0, 2), _mm512_castps512_ps128(W1),
+             _mm512_extractf32x4_ps(W1, 2));
+  } else {
+    const __m512 o = _mm512_permutex2var_ps(W0, I.out, W1);
+    store12(out + 3 * p, aligned, _mm512_castps512_ps128(o), _mm512_extractf32x4_ps(o, 1), _mm512_extractf32x4_ps(o, 2));
+  }
+}
+
+// The 4 points (x, y, z, .) in the 128-bit lanes of v to their rows out + 3 row[k].
+MBI_TARGET_AVX512 inline void scatter_lanes(float* out, const std::int32_t* row, __m512 v) {
+  scatter4(out, row, _mm512_castps512_ps128(v), _mm512_extractf32x4_ps(v, 1), _mm512_extractf32x4_ps(v, 2),
+           _mm512_extractf32x4_ps(v, 3));
 }
 
 // Positions only, pairs layout, two points to a 512-bit vector, 4 points an iteration.
-template <bool Prefetch>
+template <bool Prefetch, bool Scatter>
 MBI_TARGET_AVX512 void eval_positions(const std::int32_t* rec, const float* coef, const float*, float, float* pos,
-                                      float*, long long begin, long long end) {
+                                      float*, const std::int32_t* row, long long begin, long long end) {
   const Idx512 I;
   const bool aligned = reinterpret_cast<std::uintptr_t>(pos + 3 * begin) % 16 == 0;
   __m512 none;
   for (long long p = begin; p < end; p += 4) {
     prefetch_at(rec + 4 * p, 4LL * 4 * kStreamAhead);
     if constexpr (Prefetch) prefetch_terms(rec, coef, p);
+    if constexpr (Scatter) prefetch_rows(row, pos, nullptr, p);
     const __m512 W0 = pair512<false>(rec + 4 * p, coef, I, none, none);
     const __m512 W1 = pair512<false>(rec + 4 * (p + 2), coef, I, none, none);
-    store4(pos + 3 * p, aligned, I, W0, W1);
+    store4<Scatter>(pos, row, p, aligned, I, W0, W1);
   }
   _mm_sfence();
 }
@@ -197,17 +212,24 @@ struct Normals16 {
     const __mmask16 ok = _mm512_cmp_ps_mask(s, _mm512_set1_ps(FLT_MIN), _CMP_GT_OQ);
     wx = _mm512_maskz_mul_ps(ok, wx, inv), wy = _mm512_maskz_mul_ps(ok, wy, inv), wz = _mm512_maskz_mul_ps(ok, wz, inv);
   }
-  // 4: to out (48 floats), point 4 k + g's vector from lane 4 g + k
-  MBI_TARGET_AVX512 void phase4(float* out, bool aligned) const {
+  // 4: to the rows of points p .. p + 15 of out (in order: 48 floats at row p; scattered: rows
+  // row[p + k]), point 4 k + g's vector from lane 4 g + k
+  template <bool Scatter>
+  MBI_TARGET_AVX512 void phase4(float* out, const std::int32_t* row, long long p, bool aligned) const {
     const __m512 zero = _mm512_setzero_ps();
     const __m512 u0 = _mm512_unpacklo_ps(wx, wy), u1 = _mm512_unpackhi_ps(wx, wy);
     const __m512 v0 = _mm512_unpacklo_ps(wz, zero), v1 = _mm512_unpackhi_ps(wz, zero);
     const __m512 Q[4] = {_mm512_shuffle_ps(u0, v0, _MM_SHUFFLE(1, 0, 1, 0)), _mm512_shuffle_ps(u0, v0, _MM_SHUFFLE(3, 2, 3, 2)),
                          _mm512_shuffle_ps(u1, v1, _MM_SHUFFLE(1, 0, 1, 0)), _mm512_shuffle_ps(u1, v1, _MM_SHUFFLE(3, 2, 3, 2))};
-    const __m512i pack = _mm512_setr_epi32(0, 1, 2, 4, 5, 6, 8, 9, 10, 12, 13, 14, 0, 0, 0, 0);
+    [[maybe_unused]] const __m512i pack = _mm512_setr_epi32(0, 1, 2, 4, 5, 6, 8, 9, 10, 12, 13, 14, 0, 0, 0, 0);
     for (int k = 0; k < 4; ++k) {  // Q[k]: points 4 k .. 4 k + 3 as (x, y, z, 0)
-      const __m512 n = _mm512_permutexvar_ps(pack, Q[k]);
-      store12(out + 12 * k, aligned, _mm512_castps512_ps128(n), _mm512_extractf32x4_ps(n, 1), _mm512_extractf32x4_ps(n, 2));
+      if constexpr (Scatter) {
+        scatter_lanes(out, row + p + 4 * k, Q[k]);
+      } else {
+        const __m512 n = _mm512_permutexvar_ps(pack, Q[k]);
+        store12(out + 3 * (p + 4 * k), aligned, _mm512_castps512_ps128(n), _mm512_extractf32x4_ps(n, 1),
+                _mm512_extractf32x4_ps(n, 2));
+      }
     }
   }
 };
@@ -220,9 +242,9 @@ struct Normals16 {
 // between groups; the compiler spills some to the stack). A block of derivatives for 128 points
 // cost more in L1 misses (its lines evicted by the element terms of random points) and 4K
 // aliasing than the normals themselves.
-template <bool Scaled, bool Prefetch>
+template <bool Scaled, bool Prefetch, bool Scatter>
 MBI_TARGET_AVX512 void eval_normals(const std::int32_t* rec, const float* coef, const float* mrest, float sigma,
-                                    float* pos, float* nout, long long begin, long long end) {
+                                    float* pos, float* nout, const std::int32_t* row, long long begin, long long end) {
   const Idx512 I;
   const Idx16 I16;
   const __m512 sig = _mm512_set1_ps(sigma);
@@ -239,14 +261,15 @@ MBI_TARGET_AVX512 void eval_normals(const std::int32_t* rec, const float* coef, 
       prefetch_at(rec + 4 * g, 4LL * 4 * kStreamAhead);
       prefetch_at(mrest + 3 * g, 4LL * 3 * kStreamAhead);
       if constexpr (Prefetch) prefetch_terms(rec, coef, g);
+      if constexpr (Scatter) prefetch_rows(row, pos, nout, g);
       const __m512 W0 = pair512<true>(rec + 4 * g, coef, I, X[0], Ad[0]);
       const __m512 W1 = pair512<true>(rec + 4 * (g + 2), coef, I, X[1], Ad[1]);
-      store4(pos + 3 * g, aligned, I, W0, W1);
+      store4<Scatter>(pos, row, g, aligned, I, W0, W1);
       if (prev) {  // phase 1 reads all of the previous group's G before gather4 overwrites it
         if (q == 0) N.phase1(G);
         if (q == 1) N.phase2<Scaled>(mrest + 3 * (p - 16), sig);
         if (q == 2) N.phase3();
-        if (q == 3) N.phase4(nout + 3 * (p - 16), aligned);
+        if (q == 3) N.phase4<Scatter>(nout, row, p - 16, aligned);
       }
       Normals16::gather4(X, Ad, I16, G + 3 * q);
     }
@@ -255,15 +278,20 @@ MBI_TARGET_AVX512 void eval_normals(const std::int32_t* rec, const float* coef, 
     N.phase1(G);
     N.phase2<Scaled>(mrest + 3 * (p - 16), sig);
     N.phase3();
-    N.phase4(nout + 3 * (p - 16), aligned);
+    N.phase4<Scatter>(nout, row, p - 16, aligned);
   }
-  const __m512i pack = _mm512_setr_epi32(0, 1, 2, 4, 5, 6, 8, 9, 10, 12, 13, 14, 0, 0, 0, 0);
+  [[maybe_unused]] const __m512i pack = _mm512_setr_epi32(0, 1, 2, 4, 5, 6, 8, 9, 10, 12, 13, 14, 0, 0, 0, 0);
   for (; p < end; p += 4) {
     const __m512 W0 = pair512<true>(rec + 4 * p, coef, I, X[0], Ad[0]);
     const __m512 W1 = pair512<true>(rec + 4 * (p + 2), coef, I, X[1], Ad[1]);
-    store4(pos + 3 * p, aligned, I, W0, W1);
-    const __m512 n = _mm512_permutexvar_ps(pack, normals4<Scaled>(X, Ad, _mm512_loadu_ps(mrest + 3 * p), sig));
-    store12(nout + 3 * p, aligned, _mm512_castps512_ps128(n), _mm512_extractf32x4_ps(n, 1), _mm512_extractf32x4_ps(n, 2));
+    store4<Scatter>(pos, row, p, aligned, I, W0, W1);
+    const __m512 n4 = normals4<Scaled>(X, Ad, _mm512_loadu_ps(mrest + 3 * p), sig);
+    if constexpr (Scatter) {
+      scatter_lanes(nout, row + p, n4);
+    } else {
+      const __m512 n = _mm512_permutexvar_ps(pack, n4);
+      store12(nout + 3 * p, aligned, _mm512_castps512_ps128(n), _mm512_extractf32x4_ps(n, 1), _mm512_extractf32x4_ps(n, 2));
+    }
   }
   _mm_sfence();
 }
@@ -271,9 +299,11 @@ MBI_TARGET_AVX512 void eval_normals(const std::int32_t* rec, const float* coef, 
 }  // namespace
 
 const KernelTable avx512_kernels = {
-    {eval_positions<false>, eval_positions<true>},
-    {eval_normals<false, false>, eval_normals<false, true>},
-    {eval_normals<true, false>, eval_normals<true, true>},
+    {{eval_positions<false, false>, eval_positions<false, true>}, {eval_positions<true, false>, eval_positions<true, true>}},
+    {{eval_normals<false, false, false>, eval_normals<false, false, true>},
+     {eval_normals<false, true, false>, eval_normals<false, true, true>}},
+    {{eval_normals<true, false, false>, eval_normals<true, false, true>},
+     {eval_normals<true, true, false>, eval_normals<true, true, true>}},
 };
 
 }  // namespace mbi::interp::detail

@@ -1,5 +1,5 @@
 // The portable evaluation kernel (see fast_kernel.hpp): plain C++, any CPU, 2D and 3D, either
-// layout; also the tails of the x86 kernels' ranges.
+// layout, rows in order or scattered; also the tails of the x86 kernels' ranges.
 #include "evaluate/fast_kernel.hpp"
 
 #include <cfloat>
@@ -19,11 +19,12 @@ float as_float(std::int32_t w) {
 // a positions-only call and a call with normals give the same positions).
 template <int D>
 void eval_d(const std::int32_t* rec, const float* coef, const Layout& L, const float* mrest, float sigma,
-            float* pos, float* nout, long long begin, long long end) {
+            float* pos, float* nout, const std::int32_t* row, long long begin, long long end) {
   constexpr int NC = coef_stride(D);
   constexpr TermIndex ix(D);
   for (long long p = begin; p < end; ++p) {
     const std::int32_t* r = rec + p * (D + 1);
+    const long long out = row ? row[p] : p;  // the point's output row
     const long long e = r[0];
     float b[D + 1];
     for (int k = 1; k <= D; ++k) b[k] = as_float(r[k]);
@@ -40,7 +41,7 @@ void eval_d(const std::int32_t* rec, const float* coef, const Layout& L, const f
       for (int k = D - 1; k >= 2; --k) rest += b[k] * t[k][c];
       x[c] = (C[L.at(0, c)] + b[1] * t[1][c]) + rest;
     }
-    for (int c = 0; c < D; ++c) pos[p * D + c] = x[c];
+    for (int c = 0; c < D; ++c) pos[out * D + c] = x[c];
     if (!nout) continue;
     float Dk[D + 1][D];  // Dk[k][c] = component c of dx/db_k
     for (int k = 1; k <= D; ++k)
@@ -69,16 +70,16 @@ void eval_d(const std::int32_t* rec, const float* coef, const Layout& L, const f
     for (int c = 0; c < D; ++c) sq += o[c] * o[c];
     const float len = std::sqrt(sq);
     // 0 where J is singular: the x86 kernels' threshold, so that all give the same points 0
-    for (int c = 0; c < D; ++c) nout[p * D + c] = sq > FLT_MIN ? o[c] / len : 0.0f;
+    for (int c = 0; c < D; ++c) nout[out * D + c] = sq > FLT_MIN ? o[c] / len : 0.0f;
   }
 }
 
 }  // namespace
 
 void eval_portable(int d, const std::int32_t* rec, const float* coef, const Layout& L, const float* mrest,
-                   float sigma, float* pos, float* nout, long long begin, long long end) {
-  if (d == 3) eval_d<3>(rec, coef, L, mrest, sigma, pos, nout, begin, end);
-  else eval_d<2>(rec, coef, L, mrest, sigma, pos, nout, begin, end);
+                   float sigma, float* pos, float* nout, const std::int32_t* row, long long begin, long long end) {
+  if (d == 3) eval_d<3>(rec, coef, L, mrest, sigma, pos, nout, row, begin, end);
+  else eval_d<2>(rec, coef, L, mrest, sigma, pos, nout, row, begin, end);
 }
 
 }  // namespace mbi::interp::detail

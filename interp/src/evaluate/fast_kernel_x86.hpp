@@ -1,7 +1,8 @@
 #pragma once
 // What the AVX2 and AVX-512 evaluation kernels share (internal; see fast_kernel.hpp): prefetches
-// and streaming stores. Functions compiled for AVX2/FMA by their target attribute, as the
-// kernels are, so that nothing here is built for a CPU the caller did not check.
+// and stores (streaming for rows in order, 12 bytes a row scattered). Functions compiled for
+// AVX2/FMA by their target attribute, as the kernels are, so that nothing here is built for a
+// CPU the caller did not check.
 #include "evaluate/fast_kernel.hpp"
 
 #ifdef MBI_INTERP_X86
@@ -31,6 +32,31 @@ MBI_TARGET_AVX2 inline void prefetch_terms(const std::int32_t* rec, const float*
     _mm_prefetch(ahead, _MM_HINT_T0);
     _mm_prefetch(ahead + 64, _MM_HINT_T0);
   }
+}
+
+// Prefetch the output rows (in pos and, when set, nout) of the 4 points kRowAhead after p, for
+// writing (the permutation is padded: those are always rows).
+MBI_TARGET_AVX2 inline void prefetch_rows(const std::int32_t* row, float* pos, float* nout, long long p) {
+  for (int k = 0; k < 4; ++k) {
+    const long long r = 3LL * row[p + k + kRowAhead];
+    _mm_prefetch(reinterpret_cast<const char*>(pos + r), _MM_HINT_T0);
+    if (nout) _mm_prefetch(reinterpret_cast<const char*>(nout + r), _MM_HINT_T0);
+  }
+}
+
+// A point's coordinates (lanes 0-2 of v) to its row at out: 8 + 4 bytes, nothing past the row
+// (the next row may be another thread's).
+MBI_TARGET_AVX2 inline void store3(float* out, __m128 v) {
+  _mm_storel_pi(reinterpret_cast<__m64*>(out), v);
+  _mm_store_ss(out + 2, _mm_movehl_ps(v, v));
+}
+
+// 4 points' vectors (x, y, z, .) to their rows out + 3 row[k].
+MBI_TARGET_AVX2 inline void scatter4(float* out, const std::int32_t* row, __m128 r0, __m128 r1, __m128 r2, __m128 r3) {
+  store3(out + 3LL * row[0], r0);
+  store3(out + 3LL * row[1], r1);
+  store3(out + 3LL * row[2], r2);
+  store3(out + 3LL * row[3], r3);
 }
 
 // 12 floats to out: streaming when out is 16-byte aligned.

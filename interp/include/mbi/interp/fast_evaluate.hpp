@@ -14,6 +14,14 @@
 // Threads: OpenMP when the build has it. Kernels: picked once per evaluator from the vector
 // instructions the CPU has (Simd), or asked for.
 //
+// Point order: points in random order over element terms larger than a cache (over 16 MiB: about
+// 131K tetrahedra) would read each point's terms from memory. Then the evaluator keeps its
+// records sorted by element (a stable sort at construction; the permutation costs 4 B a point)
+// and writes each result to its point's own row. A point's position is the same bits in any
+// order, on any thread count (the last 1-3 points of a range run as a group of 4, as the others),
+// and so is its normal but for the AVX-512 kernel's (groups of 16 and the last groups of 4 of a
+// range sum in two orders: float round-off).
+//
 // Results agree with interp::evaluate<double> to float round-off (a few ulp of the coordinate
 // magnitudes: tests/interp/test_fast_evaluate.cpp states the bound). interp::evaluate<double>
 // stays the exact path (files, tests).
@@ -68,9 +76,12 @@ class FastEvaluator {
   int elements() const { return m_; }
   /// Threads evaluate() uses.
   int threads() const;
-  /// True when most points follow a point of the same element (a mesh's order): the kernel then
-  /// runs without prefetching the element terms.
+  /// True when most records follow a record of the same element (a mesh's order, or points
+  /// sorted by element): the kernel then runs without prefetching the element terms.
   bool coherent() const { return coherent_; }
+  /// True when the records are the points sorted by element (see Point order above): results
+  /// are scattered to the points' rows.
+  bool sorted_by_element() const { return !order_.empty(); }
   bool has_rest_normals() const { return !normals_.empty(); }
   /// Bytes a point reads and writes (STREAM convention): 4 (d+1) in + 4 d out, plus 8 d with
   /// normals.
@@ -90,16 +101,20 @@ class FastEvaluator {
  private:
   void prepare(const MatrixIn& B, bool normals);
   const float* rest_normals_for(const float* positions, const float* normals);
+  // the point (input row, output row) of record k
+  Eigen::Index point(long long k) const { return order_.empty() ? k : order_[static_cast<size_t>(k)]; }
   static constexpr std::size_t kSlack = 1024;  // floats (4 KiB) to move the rest-normal block in
+  static constexpr std::size_t kPad = 16;      // floats after the last record's: the x86 kernels' last group of 4 reads them
 
   int d_ = 3, m_ = 0, threads_ = 0;
   Simd simd_ = Simd::Portable;
   bool coherent_ = false;              // most points follow a point of the same element
   float dscale_ = 1.0f;                // per call: a power of 2 near 1 / max |dx/db_k| (normals)
   long long p_ = 0;
-  std::vector<std::int32_t> records_;  // (p + padding) (d+1) words: element id, then d float bit patterns
+  std::vector<std::int32_t> records_;  // (p + padding) (d+1) words a record: element id, then d float bit patterns
+  std::vector<std::int32_t> order_;    // p + padding: the point of each record (a stable sort by element); empty: record i is point i
   std::vector<double> grads_;          // m d d: rows 1..d of each element's basis gradients
-  std::vector<float> normals_;         // p d from moff_ (+ padding): m = cof(A)^T n per point (AVX-512: 16-point groups by component)
+  std::vector<float> normals_;         // p d from moff_ (+ padding): m = cof(A)^T n per record (AVX-512: 16-record groups by component)
   std::size_t moff_ = 0;               // where normals_'s block starts, in floats
   int moves_ = 0;                      // times the block was moved (at most 2)
   std::vector<float> coef_;            // m x 32 (3D; 2D: 16): position terms, cache-line aligned, per call (layout: see src/evaluate/fast_kernel.hpp)
