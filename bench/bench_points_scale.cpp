@@ -5,7 +5,8 @@
 //
 // Control meshes: unit boxes of n^3 cells, 6 tetrahedra a cell (n = 10: 6,000; n = 44: 511,104).
 // Points: uniformly random inside, in two orders: `random` (each point anywhere: the worst case
-// for the cache, every point's element a miss) and `by element` (sorted by the element they lie
+// for the cache; over 16 MiB of element terms the evaluator sorts its records by element and
+// scatters the results to the points' rows) and `by element` (sorted by the element they lie
 // in, as a model whose vertex order follows its surface mostly is). Evaluation: the float kernel
 // (interp::FastEvaluator) with BI's Bezier points of a twisted pose, bytes counted as BM_Eval
 // counts them (bench_throughput.cpp). Full run only (MBI_BENCH_QUICK skips the 10M rows).
