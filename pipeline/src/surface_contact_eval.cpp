@@ -51,6 +51,25 @@ const SurfaceContact::Sample& SurfaceContact::sample(const Eigen::Ref<const Eige
   return at_;
 }
 
+void SurfaceContact::positions_at_x(bool kept, Sample& S) const {
+  if (!kept) return evaluate(S.B, S.points, S.P);
+  // a point's evaluation is its own: the rows at_ has are copied, the others evaluated
+  for (size_t j = 0; j < at_.points.size(); ++j) row_of_[static_cast<size_t>(at_.points[j])] = static_cast<int>(j);
+  std::vector<Eigen::Index> fresh, fresh_rows;
+  for (size_t i = 0; i < S.points.size(); ++i)
+    if (row_of_[static_cast<size_t>(S.points[i])] < 0) {
+      fresh.push_back(S.points[i]);
+      fresh_rows.push_back(static_cast<Eigen::Index>(i));
+    }
+  Rows3 F;
+  evaluate(S.B, fresh, F);
+  S.P.resize(static_cast<Eigen::Index>(S.points.size()), 3);
+  for (size_t i = 0; i < S.points.size(); ++i)
+    if (const int j = row_of_[static_cast<size_t>(S.points[i])]; j >= 0) S.P.row(static_cast<Eigen::Index>(i)) = at_.P.row(j);
+  for (size_t k = 0; k < fresh.size(); ++k) S.P.row(fresh_rows[k]) = F.row(static_cast<Eigen::Index>(k));
+  for (Eigen::Index p : at_.points) row_of_[static_cast<size_t>(p)] = -1;
+}
+
 const SurfaceContact::Sample& SurfaceContact::sample(const Eigen::Ref<const Eigen::VectorXd>& x,
                                                      const Eigen::Ref<const Eigen::VectorXd>& dx) const {
   check_size(x);
@@ -67,8 +86,8 @@ const SurfaceContact::Sample& SurfaceContact::sample(const Eigen::Ref<const Eige
   Eigen::VectorXd reach(m);
   for (int e = 0; e < m; ++e) reach(e) = BD.middleRows(e * K, K).rowwise().norm().maxCoeff() / 0.9;
   gather(along_.B, reach, along_);
-  evaluate(along_.B, along_.points, along_.P);  // a point's evaluation is its own: at x as in at_, to the bit
   evaluate(BD, along_.points, along_.D);
+  positions_at_x(kept, along_);
   const size_t C = colliders_.size();
   const bool capped = started_ && !std::isinf(max_depth_);
   const long long rows = static_cast<long long>(along_.points.size());

@@ -155,6 +155,8 @@ class SurfaceContact : public sim::Potential {
   void index_points();                                          // element_start_ and the rest
   /// W applied to the Bezier points B at `points`, rows as `points` (interp's subset evaluation).
   void evaluate(const interp::BezierPoints& B, const std::vector<Eigen::Index>& points, Rows3& out) const;
+  /// S.P from S.B at S.points; kept: S.B is at_.B, whose rows are copied (the same values).
+  void positions_at_x(bool kept, Sample& S) const;
   /// Adds W^T G to out (3 n): G one row per point of active_points_ (interp's sums per run of one
   /// element, so the same for every thread count).
   void add_transpose(const Rows3& G, Eigen::Ref<Eigen::VectorXd> out) const;
