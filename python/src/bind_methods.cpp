@@ -53,6 +53,10 @@ void solver_properties(Cls& c) {
                              "True when solve() is one dense product")
       .def_property_readonly("factorization", get([](const ModifiedBI& b) { return b.factorization(); }))
       .def_property_readonly("factor_nonzeros", get([](const ModifiedBI& b) { return b.factor_nonzeros(); }))
+      .def_property_readonly("factor_stored_values", get([](const ModifiedBI& b) { return b.factor_stored_values(); }),
+                             "values the factor stores (supernodal blocks whole): what a solve reads twice")
+      .def_property_readonly("factor_index_bytes", get([](const ModifiedBI& b) { return b.factor_index_bytes(); }),
+                             "bytes of the factor's index arrays that a solve reads")
       .def_property_readonly("memory_bytes", get([](const ModifiedBI& b) { return b.memory_bytes(); }),
                              "bytes the precompute keeps");
 }

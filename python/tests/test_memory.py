@@ -16,6 +16,9 @@ def test_estimate_bounds_the_factor_that_modified_bi_builds():
     assert e.unknowns == 3 * len(U)
     # an upper bound of the values the factor stores, within 2x (tests/interp/test_memory.cpp in C++)
     assert solver.factor_nonzeros <= e.factor_nonzeros <= 2 * solver.factor_nonzeros
+    # the factor as stored: at least its nonzeros, an index a row at least
+    assert solver.factor_stored_values >= solver.factor_nonzeros
+    assert solver.factor_index_bytes >= 4 * e.unknowns
     assert e.ordering in ("AMD", "METIS", "AMD (Eigen)")
     parts = e.process_bytes + e.model_bytes + e.factor_bytes + e.assembly_bytes + e.dense_operator_bytes
     assert e.peak_bytes == pytest.approx(parts, rel=1e-12)
