@@ -214,15 +214,7 @@ void evaluate(const MatrixIn& B, const Embedding& emb, std::span<const Eigen::In
               PointsRef<double> positions, int threads) {
   const int d = check_inputs(B, emb, false);
   const long long m = B.rows() / ((d + 1) * (d + 2) / 2);
-  for (size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Index p = points[i];
-    if (p < 0 || p >= emb.size())
-      throw Error("points[" + std::to_string(i) + "] = " + std::to_string(p) + " is outside [0, " +
-                  std::to_string(emb.size()) + ")");
-    if (emb.element(p) < 0 || emb.element(p) >= m)
-      throw Error("point " + std::to_string(p) + " refers to element " + std::to_string(emb.element(p)) +
-                  " outside [0, " + std::to_string(m) + ")");
-  }
+  detail::check_point_list(emb, points, m);
   if (positions.rows() != static_cast<Eigen::Index>(points.size()) || positions.cols() != d)
     throw Error("positions must be " + std::to_string(points.size()) + " x " + std::to_string(d) + ", got " +
                 std::to_string(positions.rows()) + " x " + std::to_string(positions.cols()));

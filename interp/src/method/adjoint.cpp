@@ -144,16 +144,9 @@ void evaluate_transpose(const Embedding& emb, std::span<const Eigen::Index> poin
   // runs of consecutive points of one element, each summed on one thread, then added in order
   thread_local std::vector<long long> runs;
   runs.clear();
-  for (size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Index p = points[i];
-    if (p < 0 || p >= emb.size())
-      throw Error("points[" + std::to_string(i) + "] = " + std::to_string(p) + " is outside [0, " +
-                  std::to_string(emb.size()) + ")");
-    if (emb.element(p) < 0 || emb.element(p) >= elements)
-      throw Error("point " + std::to_string(p) + " refers to element " + std::to_string(emb.element(p)) +
-                  " outside [0, " + std::to_string(elements) + ")");
-    if (i == 0 || emb.element(p) != emb.element(points[i - 1])) runs.push_back(static_cast<long long>(i));
-  }
+  detail::check_point_list(emb, points, elements);
+  for (size_t i = 0; i < points.size(); ++i)
+    if (i == 0 || emb.element(points[i]) != emb.element(points[i - 1])) runs.push_back(static_cast<long long>(i));
   const long long nr = static_cast<long long>(runs.size());
   runs.push_back(static_cast<long long>(points.size()));
   thread_local std::vector<double> part;

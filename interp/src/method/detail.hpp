@@ -1,10 +1,12 @@
 #pragma once
 // Internal helpers of mbi::interp (not installed).
+#include <mbi/interp/embed.hpp>
 #include <mbi/interp/mesh.hpp>
 #include <mbi/interp/modified_bi.hpp>
 
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -23,6 +25,10 @@ void bezier_rows(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<co
 
 /// Throws Error naming the first non-finite entry of A (row `what` r).
 void check_finite(const char* what, const Eigen::Ref<const Eigen::MatrixXd>& A);
+
+/// Throws Error naming the first of `points` outside emb's points, or whose element is outside
+/// [0, elements): the index lists of the subset evaluation and its transpose.
+void check_point_list(const Embedding& emb, std::span<const Eigen::Index> points, long long elements);
 
 /// Per-component quadratic forms (method.md facts 1-3), unweighted, energy = z^T H z:
 /// vibr_mm (dn x dn), disc_mm (dn x dn), disc_mx (dn x n), disc_xx (n x n); m index i d + r.

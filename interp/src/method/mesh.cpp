@@ -36,6 +36,18 @@ void check_finite(const char* what, const Eigen::Ref<const Eigen::MatrixXd>& A) 
                     " has a non-finite coordinate (column " + std::to_string(c) + ")");
 }
 
+void check_point_list(const Embedding& emb, std::span<const Eigen::Index> points, long long elements) {
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Index p = points[i];
+    if (p < 0 || p >= emb.size())
+      throw Error("points[" + std::to_string(i) + "] = " + std::to_string(p) + " is outside [0, " +
+                  std::to_string(emb.size()) + ")");
+    if (emb.element(p) < 0 || emb.element(p) >= elements)
+      throw Error("point " + std::to_string(p) + " refers to element " + std::to_string(emb.element(p)) +
+                  " outside [0, " + std::to_string(elements) + ")");
+  }
+}
+
 }  // namespace detail
 
 namespace {
