@@ -94,6 +94,7 @@ void BM_EvalScale(benchmark::State& st) {
   }
   const double bytes = static_cast<double>(p) * 28.0 + static_cast<double>(g.T.rows()) * 10 * 3 * 8.0;
   st.counters["tets"] = static_cast<double>(g.T.rows());
+  st.counters["sorted"] = fe.sorted_by_element() ? 1 : 0;  // the evaluator's records a permutation of the points
   st.counters["bytes_per_eval"] = bytes;
   st.SetItemsProcessed(static_cast<int64_t>(st.iterations()) * p);
   st.SetBytesProcessed(static_cast<int64_t>(static_cast<double>(st.iterations()) * bytes));
