@@ -195,10 +195,10 @@ FastEvaluator::FastEvaluator(const Embedding& emb, int threads, Simd simd) : thr
               emb.gradients(static_cast<Eigen::Index>(e) * (d + 1) + k, r);
   }
   // records, in element order where that pays (element_order()): one block (the x86 kernel
-  // loads two 3D records as one 32-byte vector), then kPrefetch + 4 records of element 0 for the
-  // prefetches past the end and the last group of 4
+  // loads two 3D records as one 32-byte vector), then kPrefetch + 16 records of element 0 for
+  // the prefetches past the end and the last group (evaluate())
   order_ = element_order(emb.element, m_, d);
-  records_.assign(static_cast<size_t>(p_ + kPrefetch + 4) * (d + 1), 0);
+  records_.assign(static_cast<size_t>(p_ + kPrefetch + 16) * (d + 1), 0);
   for (long long k = 0; k < p_; ++k) {
     const Eigen::Index i = point(k);
     std::int32_t* r = records_.data() + k * (d + 1);
@@ -253,10 +253,10 @@ void FastEvaluator::set_rest_normals(const Eigen::Ref<const Eigen::MatrixXd>& no
   // The AVX-512 kernel takes each whole group of 16 points (groups start at multiples of 16:
   // every thread's block does) as three registers, one component each, lane 4 g + k holding
   // point 4 k + g (Normals16): stored in that order, it loads them without a permute. The last,
-  // partial group stays point by point (the 4-point and portable tails read it so).
+  // partial group too, padded with zeros: evaluate() runs it as a whole group.
   if (simd_ == Simd::Avx512 && d == 3) {
     float g[48];
-    for (long long q = 0; q + 16 <= p_; q += 16) {
+    for (long long q = 0; q < p_; q += 16) {
       float* block = normals_.data() + 3 * q;
       for (int c = 0; c < 3; ++c)
         for (int l = 0; l < 16; ++l) g[16 * c + l] = block[3 * (4 * (l % 4) + l / 4) + c];
@@ -357,18 +357,21 @@ void FastEvaluator::evaluate(const MatrixIn& B, float* positions, float* normals
   }
 #endif
   const std::int32_t* row = order_.empty() ? nullptr : order_.data();
-  // kBlock points a block, a multiple of 4 (each block's first output float stays 16-byte aligned)
+  // the x86 kernels' groups: 4 points, 16 for the AVX-512 normals (groups of 4 there sum in
+  // another order)
+  const long long group = simd_ == Simd::Avx512 && with_normals ? 16 : 4;
+  // kBlock points a block, a multiple of 16 (each block's first output float stays 16-byte aligned)
   detail::parallel_blocks(p, kBlock, threads(), [&](long long begin, long long end) {
     if (!x86) return detail::eval_portable(d, rec, coef, L, mrest, sigma, positions, normals, row, begin, end);
-    const long long mid = begin + (end - begin) / 4 * 4;
+    const long long mid = begin + (end - begin) / group * group;
     x86(rec, coef, mrest, sigma, positions, normals, row, begin, mid);
     if (mid == end) return;
-    // The last 1-3 records: a whole group of 4 (the padding records after them) into scratch,
-    // then their rows copied: the same arithmetic as every other point, wherever it lies. The
-    // scratch is off 16-byte alignment: plain stores, as it is read back at once.
-    alignas(16) float tp[13], tn[13];
+    // The last records: a whole group (the padding records after them) into scratch, then their
+    // rows copied: the same arithmetic as every other point, wherever it lies. The scratch is off
+    // 16-byte alignment: plain stores, as it is read back at once.
+    alignas(16) float tp[49], tn[49];
     x86_in_order(rec + (d + 1) * mid, coef, mrest ? mrest + d * mid : nullptr, sigma, tp + 1, normals ? tn + 1 : nullptr,
-                 nullptr, 0, 4);
+                 nullptr, 0, group);
     for (long long k = mid; k < end; ++k) {
       const long long r = d * static_cast<long long>(point(k)), s = 1 + d * (k - mid);
       std::copy(tp + s, tp + s + d, positions + r);

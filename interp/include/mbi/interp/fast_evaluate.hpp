@@ -17,10 +17,9 @@
 // Point order: points in random order over element terms larger than a cache (over 16 MiB: about
 // 131K tetrahedra) would read each point's terms from memory. Then the evaluator keeps its
 // records sorted by element (a stable sort at construction; the permutation costs 4 B a point)
-// and writes each result to its point's own row. A point's position is the same bits in any
-// order, on any thread count (the last 1-3 points of a range run as a group of 4, as the others),
-// and so is its normal but for the AVX-512 kernel's (groups of 16 and the last groups of 4 of a
-// range sum in two orders: float round-off).
+// and writes each result to its point's own row. A point's position and normal are the same bits
+// in any order, on any thread count (the last points of a range run as a whole group, as the
+// others).
 //
 // Results agree with interp::evaluate<double> to float round-off (a few ulp of the coordinate
 // magnitudes: tests/interp/test_fast_evaluate.cpp states the bound). interp::evaluate<double>
@@ -104,7 +103,7 @@ class FastEvaluator {
   // the point (input row, output row) of record k
   Eigen::Index point(long long k) const { return order_.empty() ? k : order_[static_cast<size_t>(k)]; }
   static constexpr std::size_t kSlack = 1024;  // floats (4 KiB) to move the rest-normal block in
-  static constexpr std::size_t kPad = 16;      // floats after the last record's: the x86 kernels' last group of 4 reads them
+  static constexpr std::size_t kPad = 48;      // floats after the last record's: the x86 kernels' last group (16 points) reads them
 
   int d_ = 3, m_ = 0, threads_ = 0;
   Simd simd_ = Simd::Portable;
