@@ -182,7 +182,6 @@ struct Simulator::Impl {
   std::vector<NodeBlock> pot_blocks;
   Eigen::VectorXd pot_grad, trial, x_trial;
   int halvings = 0;                 // line-search halvings of the current step
-  double line_step = 0.0;           // the fraction of delta the last line search took
   Eigen::VectorXd cg_d, cg_res, cg_z, cg_p, cg_q, cg_hv;  // exact_step's scratch
   std::vector<double> phi_history;  // incremental potential of the last substep
   // With a potential, Newton's first guess extrapolates the last substep's change of velocity:
@@ -559,7 +558,6 @@ bool Simulator::Impl::line_search(Eigen::VectorXd& vk, double h, double& phi) {
       vk.swap(trial);
       phi = value;
       delta *= step;
-      line_step = step;
       return true;
     }
     ++halvings;
@@ -770,7 +768,6 @@ std::string Simulator::Impl::substep(double h, int& newton, int& iters, double& 
         if (!constrained_dof[d]) vk(d) = 0.0;
   }
   Eigen::VectorXd xe(3 * n), vd(3 * n);
-  double last_dmax = -1.0;  // the last full Newton update's size; -1: none (or a shortened step)
   for (int it = 0; it < params.newton_iterations; ++it) {
     auto t0 = Clock::now();
     xe = x + h * (th1 * v + th2 * vk);
@@ -821,13 +818,6 @@ std::string Simulator::Impl::substep(double h, int& newton, int& iters, double& 
       phi_history.push_back(phi);
     }
     if (params.newton_tolerance > 0 && dmax <= params.newton_tolerance) break;
-    if (potential && params.newton_tolerance > 0) {
-      // After two full steps the next update is about theta dmax (theta = dmax / last_dmax, the
-      // contraction): below the tolerance, that iteration would only confirm
-      const bool full = line_step == 1.0;
-      if (full && last_dmax > 0 && dmax < last_dmax && dmax * dmax <= params.newton_tolerance * last_dmax) break;
-      last_dmax = full ? dmax : -1.0;
-    }
   }
   const Eigen::VectorXd x_old = x;
   x += h * (ps1 * v + ps2 * vk);

@@ -142,7 +142,7 @@ TEST_CASE("evaluate and FastEvaluator read the Bezier points in any layout: row-
   }
 }
 
-TEST_CASE("a subset of the points evaluates to the full evaluation's rows, to the bit; its transpose is the full one's "
+TEST_CASE("a subset of the points evaluates to the full evaluation's rows, to the bit, and its transpose is the full one's "
           "with the other rows of dL/dpositions zero, the same on every thread count",
           "[evaluate][adjoint]") {
   for (int d : {2, 3}) {
