@@ -86,6 +86,9 @@ void bind_fast_evaluator(py::module_& m) {
       .def_property_readonly("threads", [](Fast& f) { return f.object.threads(); })
       .def_property_readonly("simd", [](Fast& f) { return std::string(FastEvaluator::name(f.object.simd())); })
       .def_property_readonly("coherent", [](Fast& f) { return f.object.coherent(); })
+      .def_property_readonly("sorted_by_element", [](Fast& f) { return f.object.sorted_by_element(); },
+                             "True when the evaluator keeps its points sorted by element (random order over a "
+                             "large mesh) and scatters the results to their rows")
       .def_property_readonly("has_rest_normals", [](Fast& f) { return f.run([](FastEvaluator& e) { return e.has_rest_normals(); }); })
       .def("bytes_per_point", [](Fast& f, bool normals) { return f.object.bytes_per_point(normals); },
            "normals"_a = false)

@@ -130,6 +130,23 @@ def test_fast_evaluator_agrees_with_the_exact_path(mesh):
     # a Bezier array in C order is read through a copy: the same result
     assert np.array_equal(fast.evaluate(np.ascontiguousarray(B)), pos)
     assert mbi.FastEvaluator.supported("portable")
+    assert not fast.sorted_by_element  # a small mesh: the points keep their order
+
+
+def test_fast_evaluator_sorts_random_points_over_a_large_mesh_and_gives_each_its_row():
+    U, T = mbi.box_mesh(30, 30, 30)  # 162,000 tetrahedra: their terms exceed 16 MiB
+    rng = np.random.default_rng(5)
+    P = rng.uniform(0.0, 1.0, (20000, 3))
+    emb = mbi.embed(U, T, P)
+    B = mbi.bezier_bi(U + 0.05 * np.sin(4 * U), T)
+    fast = mbi.FastEvaluator(emb, threads=2)
+    assert fast.sorted_by_element
+    order = np.argsort(emb.element, kind="stable")
+    in_order = mbi.FastEvaluator(mbi.embed(U, T, P[order]), threads=2)
+    assert not in_order.sorted_by_element
+    # each point's row, to the bit, whatever the order the points come in
+    assert np.array_equal(fast.evaluate(B)[order], in_order.evaluate(B))
+    assert np.abs(fast.evaluate(B) - mbi.evaluate(B, emb)).max() < 1e-5
 
 
 def test_discontinuity_table(mesh):
