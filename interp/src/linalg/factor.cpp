@@ -55,73 +55,71 @@ std::size_t CholeskyFactor::index_bytes() const {
   return (rows.size() + super.size()) * sizeof(int) + (rowp.size() + valp.size()) * sizeof(std::ptrdiff_t);
 }
 
-void CholeskyFactor::schedule(int n_groups, std::ptrdiff_t min_nonzeros) {
-  bins = 1;
-  groups.clear();
-  top.clear();
-  prow.clear();
-  const int ns = static_cast<int>(super.size()) - 1;
-  if (n_groups < 2 || ns < 2 || nonzeros() < min_nonzeros) return;
-  n_groups = std::min(n_groups, 8);
-  // supernodal elimination tree: the parent holds the first row below the diagonal block
-  std::vector<int> col_super(n), parent(ns, -1);
+namespace {
+
+// The supernodal elimination tree: parent[s] (-1: a root) holds the first row below s's diagonal
+// block; col_super maps a column to its supernode. False when a parent does not come after its
+// child (not a tree in topological order: the sweeps then stay serial).
+bool supernode_tree(const CholeskyFactor& F, std::vector<int>& col_super, std::vector<int>& parent) {
+  const int ns = static_cast<int>(F.super.size()) - 1;
+  col_super.assign(static_cast<size_t>(F.n), 0);
+  parent.assign(static_cast<size_t>(ns), -1);
   for (int s = 0; s < ns; ++s)
-    for (int k = super[s]; k < super[s + 1]; ++k) col_super[k] = s;
+    for (int k = F.super[s]; k < F.super[s + 1]; ++k) col_super[k] = s;
   for (int s = 0; s < ns; ++s) {
-    const int nscol = super[s + 1] - super[s];
-    int first = n;
-    for (std::ptrdiff_t i = rowp[s] + nscol; i < rowp[s + 1]; ++i) first = std::min(first, rows[i]);
-    if (first < n) {
+    const int nscol = F.super[s + 1] - F.super[s];
+    int first = F.n;
+    for (std::ptrdiff_t i = F.rowp[s] + nscol; i < F.rowp[s + 1]; ++i) first = std::min(first, F.rows[i]);
+    if (first < F.n) {
       parent[s] = col_super[first];
-      if (parent[s] <= s) return;  // not a tree in topological order: stay serial
+      if (parent[s] <= s) return false;
     }
   }
-  std::vector<std::vector<int>> children(ns);
-  std::vector<double> work(ns);  // entries of L in the subtree
-  for (int s = 0; s < ns; ++s) {
-    const double nscol = super[s + 1] - super[s];
-    work[s] += nscol * static_cast<double>(rowp[s + 1] - rowp[s]);
-    if (parent[s] >= 0) {
-      children[parent[s]].push_back(s);
-      work[parent[s]] += work[s];
-    }
+  return true;
+}
+
+// Candidate subtrees packed into n_groups bins, largest first onto the least loaded; returns the
+// heaviest bin's load, bin_of[i] the bin of candidate c[i].
+double pack(const std::vector<int>& c, const std::vector<double>& work, int n_groups, std::vector<int>& bin_of) {
+  std::vector<int> order(c.size());
+  for (size_t i = 0; i < c.size(); ++i) order[i] = static_cast<int>(i);
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return work[c[a]] > work[c[b]]; });
+  std::vector<double> load(n_groups, 0.0);
+  bin_of.assign(c.size(), 0);
+  for (int i : order) {
+    const int b = static_cast<int>(std::min_element(load.begin(), load.end()) - load.begin());
+    bin_of[i] = b;
+    load[b] += work[c[i]];
   }
-  // Split the largest candidate subtree into its children until the groups balance; keep the
-  // split with the least critical path (top part + heaviest group).
+  return *std::max_element(load.begin(), load.end());
+}
+
+// A split of the tree: the subtrees run by the groups (`cand`, each in group bin[i]) and the
+// supernodes above them (`top`); cost = the top part's work + the heaviest group's.
+struct Split {
+  std::vector<int> cand, bin;
+  std::vector<char> top;
+  double cost = 0;
+};
+
+// Splits the largest candidate subtree into its children until the groups balance, and keeps the
+// split with the least critical path. work[s]: entries of L in s's subtree. (A chain of single
+// columns above the first branch, as Eigen's simplicial factor has, takes one split a column; the
+// top part only grows, so once it costs more than the best split no later one can be better.)
+Split best_split(const std::vector<int>& parent, const std::vector<std::vector<int>>& children,
+                 const std::vector<double>& work, int n_groups) {
+  const int ns = static_cast<int>(parent.size());
   std::vector<int> cand;
   for (int s = 0; s < ns; ++s)
     if (parent[s] < 0) cand.push_back(s);
   std::vector<char> is_top(ns, 0);
-  double top_work = 0, best_cost = 0;
-  for (int s : cand) best_cost += work[s];  // serial
-  std::vector<int> best_cand;
-  std::vector<char> best_top;
-  std::vector<int> best_bin;
-  auto pack = [&](const std::vector<int>& c, std::vector<int>& bin_of) {  // largest first
-    std::vector<int> order(c.size());
-    for (size_t i = 0; i < c.size(); ++i) order[i] = static_cast<int>(i);
-    std::sort(order.begin(), order.end(), [&](int a, int b) { return work[c[a]] > work[c[b]]; });
-    std::vector<double> load(n_groups, 0.0);
-    bin_of.assign(c.size(), 0);
-    for (int i : order) {
-      const int b = static_cast<int>(std::min_element(load.begin(), load.end()) - load.begin());
-      bin_of[i] = b;
-      load[b] += work[c[i]];
-    }
-    return *std::max_element(load.begin(), load.end());
-  };
-  // (a chain of single columns above the first branch, as Eigen's simplicial factor has, takes
-  // one split a column; the top part only grows, so once it costs more than the best split no
-  // later one can be better)
-  for (int iter = 0; iter < 100000 && !cand.empty() && top_work < best_cost; ++iter) {
+  double top_work = 0;
+  Split best;
+  for (int s : cand) best.cost += work[s];  // serial
+  for (int iter = 0; iter < 100000 && !cand.empty() && top_work < best.cost; ++iter) {
     std::vector<int> bin_of;
-    const double cost = top_work + pack(cand, bin_of);
-    if (cost < best_cost) {
-      best_cost = cost;
-      best_cand = cand;
-      best_top = is_top;
-      best_bin = bin_of;
-    }
+    const double cost = top_work + pack(cand, work, n_groups, bin_of);
+    if (cost < best.cost) best = {cand, bin_of, is_top, cost};
     auto big = std::max_element(cand.begin(), cand.end(), [&](int a, int b) { return work[a] < work[b]; });
     const int s = *big;
     cand.erase(big);
@@ -132,14 +130,40 @@ void CholeskyFactor::schedule(int n_groups, std::ptrdiff_t min_nonzeros) {
       cand.push_back(c);
     }
   }
+  return best;
+}
+
+}  // namespace
+
+void CholeskyFactor::schedule(int n_groups, std::ptrdiff_t min_nonzeros) {
+  bins = 1;
+  groups.clear();
+  top.clear();
+  prow.clear();
+  const int ns = static_cast<int>(super.size()) - 1;
+  if (n_groups < 2 || ns < 2 || nonzeros() < min_nonzeros) return;
+  n_groups = std::min(n_groups, 8);
+  std::vector<int> col_super, parent;
+  if (!supernode_tree(*this, col_super, parent)) return;
+  std::vector<std::vector<int>> children(ns);
+  std::vector<double> work(ns);  // entries of L in the subtree
   double total = 0;
+  for (int s = 0; s < ns; ++s) {
+    const double nscol = super[s + 1] - super[s];
+    work[s] += nscol * static_cast<double>(rowp[s + 1] - rowp[s]);
+    if (parent[s] >= 0) {
+      children[parent[s]].push_back(s);
+      work[parent[s]] += work[s];
+    }
+  }
   for (int s = 0; s < ns; ++s)
     if (parent[s] < 0) total += work[s];
-  if (best_cand.empty() || best_cost > 0.8 * total) return;  // no useful split
+  const Split best = best_split(parent, children, work, n_groups);
+  if (best.cand.empty() || best.cost > 0.8 * total) return;  // no useful split
   std::vector<int> owner(ns, -1);
-  for (size_t i = 0; i < best_cand.size(); ++i) owner[best_cand[i]] = best_bin[i];
+  for (size_t i = 0; i < best.cand.size(); ++i) owner[best.cand[i]] = best.bin[i];
   for (int s = ns - 1; s >= 0; --s) {
-    if (best_top[s]) owner[s] = -1;
+    if (best.top[s]) owner[s] = -1;
     else if (owner[s] < 0 && parent[s] >= 0) owner[s] = owner[parent[s]];
   }
   prow = rows;
