@@ -86,7 +86,21 @@ struct BlockMatrix {
   }
 };
 
-constexpr int kBlock = 1024;  // elements or faces a block
+// Items [0, count) a block of 1024 at a time: compute(i, local) on the library's threads, then
+// add(i, local) in item order on the calling thread, so the sums do not depend on the threads.
+template <class Local, class Compute, class Add>
+void in_blocks(int count, const Compute& compute, const Add& add) {
+  constexpr int kBlock = 1024;
+  std::vector<Local> buf(static_cast<size_t>(std::min(std::max(count, 1), kBlock)));
+  const int threads = thread_count(std::min(count, kBlock), 64);
+  for (int i0 = 0; i0 < count; i0 += kBlock) {
+    const int i1 = std::min(count, i0 + kBlock);
+    parallel_blocks(i1 - i0, 64, threads, [&](long long lo, long long hi) {
+      for (int i = i0 + static_cast<int>(lo); i < i0 + hi; ++i) compute(i, buf[static_cast<size_t>(i - i0)]);
+    });
+    for (int i = i0; i < i1; ++i) add(i, buf[static_cast<size_t>(i - i0)]);
+  }
+}
 
 // The assembly in dimension D (the same code serves triangles and tetrahedra): the elements'
 // basis gradients once, then each energy's pass.
@@ -133,34 +147,25 @@ struct FixedAssembly {
       Eigen::Matrix<double, NV, NV> H;
       int pos[D + 1][D + 1];  // pos[k][l]: T(e, k) among the neighbours of T(e, l)
     };
-    std::vector<Local> buf(static_cast<size_t>(std::min(m, kBlock)));
-    const int ntb = thread_count(std::min(m, kBlock), 64);
-    for (int e0 = 0; e0 < m; e0 += kBlock) {
-      const int e1 = std::min(m, e0 + kBlock);
-      parallel_blocks(e1 - e0, 64, ntb, [&](long long lo, long long hi) {
-        for (int e = e0 + static_cast<int>(lo); e < e0 + hi; ++e) {
-          Local& Lc = buf[static_cast<size_t>(e - e0)];
-          Eigen::Matrix<double, D * D, NV> L = Eigen::Matrix<double, D * D, NV>::Zero();
+    const auto compute = [&](int e, Local& Lc) {
+      Eigen::Matrix<double, D * D, NV> L = Eigen::Matrix<double, D * D, NV>::Zero();
+      for (int k = 0; k <= D; ++k)
+        for (int p = 0; p < D; ++p)
+          for (int q = 0; q < D; ++q) {
+            L(p * D + q, k * D + q) += A[e](k, p);
+            L(p * D + q, k * D + p) += A[e](k, q);
+          }
+      Lc.H.noalias() = volume[e] * (L.transpose() * L);
+      for (int k = 0; k <= D; ++k)
+        for (int l = 0; l <= D; ++l) Lc.pos[k][l] = Pe.find(T(e, l), T(e, k));
+    };
+    const auto add = [&](int e, const Local& Lc) {
+      for (int l = 0; l <= D; ++l)
+        for (int s = 0; s < D; ++s)
           for (int k = 0; k <= D; ++k)
-            for (int p = 0; p < D; ++p)
-              for (int q = 0; q < D; ++q) {
-                L(p * D + q, k * D + q) += A[e](k, p);
-                L(p * D + q, k * D + p) += A[e](k, q);
-              }
-          Lc.H.noalias() = volume[e] * (L.transpose() * L);
-          for (int k = 0; k <= D; ++k)
-            for (int l = 0; l <= D; ++l) Lc.pos[k][l] = Pe.find(T(e, l), T(e, k));
-        }
-      });
-      for (int e = e0; e < e1; ++e) {
-        const Local& Lc = buf[static_cast<size_t>(e - e0)];
-        for (int l = 0; l <= D; ++l)
-          for (int s = 0; s < D; ++s)
-            for (int k = 0; k <= D; ++k)
-              for (int r = 0; r < D; ++r)
-                out.at(r, T(e, l), s, Lc.pos[k][l]) += Lc.H(k * D + r, l * D + s);
-      }
-    }
+            for (int r = 0; r < D; ++r) out.at(r, T(e, l), s, Lc.pos[k][l]) += Lc.H(k * D + r, l * D + s);
+    };
+    in_blocks<Local>(m, compute, add);
     return out.take();
   }
 
@@ -247,21 +252,14 @@ struct FixedAssembly {
     const std::vector<FaceVertices> local = face_vertices(F);
     const VertexPattern Pf = vertex_pattern(n, nf, NL, [&](int f, int a) { return local[f][a]; });
     BlockMatrix dmm(Pf, n, D, D), dmx(Pf, n, D, 1), dxx(Pf, n, 1, 1);
-    std::vector<FaceLocal> buf(static_cast<size_t>(std::min(std::max(nf, 1), kBlock)));
-    const int ntb = thread_count(std::min(nf, kBlock), 64);
-    for (int f0 = 0; f0 < nf; f0 += kBlock) {
-      const int f1 = std::min(nf, f0 + kBlock);
-      parallel_blocks(f1 - f0, 64, ntb, [&](long long lo, long long hi) {
-        for (int f = f0 + static_cast<int>(lo); f < f0 + hi; ++f) {
-          FaceLocal& Lc = buf[static_cast<size_t>(f - f0)];
-          const FaceVertices& lv = local[static_cast<size_t>(f)];
-          face_hessian(F, f, lv, Lc.H);
-          for (int p = 0; p < NL; ++p)
-            for (int q = 0; q < NL; ++q) Lc.pos[p][q] = Pf.find(lv[q], lv[p]);
-        }
-      });
-      for (int f = f0; f < f1; ++f) add_face(buf[static_cast<size_t>(f - f0)], local[static_cast<size_t>(f)], dmm, dmx, dxx);
-    }
+    const auto compute = [&](int f, FaceLocal& Lc) {
+      const FaceVertices& lv = local[static_cast<size_t>(f)];
+      face_hessian(F, f, lv, Lc.H);
+      for (int p = 0; p < NL; ++p)
+        for (int q = 0; q < NL; ++q) Lc.pos[p][q] = Pf.find(lv[q], lv[p]);
+    };
+    const auto add = [&](int f, const FaceLocal& Lc) { add_face(Lc, local[static_cast<size_t>(f)], dmm, dmx, dxx); };
+    in_blocks<FaceLocal>(nf, compute, add);
     out.disc_mm = dmm.take();
     out.disc_mx = dmx.take();
     out.disc_xx = dxx.take();
