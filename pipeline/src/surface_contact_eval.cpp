@@ -188,6 +188,16 @@ const std::vector<SurfaceContact::Term>& SurfaceContact::terms(const Eigen::Ref<
       active_points_.push_back(S.points[i]);
     }
   counts_.active += static_cast<long long>(active_rows_.size());
+  active_elements_.clear();
+  active_vertices_.clear();
+  const Eigen::MatrixXi& T = deformer_->elements_matrix();
+  for (Eigen::Index p : active_points_) active_elements_.push_back(deformer_->embedding().element(p));
+  std::sort(active_elements_.begin(), active_elements_.end());
+  active_elements_.erase(std::unique(active_elements_.begin(), active_elements_.end()), active_elements_.end());
+  for (int e : active_elements_)
+    for (Eigen::Index k = 0; k < T.cols(); ++k) active_vertices_.push_back(T(e, k));
+  std::sort(active_vertices_.begin(), active_vertices_.end());
+  active_vertices_.erase(std::unique(active_vertices_.begin(), active_vertices_.end()), active_vertices_.end());
   return terms_;
 }
 
@@ -215,11 +225,24 @@ void SurfaceContact::add_transpose(const Rows3& G, Eigen::Ref<Eigen::VectorXd> o
   interp::evaluate_transpose(deformer_->embedding(), active_points_, as_points(G), m, GB, deformer_->options().threads);
   Eigen::MatrixXd GX(U.rows(), 3), GMX(U.rows(), 3);
   interp::VertexMatrices GM(3 * U.rows(), 3);
-  interp::bezier_transpose(U, deformer_->elements_matrix(), GB, GX, GM);
-  if (deformer_->method() == Method::ModifiedBI) deformer_->solver().solve_transpose(GM, GMX);
+  // GB is zero outside the active points' elements, GM outside their vertices
+  interp::bezier_transpose(U, deformer_->elements_matrix(), GB, active_elements_, GX, GM);
+  if (deformer_->method() == Method::ModifiedBI) deformer_->solver().solve_transpose_vertices(GM, active_vertices_, GMX);
   if (deformer_->method() == Method::Phong) deformer_->phong().M_transpose(GM, GMX);
   if (deformer_->method() != Method::BI) GX += GMX;
   for (Eigen::Index i = 0; i < GX.rows(); ++i) out.segment<3>(3 * i) += GX.row(i).transpose();
+}
+
+const interp::BezierPoints& SurfaceContact::active_bezier(const Eigen::MatrixXd& X) const {
+  const Eigen::MatrixXd& U = deformer_->rest_positions();
+  const Eigen::MatrixXi& T = deformer_->elements_matrix();
+  product_B_.resize(T.rows() * kBezier, 3);
+  product_M_.resize(3 * U.rows(), 3);
+  if (deformer_->method() == Method::ModifiedBI) deformer_->solver().solve_vertices(X, active_vertices_, product_M_);
+  else if (deformer_->method() == Method::Phong) deformer_->phong().M(X, product_M_);
+  else product_M_.setZero();
+  interp::bezier_points(U, T, X, product_M_, active_elements_, product_B_);
+  return product_B_;
 }
 
 bool SurfaceContact::add_hessian_product(const Eigen::Ref<const Eigen::VectorXd>& x,
@@ -230,7 +253,7 @@ bool SurfaceContact::add_hessian_product(const Eigen::Ref<const Eigen::VectorXd>
   const std::vector<Term>& T = terms(x);
   if (active_rows_.empty()) return true;
   Rows3 G;  // K_p (W v)_p at the points with a term (p is linear in x)
-  evaluate(deformer_->bezier(nodes(v)), active_points_, G);
+  evaluate(active_bezier(nodes(v)), active_points_, G);
   interp::parallel_for(G.rows(), kBlock, [&](long long b, long long e) {
     for (long long j = b; j < e; ++j) G.row(j) = (T[active_rows_[static_cast<size_t>(j)]].hessian * G.row(j).transpose()).transpose();
   }, deformer_->options().threads);

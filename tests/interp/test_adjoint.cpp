@@ -124,3 +124,70 @@ TEST_CASE("adjoint: Phong::M_transpose is the transpose of Phong::M", "[adjoint]
   const test::Mesh m = test::jittered_mesh(2, 13);
   CHECK_THROWS_AS(Phong(m.U, m.T).M_transpose(Eigen::MatrixXd::Zero(2, 2)), Error);
 }
+
+TEST_CASE("adjoint: M at a few vertices and its transpose, through the Bezier points of a few elements",
+          "[adjoint][modified_bi]") {
+  for (int d : {2, 3})
+    for (SolvePath path : {SolvePath::Dense, SolvePath::Sparse})
+      for (bool pin : {false, true}) {
+        INFO("d " << d << " dense " << (path == SolvePath::Dense) << " pin_boundary " << pin);
+        const test::Mesh m = test::jittered_mesh(d, 17);
+        const Eigen::Index n = m.U.rows();
+        const int K = (d + 1) * (d + 2) / 2;
+        const ModifiedBI solver(m.U, m.T, {.pin_boundary = pin, .solve_path = path});
+        const Eigen::MatrixXd X = test::smooth_deform(m.U, 0.4) + 0.1 * test::random_matrix(n, d, 51);
+        // a few elements, ascending, and their vertices listed twice and out of order
+        std::vector<int> elements, vertices;
+        for (int e = 1; e < m.T.rows(); e += 5) elements.push_back(e);
+        for (int e : elements)
+          for (int k = d; k >= 0; --k) vertices.push_back(m.T(e, k));
+        const VertexMatrices full = solver.solve(X);
+        VertexMatrices M = VertexMatrices::Constant(n * d, d, std::nan(""));
+        solver.solve_vertices(X, vertices, M);
+        for (int i : vertices)
+          for (int c = 0; c < d; ++c)
+            for (int r = 0; r < d; ++r) REQUIRE(M(i * d + c, r) == full(i * d + c, r));
+        // the Bezier points of those elements: the full ones' rows, to the bit; the others untouched
+        const BezierPoints Bfull = bezier_points(m.U, m.T, X, full);
+        BezierPoints B = BezierPoints::Constant(m.T.rows() * K, d, 7.0);
+        bezier_points(m.U, m.T, X, M, elements, B);
+        for (int e : elements) REQUIRE(B.middleRows(e * K, K) == Bfull.middleRows(e * K, K));
+        CHECK(B.row(0).isConstant(7.0));
+        // the transpose: dL/dB on those elements only, the same to the bit as the full transpose,
+        // then dL/dM at their vertices into dL/dX, against solve_transpose
+        BezierPoints GB = BezierPoints::Zero(m.T.rows() * K, d);
+        for (int e : elements) GB.middleRows(e * K, K) = test::random_matrix(K, d, 60 + static_cast<unsigned>(e));
+        const BezierTranspose t = bezier_transpose(m.U, m.T, GB);
+        Eigen::MatrixXd GX(n, d);
+        VertexMatrices GM(n * d, d);
+        bezier_transpose(m.U, m.T, GB, elements, GX, GM);
+        REQUIRE(GX == t.X);
+        REQUIRE(GM == t.M);
+        const Eigen::MatrixXd want = solver.solve_transpose(GM);
+        Eigen::MatrixXd got(n, d);
+        solver.solve_transpose_vertices(GM, vertices, got);
+        CHECK((got - want).cwiseAbs().maxCoeff() <= 1e-10 * (1 + want.cwiseAbs().maxCoeff()));
+        const double lhs = dot(GM, full), rhs = dot(got, X);
+        CHECK(std::abs(lhs - rhs) <= 1e-10 * (std::abs(lhs) + GM.cwiseAbs().sum() * full.cwiseAbs().maxCoeff()));
+      }
+}
+
+TEST_CASE("adjoint: the vertex and element lists are checked", "[adjoint][modified_bi]") {
+  const test::Mesh m = test::jittered_mesh(3, 17);
+  const Eigen::Index n = m.U.rows();
+  const ModifiedBI solver(m.U, m.T, {.solve_path = SolvePath::Dense});
+  VertexMatrices M(n * 3, 3);
+  const std::vector<int> bad = {0, static_cast<int>(n)};
+  CHECK_THROWS_WITH(solver.solve_vertices(m.U, bad, M), Catch::Contains("vertices[1]"));
+  Eigen::MatrixXd GX(n, 3);
+  CHECK_THROWS_WITH(solver.solve_transpose_vertices(VertexMatrices::Zero(n * 3, 3), bad, GX),
+                    Catch::Contains("vertices[1]"));
+  VertexMatrices G = VertexMatrices::Zero(n * 3, 3);
+  G(3, 2) = std::numeric_limits<double>::infinity();
+  const std::vector<int> one = {1};
+  CHECK_THROWS_WITH(solver.solve_transpose_vertices(G, one, GX), Catch::Contains("vertex 1"));
+  BezierPoints B(m.T.rows() * 10, 3);
+  const std::vector<int> elements = {-1};
+  CHECK_THROWS_WITH(bezier_points(m.U, m.T, m.U, M, elements, B), Catch::Contains("elements[0]"));
+  CHECK_THROWS_WITH(bezier_transpose(m.U, m.T, B, elements, GX, M), Catch::Contains("elements[0]"));
+}

@@ -182,9 +182,11 @@ BezierTranspose bezier_transpose(const Eigen::Ref<const Eigen::MatrixXd>& U,
   return out;
 }
 
-void bezier_transpose(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
-                      const Eigen::Ref<const BezierPoints>& G, Eigen::Ref<Eigen::MatrixXd> X,
-                      Eigen::Ref<VertexMatrices> M) {
+namespace {
+// Checks the transpose's shapes and zeroes X and M.
+void start_bezier_transpose(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
+                            const Eigen::Ref<const BezierPoints>& G, Eigen::Ref<Eigen::MatrixXd> X,
+                            Eigen::Ref<VertexMatrices> M) {
   detail::check_shapes(U, T);
   const int d = static_cast<int>(U.cols());
   const int n = static_cast<int>(U.rows());
@@ -196,24 +198,46 @@ void bezier_transpose(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::R
   check_out("dL/dM", M.rows(), M.cols(), static_cast<Eigen::Index>(n) * d, d);
   X.setZero();
   M.setZero();
+}
+
+// Adds element e's part of the transpose: its K rows of G to X and M.
+void add_bezier_transpose(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
+                          const Eigen::Ref<const BezierPoints>& G, Eigen::Index e, Eigen::Ref<Eigen::MatrixXd> X,
+                          Eigen::Ref<VertexMatrices> M) {
+  const int d = static_cast<int>(U.cols());
+  const int K = (d + 1) * (d + 2) / 2;
   const auto& edges = bezier_edges(d);
-  for (Eigen::Index e = 0; e < T.rows(); ++e) {
-    for (int k = 0; k <= d; ++k) X.row(T(e, k)) += G.row(e * K + k);
-    for (size_t s = 0; s < edges.size(); ++s) {
-      const int i = T(e, edges[s].first), j = T(e, edges[s].second);
-      // P_ij = (x_i + x_j)/2 + (M_i - M_j)(u_j - u_i)/2  (fact 5)
-      for (int c = 0; c < d; ++c) {
-        const double g = 0.5 * G(e * K + d + 1 + static_cast<Eigen::Index>(s), c);
-        X(i, c) += g;
-        X(j, c) += g;
-        for (int r = 0; r < d; ++r) {
-          const double v = g * (U(j, r) - U(i, r));
-          M(i * d + c, r) += v;
-          M(j * d + c, r) -= v;
-        }
+  for (int k = 0; k <= d; ++k) X.row(T(e, k)) += G.row(e * K + k);
+  for (size_t s = 0; s < edges.size(); ++s) {
+    const int i = T(e, edges[s].first), j = T(e, edges[s].second);
+    // P_ij = (x_i + x_j)/2 + (M_i - M_j)(u_j - u_i)/2  (fact 5)
+    for (int c = 0; c < d; ++c) {
+      const double g = 0.5 * G(e * K + d + 1 + static_cast<Eigen::Index>(s), c);
+      X(i, c) += g;
+      X(j, c) += g;
+      for (int r = 0; r < d; ++r) {
+        const double v = g * (U(j, r) - U(i, r));
+        M(i * d + c, r) += v;
+        M(j * d + c, r) -= v;
       }
     }
   }
+}
+}  // namespace
+
+void bezier_transpose(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
+                      const Eigen::Ref<const BezierPoints>& G, Eigen::Ref<Eigen::MatrixXd> X,
+                      Eigen::Ref<VertexMatrices> M) {
+  start_bezier_transpose(U, T, G, X, M);
+  for (Eigen::Index e = 0; e < T.rows(); ++e) add_bezier_transpose(U, T, G, e, X, M);
+}
+
+void bezier_transpose(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
+                      const Eigen::Ref<const BezierPoints>& G, std::span<const int> elements,
+                      Eigen::Ref<Eigen::MatrixXd> X, Eigen::Ref<VertexMatrices> M) {
+  start_bezier_transpose(U, T, G, X, M);
+  detail::check_index_list("elements", elements, T.rows());
+  for (int e : elements) add_bezier_transpose(U, T, G, e, X, M);
 }
 
 }  // namespace mbi::interp

@@ -21,9 +21,10 @@ constexpr auto kEdges = [] {
 
 template <int D, class XIn, class MIn, class Out>
 void rows_of(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
-             const XIn& X, const MIn* M, Out& B, long long e0, long long e1) {
+             const XIn& X, const MIn* M, Out& B, const int* list, long long e0, long long e1) {
   constexpr int K = (D + 1) * (D + 2) / 2;
-  for (long long e = e0; e < e1; ++e) {
+  for (long long at = e0; at < e1; ++at) {
+    const long long e = list ? list[at] : at;
     // each vertex's x, u and M_i read once into locals (the strided matrices may alias B, so the
     // compiler would reload them for every edge)
     double x[D + 1][D], u[D + 1][D] = {}, m[D + 1][D][D] = {};
@@ -52,23 +53,25 @@ void rows_of(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const 
 }  // namespace
 
 void bezier_rows(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
-                 const Eigen::Ref<const Eigen::MatrixXd>& X, const MatrixIn* M, MatrixOut B) {
-  const long long m = T.rows();
+                 const Eigen::Ref<const Eigen::MatrixXd>& X, const MatrixIn* M, MatrixOut B,
+                 std::span<const int> elements, bool listed) {
+  const long long m = listed ? static_cast<long long>(elements.size()) : T.rows();
+  const int* list = listed ? elements.data() : nullptr;
   const int d = static_cast<int>(X.cols());
   // contiguous columns (the usual MatrixXd) get their inner strides fixed at 1 at compile time
   const bool packed = B.innerStride() == 1 && (!M || M->innerStride() == 1);
   parallel_blocks(m, 256, thread_count(m, 512), [&](long long e0, long long e1) {
     if (!packed) {
-      if (d == 3) rows_of<3>(U, T, X, M, B, e0, e1);
-      else rows_of<2>(U, T, X, M, B, e0, e1);
+      if (d == 3) rows_of<3>(U, T, X, M, B, list, e0, e1);
+      else rows_of<2>(U, T, X, M, B, list, e0, e1);
       return;
     }
     using In = Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>;
     Eigen::Map<Eigen::MatrixXd, 0, Eigen::OuterStride<>> Bp(B.data(), B.rows(), B.cols(), {B.outerStride()});
     const In Xp(X.data(), X.rows(), X.cols(), {X.outerStride()});
     const In Mp(M ? M->data() : X.data(), M ? M->rows() : 0, M ? M->cols() : 0, {M ? M->outerStride() : 0});
-    if (d == 3) rows_of<3>(U, T, Xp, M ? &Mp : nullptr, Bp, e0, e1);
-    else rows_of<2>(U, T, Xp, M ? &Mp : nullptr, Bp, e0, e1);
+    if (d == 3) rows_of<3>(U, T, Xp, M ? &Mp : nullptr, Bp, list, e0, e1);
+    else rows_of<2>(U, T, Xp, M ? &Mp : nullptr, Bp, list, e0, e1);
   });
 }
 

@@ -19,12 +19,17 @@ void check_shapes(const Eigen::Ref<const Eigen::MatrixXd>& U,
 
 /// The Bezier points B ((m K) x d) of the elements T from X (n x d) and, when M is not null,
 /// modified-BI's M ((n d) x d) at rest positions U (fact 5); M null: BI's edge midpoints. Shapes
-/// and indices checked by the caller. On the library's threads (bezier_kernel.cpp).
+/// and indices checked by the caller. On the library's threads (bezier_kernel.cpp). listed: the
+/// rows of `elements` only (checked by the caller), the others left as they are.
 void bezier_rows(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
-                 const Eigen::Ref<const Eigen::MatrixXd>& X, const MatrixIn* M, MatrixOut B);
+                 const Eigen::Ref<const Eigen::MatrixXd>& X, const MatrixIn* M, MatrixOut B,
+                 std::span<const int> elements = {}, bool listed = false);
 
 /// Throws Error naming the first non-finite entry of A (row `what` r).
 void check_finite(const char* what, const Eigen::Ref<const Eigen::MatrixXd>& A);
+
+/// Throws Error naming the first entry of `list` (named `what`) outside [0, count).
+void check_index_list(const char* what, std::span<const int> list, long long count);
 
 /// Throws Error naming the first of `points` outside emb's points, or whose element is outside
 /// [0, elements): the index lists of the subset evaluation and its transpose.

@@ -48,6 +48,13 @@ void check_point_list(const Embedding& emb, std::span<const Eigen::Index> points
   }
 }
 
+void check_index_list(const char* what, std::span<const int> list, long long count) {
+  for (size_t i = 0; i < list.size(); ++i)
+    if (list[i] < 0 || list[i] >= count)
+      throw Error(std::string(what) + "[" + std::to_string(i) + "] = " + std::to_string(list[i]) + " is outside [0, " +
+                  std::to_string(count) + ")");
+}
+
 }  // namespace detail
 
 namespace {

@@ -688,6 +688,72 @@ void ModifiedBI::solve_transpose(const Eigen::Ref<const Eigen::MatrixXd>& G, Eig
       for (int c = 0; c < d; ++c) GX(it.col(), c) += it.value() * y[static_cast<size_t>(a) * d + c];
 }
 
+void ModifiedBI::solve_vertices(const Eigen::Ref<const Eigen::MatrixXd>& X, std::span<const int> vertices,
+                                MatrixOut M) const {
+  const Impl& I = *impl_;
+  if (!I.dense) return solve(X, M);
+  const int d = I.d, n = I.n;
+  if (X.rows() != n || X.cols() != d)
+    throw Error("X must be " + std::to_string(n) + " x " + std::to_string(d) +
+                ", got " + std::to_string(X.rows()) + " x " + std::to_string(X.cols()));
+  check_out("M", M.rows(), M.cols(), static_cast<Eigen::Index>(d) * n, d);
+  detail::check_index_list("vertices", vertices, n);
+  detail::check_finite("control vertex", X);
+  thread_local std::vector<double> cols;
+  cols.assign(3 * static_cast<size_t>(n), 0.0);
+  for (int c = 0; c < d; ++c)
+    for (int j = 0; j < n; ++j) cols[static_cast<size_t>(c * n + j)] = X(j, c);
+  for (int i : vertices)
+    for (int r = 0; r < d; ++r) {
+      const int a = I.reduced[static_cast<size_t>(i) * d + r];
+      if (a < 0) {
+        for (int c = 0; c < d; ++c) M(i * d + c, r) = 0.0;
+        continue;
+      }
+      // the pair of rows solve() computes together (its blocks and tiles start at even rows), so
+      // that the row comes out of the same arithmetic
+      const std::ptrdiff_t r0 = a & ~1, r1 = std::min<std::ptrdiff_t>(r0 + 2, I.n_red);
+      double pair[6];
+      dense_rows(I.K.data() + r0 * n, n, cols.data(), cols.data() + n, cols.data() + 2 * n, pair, 0, r1 - r0);
+      for (int c = 0; c < d; ++c) M(i * d + c, r) = pair[3 * (a - r0) + c];
+    }
+}
+
+void ModifiedBI::solve_transpose_vertices(const Eigen::Ref<const Eigen::MatrixXd>& G, std::span<const int> vertices,
+                                          Eigen::Ref<Eigen::MatrixXd> GX) const {
+  const Impl& I = *impl_;
+  if (!I.dense) return solve_transpose(G, GX);
+  const int d = I.d, n = I.n;
+  if (G.rows() != static_cast<Eigen::Index>(n) * d || G.cols() != d)
+    throw Error("dL/dM must be " + std::to_string(n * d) + " x " + std::to_string(d) + ", got " +
+                std::to_string(G.rows()) + " x " + std::to_string(G.cols()));
+  check_out("dL/dX", GX.rows(), GX.cols(), n, d);
+  detail::check_index_list("vertices", vertices, n);
+  // GX(j, c) = sum over the listed rows a of K(a, j) G(i d + c, r), a = reduced[i d + r] (solve()'s
+  // M(i d + c, r) = K(a, :) X(:, c)); each vertex once
+  thread_local std::vector<double> acc;
+  thread_local std::vector<char> seen;
+  acc.assign(3 * static_cast<size_t>(n), 0.0);
+  seen.assign(static_cast<size_t>(n), 0);
+  for (int i : vertices) {
+    if (seen[static_cast<size_t>(i)]) continue;
+    seen[static_cast<size_t>(i)] = 1;
+    for (int r = 0; r < d; ++r) {
+      const int a = I.reduced[static_cast<size_t>(i) * d + r];
+      if (a < 0) continue;
+      double y[3] = {};
+      for (int c = 0; c < d; ++c) y[c] = G(i * d + c, r);
+      if (!std::isfinite(y[0]) || !std::isfinite(y[1]) || !std::isfinite(y[2]))
+        throw Error("dL/dM row " + std::to_string(i * d) + " of vertex " + std::to_string(i) + " is not finite");
+      const double* k = I.K.data() + static_cast<std::ptrdiff_t>(a) * n;
+      for (int j = 0; j < n; ++j)
+        for (int c = 0; c < 3; ++c) acc[static_cast<size_t>(3 * j + c)] += k[j] * y[c];
+    }
+  }
+  for (int j = 0; j < n; ++j)
+    for (int c = 0; c < d; ++c) GX(j, c) = acc[static_cast<size_t>(3 * j + c)];
+}
+
 BezierPoints ModifiedBI::bezier(const Eigen::Ref<const Eigen::MatrixXd>& X, const VertexMatrices& M) const {
   return bezier_points(impl_->U, impl_->T, X, M);
 }
@@ -744,6 +810,17 @@ void bezier_points(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<
   const int K = (d + 1) * (d + 2) / 2;
   check_out("the Bezier points", B.rows(), B.cols(), T.rows() * K, d);
   detail::bezier_rows(U, T, X, &M, B);
+}
+
+void bezier_points(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
+                   const Eigen::Ref<const Eigen::MatrixXd>& X, const MatrixIn& M, std::span<const int> elements,
+                   MatrixOut B) {
+  detail::check_shapes(U, T);
+  const int d = static_cast<int>(U.cols());
+  check_xm(static_cast<int>(U.rows()), d, X, M);
+  check_out("the Bezier points", B.rows(), B.cols(), T.rows() * ((d + 1) * (d + 2) / 2), d);
+  detail::check_index_list("elements", elements, T.rows());
+  detail::bezier_rows(U, T, X, &M, B, elements, true);
 }
 
 Eigen::VectorXd evaluate_reference(const Eigen::Ref<const Eigen::MatrixXd>& U,

@@ -52,5 +52,12 @@ BezierTranspose bezier_transpose(const Eigen::Ref<const Eigen::MatrixXd>& U,
 void bezier_transpose(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
                       const Eigen::Ref<const BezierPoints>& G, Eigen::Ref<Eigen::MatrixXd> X,
                       Eigen::Ref<VertexMatrices> M);
+/// The same from the listed elements' rows of G only, added in list order (G's other rows are
+/// not read): with the list ascending, duplicate-free and G zero elsewhere, the full transpose
+/// to the bit. Costs the listed elements and zeroing X and M. Error also on an element outside
+/// [0, m).
+void bezier_transpose(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
+                      const Eigen::Ref<const BezierPoints>& G, std::span<const int> elements,
+                      Eigen::Ref<Eigen::MatrixXd> X, Eigen::Ref<VertexMatrices> M);
 
 }  // namespace mbi::interp

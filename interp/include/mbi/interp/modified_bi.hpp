@@ -13,6 +13,7 @@
 #include <Eigen/SparseCore>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -158,6 +159,18 @@ class ModifiedBI {
   /// The same into caller memory GX (n x d already); no allocation after the first call on a thread.
   void solve_transpose(const Eigen::Ref<const Eigen::MatrixXd>& G, Eigen::Ref<Eigen::MatrixXd> GX) const;
 
+  /// M's rows of the listed vertices only (each vertex's d rows of M ((n d) x d already); the
+  /// others are left as they are), for products that need M near a few elements. On the dense
+  /// path those rows of the operator, the same values as solve()'s to the bit, at a cost of
+  /// |vertices| d n; the other paths solve for all of M (solve()'s cost). Errors as solve(), and
+  /// on a vertex outside [0, n). Allocates nothing after the first call on a thread.
+  void solve_vertices(const Eigen::Ref<const Eigen::MatrixXd>& X, std::span<const int> vertices, MatrixOut M) const;
+  /// The transpose of solve_vertices(): dL/dX (n x d) from G = dL/dM whose rows outside the listed
+  /// vertices are zero. On the dense path it reads only the listed vertices' rows of G and of the
+  /// operator (each vertex once, however often listed); the other paths take solve_transpose().
+  void solve_transpose_vertices(const Eigen::Ref<const Eigen::MatrixXd>& G, std::span<const int> vertices,
+                                Eigen::Ref<Eigen::MatrixXd> GX) const;
+
   /// Bezier control points for positions X and matrices M (M = 0 gives BI).
   BezierPoints bezier(const Eigen::Ref<const Eigen::MatrixXd>& X, const VertexMatrices& M) const;
 
@@ -185,6 +198,12 @@ BezierPoints bezier_bi(const Eigen::Ref<const Eigen::MatrixXd>& X,
 /// The same into caller memory B ((m K) x d already, Error otherwise).
 void bezier_bi(const Eigen::Ref<const Eigen::MatrixXd>& X, const Eigen::Ref<const Eigen::MatrixXi>& T, MatrixOut B);
 
+/// The Bezier points of the listed elements only: their rows of B ((m K) x d already; the other
+/// rows are left as they are), the same values as bezier_points()' to the bit. Errors as
+/// bezier_points(), and on an element outside [0, m).
+void bezier_points(const Eigen::Ref<const Eigen::MatrixXd>& U, const Eigen::Ref<const Eigen::MatrixXi>& T,
+                   const Eigen::Ref<const Eigen::MatrixXd>& X, const MatrixIn& M, std::span<const int> elements,
+                   MatrixOut B);
 /// Bezier control points from any M (method.md fact 5); needs rest positions U.
 BezierPoints bezier_points(const Eigen::Ref<const Eigen::MatrixXd>& U,
                            const Eigen::Ref<const Eigen::MatrixXi>& T,

@@ -158,8 +158,11 @@ class SurfaceContact : public sim::Potential {
   /// S.P from S.B at S.points; kept: S.B is at_.B, whose rows are copied (the same values).
   void positions_at_x(bool kept, Sample& S) const;
   /// Adds W^T G to out (3 n): G one row per point of active_points_ (interp's sums per run of one
-  /// element, so the same for every thread count).
+  /// element, so the same for every thread count), through their elements and vertices only.
   void add_transpose(const Rows3& G, Eigen::Ref<Eigen::VectorXd> out) const;
+  /// The Bezier points at node positions X (n x 3) of the elements of active_points_ (the others'
+  /// rows stale): modified-BI solves for M at their vertices only (interp's solve_vertices).
+  const interp::BezierPoints& active_bezier(const Eigen::MatrixXd& X) const;
   double depth(Eigen::Index point, size_t collider) const;        // guarded depth or infinity
   /// signed_distance(posed_[c], q, time()): the same values, a plane's from its unit normal kept.
   Distance distance(size_t c, const Eigen::Vector3d& q) const {
@@ -221,6 +224,9 @@ class SurfaceContact : public sim::Potential {
   mutable std::vector<char> active_;   // terms_[i].active
   mutable std::vector<size_t> active_rows_;          // the rows i of at_ with terms_[i].active
   mutable std::vector<Eigen::Index> active_points_;  // their points
+  mutable std::vector<int> active_elements_, active_vertices_;  // theirs, ascending
+  mutable interp::BezierPoints product_B_;           // active_bezier's result
+  mutable interp::VertexMatrices product_M_;         // and its M
   mutable bool terms_valid_ = false;
   Eigen::VectorXd line_start_, line_move_;  // begin_line's x and dx
   bool line_valid_ = false;
