@@ -41,6 +41,7 @@ const SurfaceContact::Sample& SurfaceContact::sample(const Eigen::Ref<const Eige
   check_size(x);
   if (at_.valid && at_.x == x) return at_;
   terms_valid_ = at_.valid = false;
+  if (moved_sample(x)) return at_;
   at_.B = deformer_->bezier(nodes(x));
   gather(at_.B, Eigen::VectorXd::Zero(deformer_->elements()), at_);
   evaluate(at_.B, at_.points, at_.P);
@@ -49,6 +50,25 @@ const SurfaceContact::Sample& SurfaceContact::sample(const Eigen::Ref<const Eige
   at_.x = x;
   at_.valid = true;
   return at_;
+}
+
+bool SurfaceContact::moved_sample(const Eigen::Ref<const Eigen::VectorXd>& x) const {
+  const bool taken = line_taken_ && along_.valid;
+  line_taken_ = false;
+  if (!taken) return false;
+  const double s = line_fraction_;
+  // the simulator's x + h (v + s delta) against x + s (h delta): the same to round-off
+  const double slack = 1e-12 * (diagonal_ + x.cwiseAbs().maxCoeff());
+  if (!(((along_.x + s * along_.dx) - x).cwiseAbs().maxCoeff() <= slack)) return false;
+  at_.B = along_.B + s * along_.BD;
+  at_.points = along_.points;
+  at_.runs = along_.runs;
+  at_.P = along_.P + s * along_.D;
+  ++counts_.evaluations;
+  counts_.candidates += static_cast<long long>(at_.points.size());
+  at_.x = x;
+  at_.valid = true;
+  return true;
 }
 
 void SurfaceContact::positions_at_x(bool kept, Sample& S) const {
@@ -78,7 +98,8 @@ const SurfaceContact::Sample& SurfaceContact::sample(const Eigen::Ref<const Eige
   along_.valid = false;
   const bool kept = at_.valid && at_.x == x;
   along_.B = kept ? at_.B : deformer_->bezier(nodes(x));
-  const interp::BezierPoints BD = deformer_->bezier(nodes(dx));
+  along_.BD = deformer_->bezier(nodes(dx));
+  const interp::BezierPoints& BD = along_.BD;
   // A point moves by at most its element's largest Bezier move; the cap needs 0.9 of its room
   // above -max_depth to reach past it before it acts (contact::advance), the line the move itself.
   const int m = deformer_->elements();
@@ -315,6 +336,11 @@ void SurfaceContact::begin_line(const Eigen::Ref<const Eigen::VectorXd>& x, cons
   line_start_ = x;
   line_move_ = dx;
   line_valid_ = true;
+}
+
+void SurfaceContact::end_line(double s) {
+  line_taken_ = line_valid_ && along_.valid && along_.x == line_start_ && along_.dx == line_move_;
+  line_fraction_ = s;
 }
 
 double SurfaceContact::energy_along(double s) const {

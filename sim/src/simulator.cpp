@@ -555,6 +555,7 @@ bool Simulator::Impl::line_search(Eigen::VectorXd& vk, double h, double& phi) {
     trial = vk + step * delta;
     const double value = incremental_own(trial, h, x_trial) + potential->energy_along(step);
     if (std::isfinite(value) && value <= phi + 1e-4 * step * slope) {
+      potential->end_line(step);
       vk.swap(trial);
       phi = value;
       delta *= step;

@@ -221,6 +221,44 @@ TEST_CASE("surface contact: energy along a line is the energy at x + s dx, BI, P
   }
 }
 
+TEST_CASE("surface contact: after end_line the next evaluation, at the move's end, is a fresh "
+          "contact's to round-off, BI, Phong and modified-BI, with friction", "[pipeline][contact]") {
+  const Setup s = setup();
+  std::mt19937 rng(19);
+  std::uniform_real_distribution<double> w(-0.02, 0.02);
+  Eigen::VectorXd dx(s.x.size());
+  for (Eigen::Index k = 0; k < dx.size(); ++k) dx(k) = w(rng) + (k % 3 == 1 ? -0.15 : 0.0);
+  for (Method m : {Method::BI, Method::Phong, Method::ModifiedBI}) {
+    const Contacts moved = contacts(s, m), fresh = contacts(s, m);
+    for (size_t k = 0; k < moved.cases.size(); ++k) {
+      SurfaceContact& c = *moved.cases[k].first;
+      const Eigen::VectorXd& x = moved.cases[k].second;
+      const double t = 0.375;
+      const Eigen::VectorXd end = x + t * dx;  // the simulator's own sum: not x + t dx to the bit
+      c.energy(x);
+      const long long line0 = c.counts().move_candidates;
+      c.begin_line(x, dx);
+      c.energy_along(t);
+      c.end_line(t);
+      const long long line = c.counts().move_candidates - line0, evaluated = c.counts().candidates;
+      const double E = c.energy(end);
+      CHECK(c.counts().candidates - evaluated == line);  // the line's candidates, kept
+      const SurfaceContact& f = *fresh.cases[k].first;
+      INFO("method " << static_cast<int>(m) << (k == 1 ? ", friction" : ", plain"));
+      const double want = f.energy(end);
+      REQUIRE(want > 0);
+      CHECK(std::abs(E - want) <= 1e-12 * want);
+      const Eigen::VectorXd g = gradient(c, end), gf = gradient(f, end);
+      CHECK((g - gf).norm() <= 1e-11 * gf.norm());
+      // elsewhere than the move's end: evaluated afresh
+      c.begin_line(x, dx);
+      c.energy_along(t);
+      c.end_line(t);
+      CHECK(std::abs(c.energy(x) - f.energy(x)) <= 1e-12 * f.energy(x));
+    }
+  }
+}
+
 TEST_CASE("surface contact: a new time or law is seen at the same positions", "[pipeline][contact]") {
   const Setup s = setup();
   auto deformer = std::make_shared<Deformer>(s.mesh.U, s.mesh.T, s.points);

@@ -746,12 +746,16 @@ void ModifiedBI::solve_transpose_vertices(const Eigen::Ref<const Eigen::MatrixXd
       if (!std::isfinite(y[0]) || !std::isfinite(y[1]) || !std::isfinite(y[2]))
         throw Error("dL/dM row " + std::to_string(i * d) + " of vertex " + std::to_string(i) + " is not finite");
       const double* k = I.K.data() + static_cast<std::ptrdiff_t>(a) * n;
-      for (int j = 0; j < n; ++j)
-        for (int c = 0; c < 3; ++c) acc[static_cast<size_t>(3 * j + c)] += k[j] * y[c];
+      double *ax = acc.data(), *ay = ax + n, *az = ay + n;  // a column each: the loop vectorises
+      for (int j = 0; j < n; ++j) {
+        ax[j] += k[j] * y[0];
+        ay[j] += k[j] * y[1];
+        az[j] += k[j] * y[2];
+      }
     }
   }
-  for (int j = 0; j < n; ++j)
-    for (int c = 0; c < d; ++c) GX(j, c) = acc[static_cast<size_t>(3 * j + c)];
+  for (int c = 0; c < d; ++c)
+    for (int j = 0; j < n; ++j) GX(j, c) = acc[static_cast<size_t>(c) * n + static_cast<size_t>(j)];
 }
 
 BezierPoints ModifiedBI::bezier(const Eigen::Ref<const Eigen::MatrixXd>& X, const VertexMatrices& M) const {

@@ -110,6 +110,10 @@ class SurfaceContact : public sim::Potential {
   /// each energy_along(s) there costs those points only; other s evaluate every point.
   void begin_line(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& dx) override;
   double energy_along(double s) const override;
+  /// The next evaluation at x + s dx (to round-off) takes the line's points moved by s: their
+  /// positions P + s W dx and the Bezier points B + s B(dx), no new broad phase (the line's
+  /// candidates cover every point that can touch for s in [0, 1]).
+  void end_line(double s) override;
 
  private:
   /// Lagged friction of one point against one collider in the current substep.
@@ -128,12 +132,15 @@ class SurfaceContact : public sim::Potential {
     interp::BezierPoints B;             // at x
     std::vector<Eigen::Index> points;   // by element, then by distance at the substep's start
     std::vector<int> runs;              // starts of the runs of `points` in one element, then their count
+    interp::BezierPoints BD;            // a move's: at dx
     Rows3 P, D;                         // W x and W dx at those points, rows as `points`
     double cap = 1.0;                   // a move's: the largest fraction that max_step admits
     std::vector<Eigen::Index> near;     // a move's: the rows that can contribute along it
     bool valid = false;
   };
   const Sample& sample(const Eigen::Ref<const Eigen::VectorXd>& x) const;
+  /// at_ from along_ moved by the line's accepted fraction, when x is that move's end (end_line).
+  bool moved_sample(const Eigen::Ref<const Eigen::VectorXd>& x) const;
   const Sample& sample(const Eigen::Ref<const Eigen::VectorXd>& x, const Eigen::Ref<const Eigen::VectorXd>& dx) const;
   void check_size(const Eigen::Ref<const Eigen::VectorXd>& x, const char* what = "node positions") const;
   const Eigen::MatrixXd& nodes(const Eigen::Ref<const Eigen::VectorXd>& x) const;  // n x 3 into X_
@@ -184,7 +191,7 @@ class SurfaceContact : public sim::Potential {
   /// The terms at x, one per point of sample(x) (kept until x, the time or the substep changes);
   /// active_ flags those with a term.
   const std::vector<Term>& terms(const Eigen::Ref<const Eigen::VectorXd>& x) const;
-  void forget() { terms_valid_ = line_valid_ = at_.valid = along_.valid = false; }  // after a change of time or law
+  void forget() { terms_valid_ = line_valid_ = line_taken_ = at_.valid = along_.valid = false; }  // after a change of time or law
 
   std::shared_ptr<const Deformer> deformer_;
   std::vector<Collider> colliders_;
@@ -228,6 +235,8 @@ class SurfaceContact : public sim::Potential {
   mutable interp::BezierPoints product_B_;           // active_bezier's result
   mutable interp::VertexMatrices product_M_;         // and its M
   mutable bool terms_valid_ = false;
+  mutable bool line_taken_ = false;  // end_line's fraction of along_'s move awaits moved_sample
+  double line_fraction_ = 0.0;
   Eigen::VectorXd line_start_, line_move_;  // begin_line's x and dx
   bool line_valid_ = false;
   mutable Counts counts_;

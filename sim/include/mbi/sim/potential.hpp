@@ -54,6 +54,9 @@ class Potential {
     line_dx_ = dx;
   }
   virtual double energy_along(double s) const { return energy(line_x_ + s * line_dx_); }
+  /// The line search took the fraction s of that move: the step's next evaluation, if any, is at
+  /// x + s dx to round-off, so a potential may keep what it prepared for the move. Default: nothing.
+  virtual void end_line(double /*s*/) {}
   /// Adds dE/dx (3 n, N) to `gradient`.
   virtual void add_gradient(const Eigen::Ref<const Eigen::VectorXd>& x,
                             Eigen::Ref<Eigen::VectorXd> gradient) const = 0;
