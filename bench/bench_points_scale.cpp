@@ -9,7 +9,9 @@
 // scatters the results to the points' rows) and `by element` (sorted by the element they lie
 // in, as a model whose vertex order follows its surface mostly is). Evaluation: the float kernel
 // (interp::FastEvaluator) with BI's Bezier points of a twisted pose, bytes counted as BM_Eval
-// counts them (bench_throughput.cpp). Full run only (MBI_BENCH_QUICK skips the 10M rows).
+// counts them (bench_throughput.cpp); records in element order take the fused pass (the element
+// terms computed block by block next to their records), and fused:0 rows the table's pass for
+// comparison. Full run only (MBI_BENCH_QUICK skips the 10M rows).
 #include "bench_common.hpp"
 
 #include <mbi/interp/fast_evaluate.hpp>
@@ -75,7 +77,9 @@ void BM_EmbedScale(benchmark::State& st) {
   st.SetItemsProcessed(static_cast<int64_t>(st.iterations()) * p);
 }
 
-// Arguments: points, cells across (n), order (0 = random, 1 = by element).
+// Arguments: points, cells across (n), order (0 = random, 1 = by element), fused (0: the element
+// terms written to a table each call, then read per point, even where the evaluator would fuse
+// the two: the comparison).
 void BM_EvalScale(benchmark::State& st) {
   const long long p = st.range(0);
   const int n = static_cast<int>(st.range(1));
@@ -83,6 +87,7 @@ void BM_EvalScale(benchmark::State& st) {
   mbi::interp::Embedding emb = mbi::interp::embed(g.U, g.T, random_points(n, p));
   if (st.range(2) == 1) emb = by_element(emb);
   mbi::interp::FastEvaluator fe(emb);
+  fe.set_fused_terms(st.range(3) == 1);
   emb = mbi::interp::Embedding{};  // the evaluator holds its own packed copy
   const mbi::interp::BezierPoints B = mbi::interp::bezier_bi(g.X, g.T);
   mbi::interp::RowMatrixXf pos(p, 3);
@@ -95,6 +100,7 @@ void BM_EvalScale(benchmark::State& st) {
   const double bytes = static_cast<double>(p) * 28.0 + static_cast<double>(g.T.rows()) * 10 * 3 * 8.0;
   st.counters["tets"] = static_cast<double>(g.T.rows());
   st.counters["sorted"] = fe.sorted_by_element() ? 1 : 0;  // the evaluator's records a permutation of the points
+  st.counters["fused"] = fe.fused_terms() ? 1 : 0;
   st.counters["bytes_per_eval"] = bytes;
   st.SetItemsProcessed(static_cast<int64_t>(st.iterations()) * p);
   st.SetBytesProcessed(static_cast<int64_t>(static_cast<double>(st.iterations()) * bytes));
@@ -107,12 +113,16 @@ void embed_args(benchmark::internal::Benchmark* b) {
     for (int n : {10, 44}) b->Args({p, n});
 }
 
+// fused:0 only where the evaluator fuses (records in element order: by element, or sorted by it
+// over 44^3 cells)
 void eval_args(benchmark::internal::Benchmark* b) {
-  b->ArgNames({"points", "cells", "by_element"});
-  if (mbi::bench::quick()) return void(b->Args({100000, 10, 0}));
+  b->ArgNames({"points", "cells", "by_element", "fused"});
+  if (mbi::bench::quick()) return void(b->Args({100000, 10, 0, 1}));
   for (long long p : {1000000LL, 10000000LL})
     for (int n : {10, 44})
-      for (int order : {0, 1}) b->Args({p, n, order});
+      for (int order : {0, 1})
+        for (int fused : {1, 0})
+          if (fused == 1 || order == 1 || n == 44) b->Args({p, n, order, fused});
 }
 
 BENCHMARK(BM_EmbedScale)->Apply(embed_args)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);

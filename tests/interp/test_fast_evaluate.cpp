@@ -432,3 +432,53 @@ TEST_CASE("FastEvaluator: points in random order over a large mesh give each poi
   // element terms that fit a cache: the points' own order
   CHECK_FALSE(FastEvaluator(make_fast(3, 1000, 0.0, 1.0).emb).sorted_by_element());
 }
+
+// Records in element order (stored so, or sorted by the evaluator over a large mesh) take the
+// fused pass: each block of elements' terms computed just before its records, in a buffer of the
+// thread. It gives the bits of the pass over the whole table, on every kernel, 1 and 2 threads,
+// with points denser than the elements and sparser (groups of 4 that span more elements than a
+// block holds, run one group at a time).
+TEST_CASE("FastEvaluator: the fused pass gives the bits of the table's pass", "[fast_evaluate]") {
+  const Mesh M = box_tet_mesh(30, 30, 30);  // 162,000 tetrahedra: 20.7 MB of element terms
+  const BezierPoints B = bezier_bi(smooth_deform(M.U, 0.5), M.T);
+  auto by_element = [](const Embedding& e) {
+    std::vector<int> order(static_cast<size_t>(e.size()));
+    for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+    std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return e.element(a) < e.element(b); });
+    Embedding s = e;
+    for (size_t i = 0; i < order.size(); ++i) {
+      s.element(static_cast<Eigen::Index>(i)) = e.element(order[i]);
+      s.bary.row(static_cast<Eigen::Index>(i)) = e.bary.row(order[i]);
+    }
+    s.outside.clear();
+    return s;
+  };
+  auto compare = [&](const Embedding& emb, const BezierPoints& Bz, Simd v, int threads) {
+    FastEvaluator fe(emb, threads, v);
+    REQUIRE(fe.fused_terms());
+    RowMatrixXf fused, table;
+    fe.evaluate(Bz, fused);
+    fe.set_fused_terms(false);
+    REQUIRE_FALSE(fe.fused_terms());
+    fe.evaluate(Bz, table);
+    CHECK(std::memcmp(fused.data(), table.data(), static_cast<size_t>(fused.size()) * sizeof(float)) == 0);
+    fe.set_fused_terms(true);
+    fe.evaluate(Bz, table);  // after a table pass (another layout on some kernels): the same
+    CHECK(std::memcmp(fused.data(), table.data(), static_cast<size_t>(fused.size()) * sizeof(float)) == 0);
+  };
+  for (int p : {mbi::test::sized(100013), 1013, 113, 3}) {
+    const Embedding emb = embed(M.U, M.T, random_matrix(p, 3, 63).array() * 0.55 + 0.5);  // some outside
+    const Embedding sorted = by_element(emb);
+    for (Simd v : kernels()) for (int threads : {1, 2}) {
+      INFO("points " << p << ", kernel " << FastEvaluator::name(v) << ", threads " << threads);
+      if (p > 3) REQUIRE(FastEvaluator(emb, threads, v).sorted_by_element());
+      compare(emb, B, v, threads);
+      compare(sorted, B, v, threads);
+    }
+  }
+  // 2D (the portable loop) over a small mesh: fused when stored by element, the table's pass
+  // otherwise
+  const FastSetup s = make_fast(2, 4013, 0.0, 1.0);
+  CHECK_FALSE(FastEvaluator(s.emb).fused_terms());
+  for (int threads : {1, 2}) compare(by_element(s.emb), s.B, Simd::Portable, threads);
+}

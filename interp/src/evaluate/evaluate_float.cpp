@@ -173,9 +173,9 @@ void evaluate_float3(const MatrixIn& B, const Embedding& emb, PointsRef<float> p
         long long done = 0;
         if (const Kernel k = kernel(2 * same < n)) {
           done = n / 4 * 4;
-          k(rec, coef, nullptr, 1.0f, xyz, nullptr, nullptr, 0, done);
+          k(rec, coef, 0, nullptr, 1.0f, xyz, nullptr, nullptr, 0, done);
         }
-        eval_portable(3, rec, coef, kPairs, nullptr, 1.0f, xyz, nullptr, nullptr, done, n);
+        eval_portable(3, rec, coef, 0, kPairs, nullptr, 1.0f, xyz, nullptr, nullptr, done, n);
         if (simd) unpack_x86(xyz, b, n, px, py, pz);
         else unpack_plain(xyz, b, n, px, py, pz);
       }

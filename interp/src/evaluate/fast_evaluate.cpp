@@ -1,6 +1,8 @@
 // FastEvaluator (see fast_evaluate.hpp): packs the records and rest normals, writes each call's
-// element terms, and runs the kernel of its instruction set (fast_kernel.hpp) over the points.
-// The terms are computed in double from B and rounded to float once per call.
+// element terms, and runs the kernel of its instruction set (fast_kernel.hpp) over the points;
+// or, records in element order without normals, computes the terms of a block of elements at a
+// time and runs the kernel on those elements' records at once (the fused pass). The terms are
+// computed in double from B and rounded to float once per call, by the same function either way.
 #include <mbi/interp/fast_evaluate.hpp>
 #include <mbi/interp/threads.hpp>
 
@@ -77,17 +79,28 @@ std::int32_t as_word(float f) {
   return w;
 }
 
-// The terms of elements [0, m) from their Bezier points B ((m K) x D, K = (D+1)(D+2)/2, the
+// The terms of elements [e0, e1) from their Bezier points B ((m K) x D, K = (D+1)(D+2)/2, the
 // vertices then the edges in the order of bezier_edges(D)), computed in double and rounded to
-// float once, written in layout L; the floats no term uses are set to 0 (a call may change the
-// layout; the kernels read them but ignore what they give). Returns the largest |c_k| (the
-// scale of the derivatives dx/db_k). Everything below is known at compile time but B: no scratch
-// to clear, no offset table to read per element.
+// float once, written in layout L at C (element e's coef_stride(D) floats at C + (e - e0)
+// coef_stride(D)); the floats no term uses are set to 0 (a call may change the layout; the
+// kernels read them but ignore what they give). Returns the largest |c_k| (the scale of the
+// derivatives dx/db_k). Everything below is known at compile time but B: no scratch to clear, no
+// offset table to read per element. Each element prefetches the Bezier points kBAhead elements
+// on: a fused pass computes the terms in short bursts between kernel runs, and the hardware
+// prefetcher starts each burst's three column streams anew.
+constexpr long long kBAhead = 16;
+
+// The byte at p + bytes, prefetched: integer arithmetic, so that an address past the end of B is
+// never formed as a pointer (a prefetch does not fault).
+void prefetch_at(const void* p, long long bytes) {
+  __builtin_prefetch(reinterpret_cast<const char*>(reinterpret_cast<std::uintptr_t>(p) + static_cast<std::uintptr_t>(bytes)));
+}
+
 template <int D, const Layout& L>
-double prepare_terms(const MatrixIn& B, float* coef, int m, int threads) {
+double terms_of(const MatrixIn& B, float* C0, long long e0, long long e1) {
   constexpr int K = (D + 1) * (D + 2) / 2, NC = coef_stride(D);
   static constexpr TermIndex ix(D);
-  constexpr auto unused = [] {
+  static constexpr auto unused = [] {  // the floats no term uses
     std::array<bool, NC> free{};
     for (bool& f : free) f = true;
     for (int c = 0; c < D; ++c) {
@@ -97,7 +110,10 @@ double prepare_terms(const MatrixIn& B, float* coef, int m, int threads) {
         for (int l = k; l <= D; ++l) free[L.at(ix.quad[k][l], c)] = false;
       }
     }
-    return free;
+    std::array<int, NC - D * detail::position_terms(D)> list{};
+    for (int f = 0, n = 0; f < NC; ++f)
+      if (free[f]) list[n++] = f;
+    return list;
   }();
   // row of the Bezier point on edge (i, j) within an element's K rows
   int edge_row[D + 1][D + 1] = {};
@@ -105,37 +121,134 @@ double prepare_terms(const MatrixIn& B, float* coef, int m, int threads) {
   for (size_t s = 0; s < edges.size(); ++s)
     edge_row[edges[s].first][edges[s].second] = edge_row[edges[s].second][edges[s].first] =
         D + 1 + static_cast<int>(s);
-  const double* col[D];
-  for (int c = 0; c < D; ++c) col[c] = B.data() + c * B.outerStride();
   const std::ptrdiff_t is = B.innerStride();  // rows is doubles apart (1 in a BezierPoints)
-  // blocks of elements on up to `threads` threads (more than 512 elements); the largest |c_k|
-  // of each block joins the maximum
-  std::atomic<double> dmax_all{0.0};
-  detail::parallel_blocks(m, 256, m > 512 ? threads : 1, [&](long long e0, long long e1) {
-    double dmax = 0;
-    for (long long e = e0; e < e1; ++e) {
-      const long long row = e * K;
-      float* C = coef + static_cast<size_t>(e) * NC;
-      for (int f = 0; f < NC; ++f)
-        if (unused[f]) C[f] = 0.0f;
-      for (int c = 0; c < D; ++c) {
-        const double* P = col[c] + row * is;
-        auto Pe = [&](int i, int j) { return P[edge_row[i][j] * is]; };
-        C[L.at(0, c)] = static_cast<float>(P[0]);
-        for (int k = 1; k <= D; ++k) {
-          const double ck = 2 * (Pe(0, k) - P[0]);
-          dmax = std::max(dmax, std::abs(ck));
-          C[L.at(ix.lin[k], c)] = static_cast<float>(ck);
-          C[L.at(ix.quad[k][k], c)] = static_cast<float>(P[0] + P[k * is] - 2 * Pe(0, k));
-          for (int l = k + 1; l <= D; ++l)
-            C[L.at(ix.quad[k][l], c)] = static_cast<float>(2 * (P[0] - Pe(0, k) - Pe(0, l) + Pe(k, l)));
-        }
+  double dmax = 0;
+  for (long long e = e0; e < e1; ++e) {
+    float* C = C0 + static_cast<size_t>(e - e0) * NC;
+    for (int f : unused) C[f] = 0.0f;
+    for (int c = 0; c < D; ++c) {  // an element's K doubles of a column: 2 lines at most (is = 1)
+      const double* P = B.data() + c * B.outerStride() + e * K * is;
+      prefetch_at(P, kBAhead * K * is * 8);
+      prefetch_at(P, kBAhead * K * is * 8 + 64);
+    }
+    for (int c = 0; c < D; ++c) {
+      const double* P = B.data() + c * B.outerStride() + e * K * is;
+      auto Pe = [&](int i, int j) { return P[edge_row[i][j] * is]; };
+      C[L.at(0, c)] = static_cast<float>(P[0]);
+      for (int k = 1; k <= D; ++k) {
+        const double ck = 2 * (Pe(0, k) - P[0]);
+        dmax = std::max(dmax, std::abs(ck));
+        C[L.at(ix.lin[k], c)] = static_cast<float>(ck);
+        C[L.at(ix.quad[k][k], c)] = static_cast<float>(P[0] + P[k * is] - 2 * Pe(0, k));
+        for (int l = k + 1; l <= D; ++l)
+          C[L.at(ix.quad[k][l], c)] = static_cast<float>(2 * (P[0] - Pe(0, k) - Pe(0, l) + Pe(k, l)));
       }
     }
+  }
+  return dmax;
+}
+
+// The terms of elements [0, m) (terms_of) at coef, in blocks of elements on up to `threads`
+// threads (more than 512 elements); returns the largest |c_k|.
+template <int D, const Layout& L>
+double prepare_terms(const MatrixIn& B, float* coef, int m, int threads) {
+  std::atomic<double> dmax_all{0.0};
+  detail::parallel_blocks(m, 256, m > 512 ? threads : 1, [&](long long e0, long long e1) {
+    const double dmax = terms_of<D, L>(B, coef + static_cast<size_t>(e0) * coef_stride(D), e0, e1);
     for (double cur = dmax_all.load(); dmax > cur && !dmax_all.compare_exchange_weak(cur, dmax);) {
     }
   });
   return dmax_all.load();
+}
+
+// Elements whose terms a fused pass computes at a time (evaluate_fused()): their 128 KiB (3D)
+// stay in L2 until the records that read them are done. Smaller blocks, in L1, ran slower: each
+// switch between the two streams (Bezier points, then records) costs more than L1 saves.
+constexpr int kFuseElements = 1024;
+
+// The end of the records from p (< mid, in element order: rec, d + 1 words a record) whose
+// elements span fewer than kFuseElements: the most whole groups before mid (a binary search),
+// p when the first group spans more (points sparser than elements).
+long long fused_end(const std::int32_t* rec, int d, long long p, long long mid, long long group) {
+  auto element = [&](long long k) { return static_cast<long long>(rec[k * (d + 1)]); };
+  const long long e_end = element(p) + kFuseElements;
+  long long lo = 0, hi = (mid - p) / group;  // groups known to fit, groups at most
+  while (lo < hi) {
+    const long long j = (lo + hi + 1) / 2;
+    if (element(p + j * group - 1) < e_end) lo = j;
+    else hi = j - 1;
+  }
+  return p + lo * group;
+}
+
+// What a fused pass reads and writes: records in element order (their own, or sorted with a
+// permutation: row), its ranges of records (FastEvaluator::plan_fused()), the terms' function
+// and the kernels of the call.
+struct FusedPass {
+  const MatrixIn& B;
+  const std::int32_t* rec;
+  const std::int32_t* row;  // the output row of each record, or nullptr: record k's is row k
+  const long long* ends;    // the ranges' ends, block after block of kBlock records
+  const std::size_t* first; // block i's ranges: ends[first[i]] .. ends[first[i + 1] - 1]
+  float* pos;
+  int d;
+  const Layout& L;
+  double (*terms)(const MatrixIn&, float*, long long, long long);
+  detail::Kernel x86, x86_in_order;  // positions without prefetches (nullptr: the portable loop)
+  long long group;                   // 4 with the x86 kernels, 1 with the portable loop
+
+  std::int32_t element(long long k) const { return rec[k * (d + 1)]; }
+  long long out_row(long long k) const { return row ? row[k] : k; }
+};
+
+// Records [p, q) (whole groups): their elements' terms into buf, then the kernel on them.
+void fused_range(const FusedPass& f, float* buf, long long p, long long q) {
+  const std::int32_t e0 = f.element(p);
+  f.terms(f.B, buf, e0, static_cast<long long>(f.element(q - 1)) + 1);
+  if (f.x86) f.x86(f.rec, buf, e0, nullptr, 1.0f, f.pos, nullptr, f.row, p, q);
+  else detail::eval_portable(f.d, f.rec, buf, e0, f.L, nullptr, 1.0f, f.pos, nullptr, f.row, p, q);
+}
+
+// Records [a, b) (at most a group: a block's last records, or a group whose elements span more
+// than buf holds) as a whole group of copies whose element ids count the group's elements
+// (terms computed in that order): the same arithmetic as in any other group, nothing read
+// outside buf. The results go through scratch to the records' rows (off 16-byte alignment:
+// plain stores, read back at once).
+void fused_group(const FusedPass& f, float* buf, long long a, long long b) {
+  constexpr int NR = 4;  // words a 3D record (the x86 kernels are 3D)
+  alignas(16) std::int32_t local[4 * NR];
+  std::int32_t slot = -1, prev = -1;
+  for (long long k = a; k < a + 4; ++k) {
+    const long long src = std::min(k, b - 1);  // the last record again after b
+    if (const std::int32_t e = f.element(src); e != prev) {
+      f.terms(f.B, buf + ++slot * coef_stride(3), e, e + 1LL);
+      prev = e;
+    }
+    std::copy(f.rec + src * NR, f.rec + src * NR + NR, local + (k - a) * NR);
+    local[(k - a) * NR] = slot;
+  }
+  alignas(16) float tp[13];
+  f.x86_in_order(local, buf, 0, nullptr, 1.0f, tp + 1, nullptr, nullptr, 0, 4);
+  for (long long k = a; k < b; ++k) std::copy(tp + 1 + 3 * (k - a), tp + 4 + 3 * (k - a), f.pos + 3 * f.out_row(k));
+}
+
+// Records [begin, end) of a fused pass (whole blocks of kBlock records): range after range, each
+// one's terms computed into a buffer of this thread and read back at once by the kernel.
+void fused_blocks(const FusedPass& f, long long begin, long long end) {
+  // the terms' buffer: scratch of this thread, kept between calls (64-byte aligned)
+  thread_local std::vector<float> scratch;
+  scratch.resize(std::max(scratch.size(), static_cast<size_t>(kFuseElements) * coef_stride(3) + 16));
+  float* const buf = align64(scratch.data());
+  for (long long b = begin; b < end; b += kBlock) {
+    const auto i = static_cast<size_t>(b / kBlock);
+    long long p = b;
+    for (size_t r = f.first[i]; r < f.first[i + 1]; p = f.ends[r++]) {
+      const long long q = f.ends[r];
+      if (q - p == f.group && f.element(q - 1) - f.element(p) >= kFuseElements) fused_group(f, buf, p, q);
+      else fused_range(f, buf, p, q);
+    }
+    if (const long long block_end = std::min(b + kBlock, end); p < block_end) fused_group(f, buf, p, block_end);
+  }
 }
 
 }  // namespace
@@ -207,9 +320,14 @@ FastEvaluator::FastEvaluator(const Embedding& emb, int threads, Simd simd) : thr
   }
   // Records stored coherently (a mesh's vertices, or sorted: most follow a record of the same
   // element) find their element's terms in L1 already; the prefetches only help the others.
-  long long same = 0;
-  for (long long k = 1; k < p_; ++k) same += records_[k * (d + 1)] == records_[(k - 1) * (d + 1)];
+  long long same = 0, ordered = 1;
+  for (long long k = 1; k < p_; ++k) {
+    same += records_[k * (d + 1)] == records_[(k - 1) * (d + 1)];
+    ordered += records_[k * (d + 1)] >= records_[(k - 1) * (d + 1)];
+  }
   coherent_ = 2 * same >= p_;
+  ordered_ = ordered >= p_;
+  if (ordered_) plan_fused();
 }
 
 void FastEvaluator::set_rest_normals(const Eigen::Ref<const Eigen::MatrixXd>& normals) {
@@ -270,7 +388,7 @@ int FastEvaluator::threads() const {
   return detail::thread_count(p_, kBlock, threads_);
 }
 
-void FastEvaluator::prepare(const MatrixIn& B, bool normals) {
+void FastEvaluator::check(const MatrixIn& B, bool normals) const {
   const int d = d_;
   const int K = (d + 1) * (d + 2) / 2;
   if (B.cols() != d || B.rows() % K != 0 || B.rows() / K < m_)
@@ -278,6 +396,11 @@ void FastEvaluator::prepare(const MatrixIn& B, bool normals) {
                 std::to_string(d) + " with m >= " + std::to_string(m_) + ", got " +
                 std::to_string(B.rows()) + " x " + std::to_string(B.cols()));
   if (normals && !has_rest_normals()) throw Error("normals asked for, but no rest normals were set");
+}
+
+void FastEvaluator::prepare(const MatrixIn& B, bool normals) {
+  check(B, normals);
+  const int d = d_;
   coef_.resize(static_cast<size_t>(m_) * coef_stride(d) + 16);
   float* const coef = align64(coef_.data());
   const int nt = threads();
@@ -336,6 +459,7 @@ void FastEvaluator::evaluate(const MatrixIn& B, RowMatrixXf& positions, RowMatri
 
 void FastEvaluator::evaluate(const MatrixIn& B, float* positions, float* normals) {
   const bool with_normals = normals != nullptr;
+  if (!with_normals && fused_terms()) return evaluate_fused(B, positions);
   prepare(B, with_normals);
   if (p_ == 0) return;
   const std::int32_t* rec = records_.data();
@@ -362,15 +486,15 @@ void FastEvaluator::evaluate(const MatrixIn& B, float* positions, float* normals
   const long long group = simd_ == Simd::Avx512 && with_normals ? 16 : 4;
   // kBlock points a block, a multiple of 16 (each block's first output float stays 16-byte aligned)
   detail::parallel_blocks(p, kBlock, threads(), [&](long long begin, long long end) {
-    if (!x86) return detail::eval_portable(d, rec, coef, L, mrest, sigma, positions, normals, row, begin, end);
+    if (!x86) return detail::eval_portable(d, rec, coef, 0, L, mrest, sigma, positions, normals, row, begin, end);
     const long long mid = begin + (end - begin) / group * group;
-    x86(rec, coef, mrest, sigma, positions, normals, row, begin, mid);
+    x86(rec, coef, 0, mrest, sigma, positions, normals, row, begin, mid);
     if (mid == end) return;
     // The last records: a whole group (the padding records after them) into scratch, then their
     // rows copied: the same arithmetic as every other point, wherever it lies. The scratch is off
     // 16-byte alignment: plain stores, as it is read back at once.
     alignas(16) float tp[49], tn[49];
-    x86_in_order(rec + (d + 1) * mid, coef, mrest ? mrest + d * mid : nullptr, sigma, tp + 1, normals ? tn + 1 : nullptr,
+    x86_in_order(rec + (d + 1) * mid, coef, 0, mrest ? mrest + d * mid : nullptr, sigma, tp + 1, normals ? tn + 1 : nullptr,
                  nullptr, 0, group);
     for (long long k = mid; k < end; ++k) {
       const long long r = d * static_cast<long long>(point(k)), s = 1 + d * (k - mid);
@@ -378,6 +502,44 @@ void FastEvaluator::evaluate(const MatrixIn& B, float* positions, float* normals
       if (normals) std::copy(tn + s, tn + s + d, normals + r);
     }
   });
+}
+
+// Positions with the element terms computed block by block alongside the records (fused_blocks()):
+// each thread takes whole blocks of records, and an element whose records straddle two blocks is
+// computed by both. No sigma: positions do not scale by it.
+void FastEvaluator::evaluate_fused(const MatrixIn& B, float* positions) {
+  check(B, false);
+  const int d = d_;
+  const Layout& L = layout_for(d, false, simd_);
+  detail::Kernel x86 = nullptr, x86_in_order = nullptr;
+#ifdef MBI_INTERP_X86
+  if (simd_ == Simd::Avx512 || simd_ == Simd::Avx2) {
+    // the terms were just written, in cache: the kernels without prefetches
+    const auto& variant = (simd_ == Simd::Avx512 ? detail::avx512_kernels : detail::avx2_kernels)[0][0];
+    x86 = variant[order_.empty() ? 0 : 1];
+    x86_in_order = variant[0];
+  }
+#endif
+  const FusedPass f{B, records_.data(), order_.empty() ? nullptr : order_.data(), fuse_ends_.data(),
+                    fuse_first_.data(), positions, d, L, d == 2 ? &terms_of<2, kPacked2> : &terms_of<3, kPairs>,
+                    x86, x86_in_order, fuse_group()};
+  detail::parallel_blocks(p_, kBlock, threads(), [&](long long begin, long long end) { fused_blocks(f, begin, end); });
+}
+
+// The fused pass's ranges of records, once (the records keep their order): in each block of
+// kBlock records, whole groups whose elements span fewer than kFuseElements, or one group that
+// spans more (run alone: fused_group()); the block's last records short of a group in none.
+void FastEvaluator::plan_fused() {
+  const long long group = fuse_group();
+  fuse_ends_.clear();
+  fuse_first_.clear();
+  for (long long b = 0; b < p_; b += kBlock) {
+    fuse_first_.push_back(fuse_ends_.size());
+    const long long end = std::min(b + kBlock, p_), mid = b + (end - b) / group * group;
+    for (long long p = b; p < mid; p = fuse_ends_.back())
+      fuse_ends_.push_back(std::max(fused_end(records_.data(), d_, p, mid, group), p + group));
+  }
+  fuse_first_.push_back(fuse_ends_.size());
 }
 
 }  // namespace mbi::interp

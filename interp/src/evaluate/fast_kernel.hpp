@@ -40,7 +40,7 @@ constexpr int coef_stride(int d) { return d == 3 ? 32 : 16; }
 static_assert(position_terms(3) * 3 + 1 <= coef_stride(3) && position_terms(2) * 2 <= coef_stride(2));
 
 // Records past the last point (element 0): the x86 kernels prefetch the terms of the point
-// kPrefetch ahead without a bounds check.
+// kPrefetch ahead without a bounds check (only over the whole table: ebase 0).
 constexpr int kPrefetch = 16;
 // Rows past the last of a permutation (row 0): the x86 kernels that scatter prefetch the output
 // rows of the point kRowAhead ahead without a bounds check.
@@ -79,18 +79,21 @@ inline constexpr Layout kPacked2 = packed_layout(2), kPacked3 = packed_layout(3)
 
 // A kernel: positions (and normals when nout is set) of records [begin, end) from the records
 // (rec: (d+1) words a point), the element terms (coef, coef_stride(d) floats an element, 64-byte
-// aligned), the rest normals' m (mrest, one per record) and the scale sigma of the derivatives.
-// Record p's results go to output row row[p] (scattered), or to row p where row is nullptr.
-using Kernel = void (*)(const std::int32_t* rec, const float* coef, const float* mrest, float sigma, float* pos,
-                        float* nout, const std::int32_t* row, long long begin, long long end);
+// aligned; element e's at coef + (e - ebase) coef_stride(d): ebase is 0 for the whole table, the
+// first element of a block of terms otherwise), the rest normals' m (mrest, one per record) and
+// the scale sigma of the derivatives. Record p's results go to output row row[p] (scattered), or
+// to row p where row is nullptr.
+using Kernel = void (*)(const std::int32_t* rec, const float* coef, std::int32_t ebase, const float* mrest, float sigma,
+                        float* pos, float* nout, const std::int32_t* row, long long begin, long long end);
 
 // The 3D element terms of B in the pairs layout (m x coef_stride(3) floats at coef, 64-byte
 // aligned), on up to `threads` threads; returns the largest |c_k| (fast_evaluate.cpp).
 double pairs_terms3(const MatrixIn& B, float* coef, int m, int threads);
 
 // The portable loop (d = 2 or 3, terms in layout L), any number of points.
-void eval_portable(int d, const std::int32_t* rec, const float* coef, const Layout& L, const float* mrest,
-                   float sigma, float* pos, float* nout, const std::int32_t* row, long long begin, long long end);
+void eval_portable(int d, const std::int32_t* rec, const float* coef, std::int32_t ebase, const Layout& L,
+                   const float* mrest, float sigma, float* pos, float* nout, const std::int32_t* row, long long begin,
+                   long long end);
 
 #ifdef MBI_INTERP_X86
 // The 3D kernels of an instruction set: [positions only, normals, normals with D scaled]

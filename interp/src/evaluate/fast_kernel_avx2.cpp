@@ -26,11 +26,12 @@ MBI_TARGET_AVX2 inline __m256 term2(const float* A, const float* B, int k) {
 // Positions of the 2 points whose records start at r (packed layout) and their derivatives
 // D_k = dx/db_k (times sigma when Scaled: of order 1 at any model scale; cof(D) is quadratic in D).
 template <bool Scaled>
-MBI_TARGET_AVX2 inline void two_points(const std::int32_t* r, const float* coef, __m256 sigma, __m256& x, __m256* D) {
+MBI_TARGET_AVX2 inline void two_points(const std::int32_t* r, const float* coef, std::int32_t ebase, __m256 sigma,
+                                       __m256& x, __m256* D) {
   constexpr int NC = coef_stride(3);
   const __m256 v = _mm256_loadu_ps(reinterpret_cast<const float*>(r));
-  const float* A = coef + static_cast<long long>(r[0]) * NC;
-  const float* B = coef + static_cast<long long>(r[4]) * NC;
+  const float* A = coef + (static_cast<long long>(r[0]) - ebase) * NC;
+  const float* B = coef + (static_cast<long long>(r[4]) - ebase) * NC;
   const __m256 b1 = _mm256_permute_ps(v, 0x55), b2 = _mm256_permute_ps(v, 0xAA), b3 = _mm256_permute_ps(v, 0xFF);
   // terms: 0 c0, 1 c1, 2 c11, 3 c12, 4 c13, 5 c2, 6 c22, 7 c23, 8 c3, 9 c33
   const __m256 c11 = term2(A, B, 2), c12 = term2(A, B, 3), c13 = term2(A, B, 4), c22 = term2(A, B, 6),
@@ -109,8 +110,9 @@ MBI_TARGET_AVX2 inline void put4(float* out, const std::int32_t* row, long long 
 // one before that). Each stage is a long chain of dependent operations; in one iteration they
 // starve the out-of-order window, staggered they overlap.
 template <bool Scaled, bool Prefetch, bool Scatter>
-MBI_TARGET_AVX2 void eval_normals(const std::int32_t* rec, const float* coef, const float* mrest, float sigma,
-                                  float* pos, float* nout, const std::int32_t* row, long long begin, long long end) {
+MBI_TARGET_AVX2 void eval_normals(const std::int32_t* rec, const float* coef, std::int32_t ebase, const float* mrest,
+                                  float sigma, float* pos, float* nout, const std::int32_t* row, long long begin,
+                                  long long end) {
   const __m256 sig = _mm256_set1_ps(sigma);
   const bool aligned = reinterpret_cast<std::uintptr_t>(pos + 3 * begin) % 16 == 0 &&
                        reinterpret_cast<std::uintptr_t>(nout + 3 * begin) % 16 == 0;
@@ -121,15 +123,15 @@ MBI_TARGET_AVX2 void eval_normals(const std::int32_t* rec, const float* coef, co
   for (; p < end; p += 4) {
     prefetch_at(rec + 4 * p, 4LL * 4 * kStreamAhead);  // one 64-byte line of records per 4 points
     prefetch_at(mrest + 3 * p, 4LL * 3 * kStreamAhead);
-    if constexpr (Prefetch) prefetch_terms(rec, coef, p);
+    if constexpr (Prefetch) prefetch_terms(rec, coef, ebase, p);
     if constexpr (Scatter) prefetch_rows(row, pos, nout, p);
     // stages 3 and 2 (on zeros in the first two iterations: not stored)
     const __m256 n0 = renormalise(o[0]), n1 = renormalise(o[1]);
     o[0] = cof_times(D[0], m[0]);
     o[1] = cof_times(D[1], m[1]);
     __m256 x0, x1;
-    two_points<Scaled>(rec + 4 * p, coef, sig, x0, D[0]);
-    two_points<Scaled>(rec + 4 * (p + 2), coef, sig, x1, D[1]);
+    two_points<Scaled>(rec + 4 * p, coef, ebase, sig, x0, D[0]);
+    two_points<Scaled>(rec + 4 * (p + 2), coef, ebase, sig, x1, D[1]);
     put4<Scatter>(pos, row, p, aligned, x0, x1);
     m[0] = _mm256_loadu2_m128(mrest + 3 * (p + 1), mrest + 3 * p);
     m[1] = _mm256_loadu2_m128(mrest + 3 * (p + 3), mrest + 3 * (p + 2));
@@ -165,19 +167,19 @@ MBI_TARGET_AVX2 inline __m128 one_point(const float* C, const std::int32_t* r, _
 }
 
 template <bool Prefetch, bool Scatter>
-MBI_TARGET_AVX2 void eval_positions(const std::int32_t* rec, const float* coef, const float*, float, float* pos,
-                                    float*, const std::int32_t* row, long long begin, long long end) {
+MBI_TARGET_AVX2 void eval_positions(const std::int32_t* rec, const float* coef, std::int32_t ebase, const float*, float,
+                                    float* pos, float*, const std::int32_t* row, long long begin, long long end) {
   constexpr int NC = coef_stride(3);
   const __m256i sel12 = _mm256_setr_epi32(1, 1, 1, 1, 2, 2, 2, 2), sel23 = _mm256_setr_epi32(2, 2, 2, 2, 3, 3, 3, 3);
   const bool aligned = reinterpret_cast<std::uintptr_t>(pos + 3 * begin) % 16 == 0;
   for (long long p = begin; p < end; p += 4) {
     prefetch_at(rec + 4 * p, 4LL * 4 * kStreamAhead);
-    if constexpr (Prefetch) prefetch_terms(rec, coef, p);
+    if constexpr (Prefetch) prefetch_terms(rec, coef, ebase, p);
     if constexpr (Scatter) prefetch_rows(row, pos, nullptr, p);
     __m128 x[4];
     for (int k = 0; k < 4; ++k) {
       const std::int32_t* r = rec + 4 * (p + k);
-      x[k] = one_point(coef + static_cast<long long>(r[0]) * NC, r, sel12, sel23);
+      x[k] = one_point(coef + (static_cast<long long>(r[0]) - ebase) * NC, r, sel12, sel23);
     }
     put4<Scatter>(pos, row, p, aligned, x[0], x[1], x[2], x[3]);
   }

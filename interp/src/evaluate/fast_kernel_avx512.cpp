@@ -38,10 +38,11 @@ struct Idx512 {
 // (x_A, ., x_B, .) in 128-bit lanes 0 and 2. With Derivs also X = (D_1 | D_2) and Ad = (. | D_3)
 // in each point's 256 bits (D_k = dx/db_k; summed in another order than the packed kernel's).
 template <bool Derivs>
-MBI_TARGET_AVX512 inline __m512 pair512(const std::int32_t* r, const float* coef, const Idx512& I, __m512& X, __m512& Ad) {
+MBI_TARGET_AVX512 inline __m512 pair512(const std::int32_t* r, const float* coef, std::int32_t ebase, const Idx512& I,
+                                        __m512& X, __m512& Ad) {
   constexpr int NC = coef_stride(3);
-  const float* A = coef + static_cast<long long>(r[0]) * NC;
-  const float* B = coef + static_cast<long long>(r[4]) * NC;
+  const float* A = coef + (static_cast<long long>(r[0]) - ebase) * NC;
+  const float* B = coef + (static_cast<long long>(r[4]) - ebase) * NC;
   const __m512 v = _mm512_castps256_ps512(_mm256_loadu_ps(reinterpret_cast<const float*>(r)));
   const __m512 L0 = halves(A, B, 0), L1 = halves(A, B, 8), L2 = halves(A, B, 16), L3 = halves(A, B, 24);
   // (rA, rA' | rB, rB'), r' = (b1, b2, b3, e): one cross-lane permute, then every coefficient
@@ -91,17 +92,18 @@ MBI_TARGET_AVX512 inline void scatter_lanes(float* out, const std::int32_t* row,
 
 // Positions only, pairs layout, two points to a 512-bit vector, 4 points an iteration.
 template <bool Prefetch, bool Scatter>
-MBI_TARGET_AVX512 void eval_positions(const std::int32_t* rec, const float* coef, const float*, float, float* pos,
-                                      float*, const std::int32_t* row, long long begin, long long end) {
+MBI_TARGET_AVX512 void eval_positions(const std::int32_t* rec, const float* coef, std::int32_t ebase, const float*,
+                                      float, float* pos, float*, const std::int32_t* row, long long begin,
+                                      long long end) {
   const Idx512 I;
   const bool aligned = reinterpret_cast<std::uintptr_t>(pos + 3 * begin) % 16 == 0;
   __m512 none;
   for (long long p = begin; p < end; p += 4) {
     prefetch_at(rec + 4 * p, 4LL * 4 * kStreamAhead);
-    if constexpr (Prefetch) prefetch_terms(rec, coef, p);
+    if constexpr (Prefetch) prefetch_terms(rec, coef, ebase, p);
     if constexpr (Scatter) prefetch_rows(row, pos, nullptr, p);
-    const __m512 W0 = pair512<false>(rec + 4 * p, coef, I, none, none);
-    const __m512 W1 = pair512<false>(rec + 4 * (p + 2), coef, I, none, none);
+    const __m512 W0 = pair512<false>(rec + 4 * p, coef, ebase, I, none, none);
+    const __m512 W1 = pair512<false>(rec + 4 * (p + 2), coef, ebase, I, none, none);
     store4<Scatter>(pos, row, p, aligned, I, W0, W1);
   }
   _mm_sfence();
@@ -243,8 +245,9 @@ struct Normals16 {
 // cost more in L1 misses (its lines evicted by the element terms of random points) and 4K
 // aliasing than the normals themselves.
 template <bool Scaled, bool Prefetch, bool Scatter>
-MBI_TARGET_AVX512 void eval_normals(const std::int32_t* rec, const float* coef, const float* mrest, float sigma,
-                                    float* pos, float* nout, const std::int32_t* row, long long begin, long long end) {
+MBI_TARGET_AVX512 void eval_normals(const std::int32_t* rec, const float* coef, std::int32_t ebase, const float* mrest,
+                                    float sigma, float* pos, float* nout, const std::int32_t* row, long long begin,
+                                    long long end) {
   const Idx512 I;
   const Idx16 I16;
   const __m512 sig = _mm512_set1_ps(sigma);
@@ -260,10 +263,10 @@ MBI_TARGET_AVX512 void eval_normals(const std::int32_t* rec, const float* coef, 
       const long long g = p + 4 * q;
       prefetch_at(rec + 4 * g, 4LL * 4 * kStreamAhead);
       prefetch_at(mrest + 3 * g, 4LL * 3 * kStreamAhead);
-      if constexpr (Prefetch) prefetch_terms(rec, coef, g);
+      if constexpr (Prefetch) prefetch_terms(rec, coef, ebase, g);
       if constexpr (Scatter) prefetch_rows(row, pos, nout, g);
-      const __m512 W0 = pair512<true>(rec + 4 * g, coef, I, X[0], Ad[0]);
-      const __m512 W1 = pair512<true>(rec + 4 * (g + 2), coef, I, X[1], Ad[1]);
+      const __m512 W0 = pair512<true>(rec + 4 * g, coef, ebase, I, X[0], Ad[0]);
+      const __m512 W1 = pair512<true>(rec + 4 * (g + 2), coef, ebase, I, X[1], Ad[1]);
       store4<Scatter>(pos, row, g, aligned, I, W0, W1);
       if (prev) {  // phase 1 reads all of the previous group's G before gather4 overwrites it
         if (q == 0) N.phase1(G);
@@ -282,8 +285,8 @@ MBI_TARGET_AVX512 void eval_normals(const std::int32_t* rec, const float* coef, 
   }
   [[maybe_unused]] const __m512i pack = _mm512_setr_epi32(0, 1, 2, 4, 5, 6, 8, 9, 10, 12, 13, 14, 0, 0, 0, 0);
   for (; p < end; p += 4) {
-    const __m512 W0 = pair512<true>(rec + 4 * p, coef, I, X[0], Ad[0]);
-    const __m512 W1 = pair512<true>(rec + 4 * (p + 2), coef, I, X[1], Ad[1]);
+    const __m512 W0 = pair512<true>(rec + 4 * p, coef, ebase, I, X[0], Ad[0]);
+    const __m512 W1 = pair512<true>(rec + 4 * (p + 2), coef, ebase, I, X[1], Ad[1]);
     store4<Scatter>(pos, row, p, aligned, I, W0, W1);
     const __m512 n4 = normals4<Scaled>(X, Ad, _mm512_loadu_ps(mrest + 3 * p), sig);
     if constexpr (Scatter) {

@@ -18,14 +18,14 @@ float as_float(std::int32_t w) {
 // x = (c_0 + b_1 t_1) + (b_2 t_2 + .. + b_d t_d), summed in this order by every kernel (so that
 // a positions-only call and a call with normals give the same positions).
 template <int D>
-void eval_d(const std::int32_t* rec, const float* coef, const Layout& L, const float* mrest, float sigma,
-            float* pos, float* nout, const std::int32_t* row, long long begin, long long end) {
+void eval_d(const std::int32_t* rec, const float* coef, std::int32_t ebase, const Layout& L, const float* mrest,
+            float sigma, float* pos, float* nout, const std::int32_t* row, long long begin, long long end) {
   constexpr int NC = coef_stride(D);
   constexpr TermIndex ix(D);
   for (long long p = begin; p < end; ++p) {
     const std::int32_t* r = rec + p * (D + 1);
     const long long out = row ? row[p] : p;  // the point's output row
-    const long long e = r[0];
+    const long long e = static_cast<long long>(r[0]) - ebase;
     float b[D + 1];
     for (int k = 1; k <= D; ++k) b[k] = as_float(r[k]);
     const float* C = coef + e * NC;
@@ -76,10 +76,11 @@ void eval_d(const std::int32_t* rec, const float* coef, const Layout& L, const f
 
 }  // namespace
 
-void eval_portable(int d, const std::int32_t* rec, const float* coef, const Layout& L, const float* mrest,
-                   float sigma, float* pos, float* nout, const std::int32_t* row, long long begin, long long end) {
-  if (d == 3) eval_d<3>(rec, coef, L, mrest, sigma, pos, nout, row, begin, end);
-  else eval_d<2>(rec, coef, L, mrest, sigma, pos, nout, row, begin, end);
+void eval_portable(int d, const std::int32_t* rec, const float* coef, std::int32_t ebase, const Layout& L,
+                   const float* mrest, float sigma, float* pos, float* nout, const std::int32_t* row, long long begin,
+                   long long end) {
+  if (d == 3) eval_d<3>(rec, coef, ebase, L, mrest, sigma, pos, nout, row, begin, end);
+  else eval_d<2>(rec, coef, ebase, L, mrest, sigma, pos, nout, row, begin, end);
 }
 
 }  // namespace mbi::interp::detail

@@ -25,12 +25,12 @@ inline void prefetch_at(const void* p, long long bytes) {
 }
 
 // Prefetch the element terms (both lines) of the 4 points kPrefetch after p (records are padded:
-// those are always records).
-MBI_TARGET_AVX2 inline void prefetch_terms(const std::int32_t* rec, const float* coef, long long p) {
+// those are always records; their element may lie outside a block of terms, hence prefetch_at).
+MBI_TARGET_AVX2 inline void prefetch_terms(const std::int32_t* rec, const float* coef, std::int32_t ebase, long long p) {
   for (int k = 0; k < 4; ++k) {
-    const char* ahead = reinterpret_cast<const char*>(coef + static_cast<long long>(rec[4 * (p + k + kPrefetch)]) * coef_stride(3));
-    _mm_prefetch(ahead, _MM_HINT_T0);
-    _mm_prefetch(ahead + 64, _MM_HINT_T0);
+    const long long at = (static_cast<long long>(rec[4 * (p + k + kPrefetch)]) - ebase) * coef_stride(3) * 4;
+    prefetch_at(coef, at);
+    prefetch_at(coef, at + 64);
   }
 }
 

@@ -17,7 +17,10 @@
 // Point order: points in random order over element terms larger than a cache (over 16 MiB: about
 // 131K tetrahedra) would read each point's terms from memory. Then the evaluator keeps its
 // records sorted by element (a stable sort at construction; the permutation costs 4 B a point)
-// and writes each result to its point's own row. A point's position and normal are the same bits
+// and writes each result to its point's own row. Records in element order (so sorted, or stored
+// so) have their positions computed block by block: a block of elements' terms into a buffer of
+// the thread, then the records of those elements, so that no table of every element's terms is
+// written and read back (fused_terms()). A point's position and normal are the same bits
 // in any order, on any thread count (the last points of a range run as a whole group, as the
 // others).
 //
@@ -81,6 +84,15 @@ class FastEvaluator {
   /// True when the records are the points sorted by element (see Point order above): results
   /// are scattered to the points' rows.
   bool sorted_by_element() const { return !order_.empty(); }
+  /// True when evaluate() without normals computes the element terms block by block, each
+  /// block just before the records of its elements, in a buffer of each thread that stays in
+  /// cache: the records are in element order (stored so, or sorted_by_element()) and
+  /// set_fused_terms() left it on. Otherwise (and always with normals, whose scale needs every
+  /// element's terms first) each call writes every element's terms to a table, then reads them
+  /// back per point. Both give the same bits.
+  bool fused_terms() const { return fuse_ && ordered_ && p_ > 0; }
+  /// Turns the fused pass off (false) or back on (true, the default), e.g. to compare the two.
+  void set_fused_terms(bool on) { fuse_ = on; }
   bool has_rest_normals() const { return !normals_.empty(); }
   /// Bytes a point reads and writes (STREAM convention): 4 (d+1) in + 4 d out, plus 8 d with
   /// normals.
@@ -98,7 +110,12 @@ class FastEvaluator {
   void evaluate(const MatrixIn& B, float* positions, float* normals);
 
  private:
+  void check(const MatrixIn& B, bool normals) const;
   void prepare(const MatrixIn& B, bool normals);
+  void evaluate_fused(const MatrixIn& B, float* positions);
+  void plan_fused();
+  // records a group of the fused pass's kernel takes: 4 with the x86 kernels, 1 with the portable loop
+  long long fuse_group() const { return simd_ == Simd::Portable ? 1 : 4; }
   const float* rest_normals_for(const float* positions, const float* normals);
   // the point (input row, output row) of record k
   Eigen::Index point(long long k) const { return order_.empty() ? k : order_[static_cast<size_t>(k)]; }
@@ -108,6 +125,8 @@ class FastEvaluator {
   int d_ = 3, m_ = 0, threads_ = 0;
   Simd simd_ = Simd::Portable;
   bool coherent_ = false;              // most points follow a point of the same element
+  bool ordered_ = false;               // every record's element at least the one before's
+  bool fuse_ = true;                   // fused_terms() allowed
   float dscale_ = 1.0f;                // per call: a power of 2 near 1 / max |dx/db_k| (normals)
   long long p_ = 0;
   std::vector<std::int32_t> records_;  // (p + padding) (d+1) words a record: element id, then d float bit patterns
@@ -116,6 +135,8 @@ class FastEvaluator {
   std::vector<float> normals_;         // p d from moff_ (+ padding): m = cof(A)^T n per record (AVX-512: 16-record groups by component)
   std::size_t moff_ = 0;               // where normals_'s block starts, in floats
   int moves_ = 0;                      // times the block was moved (at most 2)
+  std::vector<long long> fuse_ends_;   // the fused pass's ranges of records (plan_fused())
+  std::vector<std::size_t> fuse_first_;  // per block of records, its first range in fuse_ends_
   std::vector<float> coef_;            // m x 32 (3D; 2D: 16): position terms, cache-line aligned, per call (layout: see src/evaluate/fast_kernel.hpp)
 };
 
