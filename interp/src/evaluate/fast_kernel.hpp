@@ -40,7 +40,8 @@ constexpr int coef_stride(int d) { return d == 3 ? 32 : 16; }
 static_assert(position_terms(3) * 3 + 1 <= coef_stride(3) && position_terms(2) * 2 <= coef_stride(2));
 
 // Records past the last point (element 0): the x86 kernels prefetch the terms of the point
-// kPrefetch ahead without a bounds check (only over the whole table: ebase 0).
+// kPrefetch ahead without a bounds check (their addresses computed as integers: over a block of
+// terms, ebase > 0, those elements may lie outside it).
 constexpr int kPrefetch = 16;
 // Rows past the last of a permutation (row 0): the x86 kernels that scatter prefetch the output
 // rows of the point kRowAhead ahead without a bounds check.
