@@ -242,10 +242,15 @@ void SurfaceContact::add_gradient(const Eigen::Ref<const Eigen::VectorXd>& x,
 void SurfaceContact::add_transpose(const Rows3& G, Eigen::Ref<Eigen::VectorXd> out) const {
   const Eigen::MatrixXd& U = deformer_->rest_positions();
   const int m = deformer_->elements();
-  interp::BezierPoints GB(static_cast<Eigen::Index>(m) * kBezier, 3);
+  Transpose& t = transpose_;  // scratch, sized once
+  interp::BezierPoints& GB = t.GB;
+  Eigen::MatrixXd &GX = t.GX, &GMX = t.GMX;
+  interp::VertexMatrices& GM = t.GM;
+  GB.resize(static_cast<Eigen::Index>(m) * kBezier, 3);
+  GX.resize(U.rows(), 3);
+  GMX.resize(U.rows(), 3);
+  GM.resize(3 * U.rows(), 3);
   interp::evaluate_transpose(deformer_->embedding(), active_points_, as_points(G), m, GB, deformer_->options().threads);
-  Eigen::MatrixXd GX(U.rows(), 3), GMX(U.rows(), 3);
-  interp::VertexMatrices GM(3 * U.rows(), 3);
   // GB is zero outside the active points' elements, GM outside their vertices
   interp::bezier_transpose(U, deformer_->elements_matrix(), GB, active_elements_, GX, GM);
   if (deformer_->method() == Method::ModifiedBI) deformer_->solver().solve_transpose_vertices(GM, active_vertices_, GMX);

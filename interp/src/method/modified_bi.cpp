@@ -620,6 +620,24 @@ void check_out(const char* what, Eigen::Index rows, Eigen::Index cols, Eigen::In
     throw Error(std::string(what) + " must be " + std::to_string(want_rows) + " x " + std::to_string(want_cols) +
                 ", got " + std::to_string(rows) + " x " + std::to_string(cols));
 }
+
+// solve()'s checks: X (n x d, finite) and M ((n d) x d).
+void check_solve(int n, int d, const Eigen::Ref<const Eigen::MatrixXd>& X, const MatrixOut& M) {
+  if (X.rows() != n || X.cols() != d)
+    throw Error("X must be " + std::to_string(n) + " x " + std::to_string(d) +
+                ", got " + std::to_string(X.rows()) + " x " + std::to_string(X.cols()));
+  check_out("M", M.rows(), M.cols(), static_cast<Eigen::Index>(d) * n, d);
+  detail::check_finite("control vertex", X);
+}
+
+// solve_transpose()'s checks: G ((n d) x d, finite) and GX (n x d).
+void check_solve_transpose(int n, int d, const Eigen::Ref<const Eigen::MatrixXd>& G, const Eigen::Ref<Eigen::MatrixXd>& GX) {
+  if (G.rows() != static_cast<Eigen::Index>(n) * d || G.cols() != d)
+    throw Error("dL/dM must be " + std::to_string(n * d) + " x " + std::to_string(d) + ", got " +
+                std::to_string(G.rows()) + " x " + std::to_string(G.cols()));
+  check_out("dL/dX", GX.rows(), GX.cols(), n, d);
+  detail::check_finite("dL/dM row", G);
+}
 }  // namespace
 
 VertexMatrices ModifiedBI::solve(const Eigen::Ref<const Eigen::MatrixXd>& X) const {
@@ -630,12 +648,7 @@ VertexMatrices ModifiedBI::solve(const Eigen::Ref<const Eigen::MatrixXd>& X) con
 
 void ModifiedBI::solve(const Eigen::Ref<const Eigen::MatrixXd>& X, MatrixOut M) const {
   const Impl& I = *impl_;
-  const int d = I.d, n = I.n;
-  if (X.rows() != n || X.cols() != d)
-    throw Error("X must be " + std::to_string(n) + " x " + std::to_string(d) +
-                ", got " + std::to_string(X.rows()) + " x " + std::to_string(X.cols()));
-  check_out("M", M.rows(), M.cols(), static_cast<Eigen::Index>(d) * n, d);
-  detail::check_finite("control vertex", X);
+  check_solve(I.n, I.d, X, M);
   I.solve_frames(X, 1, M);
 }
 
@@ -664,11 +677,7 @@ Eigen::MatrixXd ModifiedBI::solve_transpose(const VertexMatrices& G) const {
 void ModifiedBI::solve_transpose(const Eigen::Ref<const Eigen::MatrixXd>& G, Eigen::Ref<Eigen::MatrixXd> GX) const {
   const Impl& I = *impl_;
   const int d = I.d, n = I.n;
-  if (G.rows() != static_cast<Eigen::Index>(n) * d || G.cols() != d)
-    throw Error("dL/dM must be " + std::to_string(n * d) + " x " + std::to_string(d) + ", got " +
-                std::to_string(G.rows()) + " x " + std::to_string(G.cols()));
-  check_out("dL/dX", GX.rows(), GX.cols(), n, d);
-  detail::check_finite("dL/dM row", G);
+  check_solve_transpose(n, d, G, GX);
   GX.setZero();
   if (I.n_red == 0) return;
   // solve() writes M(i d + c, r) = sol(a, c), a = reduced[i d + r]: gather G the same way
@@ -693,29 +702,26 @@ void ModifiedBI::solve_vertices(const Eigen::Ref<const Eigen::MatrixXd>& X, std:
   const Impl& I = *impl_;
   if (!I.dense) return solve(X, M);
   const int d = I.d, n = I.n;
-  if (X.rows() != n || X.cols() != d)
-    throw Error("X must be " + std::to_string(n) + " x " + std::to_string(d) +
-                ", got " + std::to_string(X.rows()) + " x " + std::to_string(X.cols()));
-  check_out("M", M.rows(), M.cols(), static_cast<Eigen::Index>(d) * n, d);
+  check_solve(n, d, X, M);
   detail::check_index_list("vertices", vertices, n);
-  detail::check_finite("control vertex", X);
-  thread_local std::vector<double> cols;
+  thread_local std::vector<double> cols, sol;
+  thread_local std::vector<char> have;  // per pair of the operator's rows: computed
   cols.assign(3 * static_cast<size_t>(n), 0.0);
   for (int c = 0; c < d; ++c)
     for (int j = 0; j < n; ++j) cols[static_cast<size_t>(c * n + j)] = X(j, c);
+  sol.resize(3 * static_cast<size_t>(I.n_red));
+  have.assign((static_cast<size_t>(I.n_red) + 1) / 2, 0);
   for (int i : vertices)
     for (int r = 0; r < d; ++r) {
       const int a = I.reduced[static_cast<size_t>(i) * d + r];
-      if (a < 0) {
-        for (int c = 0; c < d; ++c) M(i * d + c, r) = 0.0;
-        continue;
+      if (a >= 0 && !have[static_cast<size_t>(a / 2)]) {
+        // the pair of rows solve() computes together (its blocks and tiles start at even rows):
+        // the same arithmetic, so the same bits
+        const std::ptrdiff_t r0 = a & ~1, r1 = std::min<std::ptrdiff_t>(r0 + 2, I.n_red);
+        dense_rows(I.K.data(), n, cols.data(), cols.data() + n, cols.data() + 2 * n, sol.data(), r0, r1);
+        have[static_cast<size_t>(a / 2)] = 1;
       }
-      // the pair of rows solve() computes together (its blocks and tiles start at even rows), so
-      // that the row comes out of the same arithmetic
-      const std::ptrdiff_t r0 = a & ~1, r1 = std::min<std::ptrdiff_t>(r0 + 2, I.n_red);
-      double pair[6];
-      dense_rows(I.K.data() + r0 * n, n, cols.data(), cols.data() + n, cols.data() + 2 * n, pair, 0, r1 - r0);
-      for (int c = 0; c < d; ++c) M(i * d + c, r) = pair[3 * (a - r0) + c];
+      for (int c = 0; c < d; ++c) M(i * d + c, r) = a < 0 ? 0.0 : sol[3 * static_cast<size_t>(a) + static_cast<size_t>(c)];
     }
 }
 
@@ -724,10 +730,7 @@ void ModifiedBI::solve_transpose_vertices(const Eigen::Ref<const Eigen::MatrixXd
   const Impl& I = *impl_;
   if (!I.dense) return solve_transpose(G, GX);
   const int d = I.d, n = I.n;
-  if (G.rows() != static_cast<Eigen::Index>(n) * d || G.cols() != d)
-    throw Error("dL/dM must be " + std::to_string(n * d) + " x " + std::to_string(d) + ", got " +
-                std::to_string(G.rows()) + " x " + std::to_string(G.cols()));
-  check_out("dL/dX", GX.rows(), GX.cols(), n, d);
+  check_solve_transpose(n, d, G, GX);
   detail::check_index_list("vertices", vertices, n);
   // GX(j, c) = sum over the listed rows a of K(a, j) G(i d + c, r), a = reduced[i d + r] (solve()'s
   // M(i d + c, r) = K(a, :) X(:, c)); each vertex once
@@ -743,8 +746,6 @@ void ModifiedBI::solve_transpose_vertices(const Eigen::Ref<const Eigen::MatrixXd
       if (a < 0) continue;
       double y[3] = {};
       for (int c = 0; c < d; ++c) y[c] = G(i * d + c, r);
-      if (!std::isfinite(y[0]) || !std::isfinite(y[1]) || !std::isfinite(y[2]))
-        throw Error("dL/dM row " + std::to_string(i * d) + " of vertex " + std::to_string(i) + " is not finite");
       const double* k = I.K.data() + static_cast<std::ptrdiff_t>(a) * n;
       double *ax = acc.data(), *ay = ax + n, *az = ay + n;  // a column each: the loop vectorises
       for (int j = 0; j < n; ++j) {

@@ -166,8 +166,9 @@ class ModifiedBI {
   /// on a vertex outside [0, n). Allocates nothing after the first call on a thread.
   void solve_vertices(const Eigen::Ref<const Eigen::MatrixXd>& X, std::span<const int> vertices, MatrixOut M) const;
   /// The transpose of solve_vertices(): dL/dX (n x d) from G = dL/dM whose rows outside the listed
-  /// vertices are zero. On the dense path it reads only the listed vertices' rows of G and of the
-  /// operator (each vertex once, however often listed); the other paths take solve_transpose().
+  /// vertices are zero. On the dense path it reads only the listed vertices' rows of the operator
+  /// (each vertex once, however often listed); the other paths take solve_transpose(). Errors as
+  /// solve_transpose(), and on a vertex outside [0, n).
   void solve_transpose_vertices(const Eigen::Ref<const Eigen::MatrixXd>& G, std::span<const int> vertices,
                                 Eigen::Ref<Eigen::MatrixXd> GX) const;
 

@@ -234,6 +234,12 @@ class SurfaceContact : public sim::Potential {
   mutable std::vector<int> active_elements_, active_vertices_;  // theirs, ascending
   mutable interp::BezierPoints product_B_;           // active_bezier's result
   mutable interp::VertexMatrices product_M_;         // and its M
+  struct Transpose {                                 // add_transpose's scratch
+    interp::BezierPoints GB;
+    Eigen::MatrixXd GX, GMX;
+    interp::VertexMatrices GM;
+  };
+  mutable Transpose transpose_;
   mutable bool terms_valid_ = false;
   mutable bool line_taken_ = false;  // end_line's fraction of along_'s move awaits moved_sample
   double line_fraction_ = 0.0;
