@@ -11,6 +11,7 @@
 
 #include <Eigen/Dense>
 #include <random>
+#include <set>
 
 using mbi::interp::detail::CholeskyFactor;
 
@@ -68,7 +69,7 @@ double solve_error(const CholeskyFactor& F, const Eigen::LLT<Eigen::MatrixXd>& r
 }  // namespace
 
 TEST_CASE("sparse Cholesky sweeps equal a dense LLT for 1 to 8 right-hand sides, serial and split into subtree groups", "[factorization]") {
-  const Eigen::SparseMatrix<double> A = grid_spd(7, 6, 5, 91);  // 630 unknowns
+  const Eigen::SparseMatrix<double> A = grid_spd(8, 8, 5, 91);  // 960 unknowns
   const Eigen::LLT<Eigen::MatrixXd> ref{Eigen::MatrixXd(A)};
   REQUIRE(ref.info() == Eigen::Success);
   std::vector<bool> which{false};
@@ -76,6 +77,10 @@ TEST_CASE("sparse Cholesky sweeps equal a dense LLT for 1 to 8 right-hand sides,
   for (bool cholmod : which) {
     CholeskyFactor F = mbi::interp::detail::cholesky(A, cholmod);
     CAPTURE(F.method);
+    // supernodes of every width modulo the sweeps' panel of 8 (CHOLMOD's; Eigen's have one column)
+    std::set<int> widths;
+    for (size_t s = 0; s + 1 < F.super.size(); ++s) widths.insert((F.super[s + 1] - F.super[s]) % 8);
+    CHECK(widths.size() == (cholmod ? 8u : 1u));
     for (int groups : {1, 2, 3}) {
       F.schedule(groups, 0);
       CAPTURE(groups);

@@ -43,14 +43,16 @@ __attribute__((always_inline)) inline void store(double* p, const Vec<S>& v) {
   std::memcpy(p, &v, sizeof v);
 }
 
-// Forward L y = b and backward L^T x = y, one supernode at a time, in panels of 4 columns; X
-// holds S doubles a row (the right-hand sides, padded). A panel's 4 x 4 triangle is solved in
+// Forward L y = b and backward L^T x = y, one supernode at a time, in panels of P columns; X
+// holds S doubles a row (the right-hand sides, padded). A panel's P x P triangle is solved in
 // registers, then one pass over every row below it (the rest of the diagonal block and the rows
-// below the supernode alike: row i of the supernode is X's row rmap[i]) applies its 4 columns:
-// each such row of X is loaded and stored once per panel, and the backward sums run in 4
+// below the supernode alike: row i of the supernode is X's row rmap[i]) applies its P columns:
+// each such row of X is loaded and stored once per panel, and the backward sums run in P
 // independent accumulators. `rmap` is F.rows, or F.prow for a group of the threaded forward
 // sweep (the supernode's own columns come first in both).
-constexpr int kPanel = 4;  // columns of a panel (wider panels ran slower)
+// Columns of a panel: 8 while the panel's vectors fit the 16 AVX2 registers (S <= 4), else 4.
+template <int S>
+constexpr int kPanel = S <= 4 ? 8 : 4;
 
 template <int S, int W>
 __attribute__((always_inline)) inline void forward_panel(const double* L, std::ptrdiff_t nsrow, int j,
@@ -102,9 +104,14 @@ __attribute__((always_inline)) inline void forward_super(const CholeskyFactor& F
   const int* r = rmap + F.rowp[s];
   const double* L = F.vals.data() + F.valp[s];
   double* Xs = X + static_cast<std::ptrdiff_t>(k1) * S;
+  constexpr int P = kPanel<S>;
   int j = 0;
-  for (; j + kPanel <= nscol; j += kPanel) forward_panel<S, kPanel>(L, nsrow, j, r, X, Xs);
+  for (; j + P <= nscol; j += P) forward_panel<S, P>(L, nsrow, j, r, X, Xs);
   switch (nscol - j) {
+    case 7: forward_panel<S, 7>(L, nsrow, j, r, X, Xs); break;
+    case 6: forward_panel<S, 6>(L, nsrow, j, r, X, Xs); break;
+    case 5: forward_panel<S, 5>(L, nsrow, j, r, X, Xs); break;
+    case 4: forward_panel<S, 4>(L, nsrow, j, r, X, Xs); break;
     case 3: forward_panel<S, 3>(L, nsrow, j, r, X, Xs); break;
     case 2: forward_panel<S, 2>(L, nsrow, j, r, X, Xs); break;
     case 1: forward_panel<S, 1>(L, nsrow, j, r, X, Xs); break;
@@ -119,14 +126,19 @@ __attribute__((always_inline)) inline void backward_super(const CholeskyFactor& 
   const int* r = F.rows.data() + F.rowp[s];
   const double* L = F.vals.data() + F.valp[s];
   double* Xs = X + static_cast<std::ptrdiff_t>(k1) * S;
-  const int full = nscol / kPanel * kPanel;  // the same panels as forward_super, last first
+  constexpr int P = kPanel<S>;
+  const int full = nscol / P * P;  // the same panels as forward_super, last first
   switch (nscol - full) {
+    case 7: backward_panel<S, 7>(L, nsrow, full, r, X, Xs); break;
+    case 6: backward_panel<S, 6>(L, nsrow, full, r, X, Xs); break;
+    case 5: backward_panel<S, 5>(L, nsrow, full, r, X, Xs); break;
+    case 4: backward_panel<S, 4>(L, nsrow, full, r, X, Xs); break;
     case 3: backward_panel<S, 3>(L, nsrow, full, r, X, Xs); break;
     case 2: backward_panel<S, 2>(L, nsrow, full, r, X, Xs); break;
     case 1: backward_panel<S, 1>(L, nsrow, full, r, X, Xs); break;
     default: break;
   }
-  for (int j = full - kPanel; j >= 0; j -= kPanel) backward_panel<S, kPanel>(L, nsrow, j, r, X, Xs);
+  for (int j = full - P; j >= 0; j -= P) backward_panel<S, P>(L, nsrow, j, r, X, Xs);
 }
 
 // A sweep over a list of supernodes (ascending; the backward sweep walks it from the end), or
