@@ -27,6 +27,7 @@
 #include <mbi/sim/potential.hpp>
 
 #include <Eigen/Core>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -103,10 +104,18 @@ struct StepResult {
   /// iteration (never increasing). Empty without a potential.
   int line_search_halvings = 0;
   std::vector<double> incremental_potential;
-  double assemble_ms = 0.0;  ///< forces, rotations, warped stiffness, constraints (1 thread)
+  double assemble_ms = 0.0;  ///< forces, rotations, warped stiffness, constraints
   double solve_ms = 0.0;     ///< factorisation + solve (or PCG)
   double total_ms = 0.0;
 };
+
+/// A parallel loop for the simulator's element and node loops: loop(count, block, f) must call
+/// f(begin, end) once for each block [k block, min((k + 1) block, count)) of [0, count), on any
+/// threads in any order, and return when all are done. Every block writes results of its own and
+/// sums are taken per block, then in block order, so the simulator's results are the same to the
+/// bit for every loop (one thread or many). interp::parallel_for has this form.
+using ParallelFor =
+    std::function<void(long long count, long long block, const std::function<void(long long, long long)>& f)>;
 
 struct StaticResult {
   bool converged = false;
@@ -159,6 +168,10 @@ class Simulator {
   const std::shared_ptr<Potential>& potential() const;
   /// Whether nodes i and j share an element (the pattern Potential::hessian_blocks must keep).
   bool adjacent(int i, int j) const;
+
+  /// Runs the element loops (assembly, elastic energy) and the solver's node loops (block
+  /// products, PCG) on `loop`; an empty one (the default) runs them on the calling thread.
+  void set_parallel_for(ParallelFor loop);
 
   // ------------------------------------------------------------ stepping
   /// Advances by params().dt. On failure (non-finite state, runaway energy, solver failure) the
