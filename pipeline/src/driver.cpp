@@ -1,4 +1,5 @@
 #include <mbi/error.hpp>
+#include <mbi/interp/parallel.hpp>
 #include <mbi/pipeline/contact_setup.hpp>
 #include <mbi/pipeline/driver.hpp>
 
@@ -6,7 +7,12 @@ namespace mbi::pipeline {
 
 // ------------------------------------------------------------------------------ SimulatorDriver
 
-SimulatorDriver::SimulatorDriver(sim::Simulator simulator) : sim_(std::move(simulator)) {}
+SimulatorDriver::SimulatorDriver(sim::Simulator simulator) : sim_(std::move(simulator)) {
+  // the simulator's element and node loops on the library's threads (its results do not change)
+  sim_.set_parallel_for([](long long count, long long block, const std::function<void(long long, long long)>& f) {
+    interp::parallel_for(count, block, f);
+  });
+}
 
 void SimulatorDriver::add_scripted(const Scripted& s) {
   if (s.first < 0 || s.last < s.first)
