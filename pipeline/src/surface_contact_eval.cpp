@@ -251,7 +251,8 @@ void SurfaceContact::add_transpose(const Rows3& G, Eigen::Ref<Eigen::VectorXd> o
   GMX.resize(U.rows(), 3);
   GM.resize(3 * U.rows(), 3);
   interp::evaluate_transpose(deformer_->embedding(), active_points_, as_points(G), m, GB, deformer_->options().threads);
-  // GB is zero outside the active points' elements, GM outside their vertices
+  // GB is written on the active points' elements only, and read there only; GM is zero outside
+  // their vertices
   interp::bezier_transpose(U, deformer_->elements_matrix(), GB, active_elements_, GX, GM);
   if (deformer_->method() == Method::ModifiedBI) deformer_->solver().solve_transpose_vertices(GM, active_vertices_, GMX);
   if (deformer_->method() == Method::Phong) deformer_->phong().M_transpose(GM, GMX);

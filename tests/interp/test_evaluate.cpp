@@ -178,19 +178,27 @@ TEST_CASE("a subset of the points evaluates to the full evaluation's rows, to th
         CHECK(worst == 0.0);
         CHECK((rows - sub).cwiseAbs().maxCoeff() == 0.0);
         BezierPoints GB(want.rows(), d);
-        GB.setConstant(7.0);  // overwritten
+        GB.setConstant(7.0);  // the listed points' elements' rows overwritten, the others kept
         evaluate_transpose(s.emb, *points, G, m, GB, threads);
+        std::vector<char> listed(static_cast<size_t>(m), 0);
+        for (Eigen::Index p : *points) listed[static_cast<size_t>(s.emb.element(p))] = 1;
+        const int K = (d + 1) * (d + 2) / 2;
+        for (int e = 0; e < m; ++e)
+          if (!listed[static_cast<size_t>(e)]) {
+            CHECK(GB.middleRows(e * K, K).isConstant(7.0));
+            GB.middleRows(e * K, K).setZero();
+          }
         CHECK((GB - want).cwiseAbs().maxCoeff() <= 1e-12 * (1.0 + want.cwiseAbs().maxCoeff()));
         if (threads == 1) first = GB;
         CHECK((GB - first).cwiseAbs().maxCoeff() == 0.0);
       }
     }
-    // no points: nothing written, dL/dB zero
+    // no points: nothing written
     Eigen::MatrixXd none(0, d);
     evaluate(s.B, s.emb, std::vector<Eigen::Index>{}, none);
-    BezierPoints zero = BezierPoints::Constant(s.B.rows(), d, 1.0);
-    evaluate_transpose(s.emb, std::vector<Eigen::Index>{}, Eigen::MatrixXd(0, d), m, zero);
-    CHECK(zero.cwiseAbs().maxCoeff() == 0.0);
+    BezierPoints kept = BezierPoints::Constant(s.B.rows(), d, 1.0);
+    evaluate_transpose(s.emb, std::vector<Eigen::Index>{}, Eigen::MatrixXd(0, d), m, kept);
+    CHECK(kept.isConstant(1.0));
   }
 }
 

@@ -158,10 +158,14 @@ void evaluate_transpose(const Embedding& emb, std::span<const Eigen::Index> poin
     if (d == 3) scatter_runs<3>(emb, points, G, starts, r0, r1, partp);
     else scatter_runs<2>(emb, points, G, starts, r0, r1, partp);
   });
-  out.setZero();
+  // only the runs' elements' rows: the others are not the transpose's to write (adjoint.hpp)
+  auto first_row = [&](long long r) {
+    return static_cast<Eigen::Index>(emb.element(points[static_cast<size_t>(runs[static_cast<size_t>(r)])])) * K;
+  };
+  for (long long r = 0; r < nr; ++r) out.middleRows(first_row(r), K).setZero();
   bool finite = true;
   for (long long r = 0; r < nr; ++r) {
-    const Eigen::Index first = static_cast<Eigen::Index>(emb.element(points[static_cast<size_t>(runs[static_cast<size_t>(r)])])) * K;
+    const Eigen::Index first = first_row(r);
     for (int k = 0; k < K; ++k)
       for (int c = 0; c < d; ++c) {
         out(first + k, c) += partp[(r * K + k) * d + c];

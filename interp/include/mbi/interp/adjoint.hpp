@@ -30,11 +30,13 @@ BezierPoints evaluate_transpose(const Embedding& emb, const ConstPointsRef<doubl
 void evaluate_transpose(const Embedding& emb, const ConstPointsRef<double>& G, int elements,
                         Eigen::Ref<BezierPoints> out, int threads = 0);
 
-/// The transpose of the subset evaluate() (evaluate.hpp): dL/dB into out ((m K) x d already,
-/// overwritten) from G (|points| x d, row i for point points[i]). Each run of consecutive listed
+/// The transpose of the subset evaluate() (evaluate.hpp): dL/dB into out ((m K) x d already)
+/// from G (|points| x d, row i for point points[i]), on the K rows of each listed point's element
+/// only (set to their sums); the other rows, zero in the transpose, are left as they are (read
+/// them through the same elements: bezier_transpose's list). Each run of consecutive listed
 /// points of one element is summed in list order and the runs added in order, so the result is
-/// the same to the bit for every thread count. Costs the listed points and zeroing out. Throws
-/// Error as the full transpose does, and on an index outside [0, p).
+/// the same to the bit for every thread count. Costs the listed points. Throws Error as the full
+/// transpose does, and on an index outside [0, p).
 void evaluate_transpose(const Embedding& emb, std::span<const Eigen::Index> points, const ConstPointsRef<double>& G,
                         int elements, Eigen::Ref<BezierPoints> out, int threads = 0);
 
