@@ -194,6 +194,14 @@ struct Simulator::Impl {
   Eigen::VectorXd guess1, guess2;
   int newton_index = -1;  // Newton iteration of the current solve; -1: static solve
   double inner_tolerance = 0.0;  // PCG's relative residual when > 0 (else pcg_tolerance)
+  // Each preconditioner solve of exact_step (PCG on the blocks' system) to 1e-3 unless
+  // pcg_tolerance is looser: the same Newton iterations for fewer PCG iterations
+  // (bench/results/contact.md)
+  static constexpr double kInnerRelative = 1e-3;
+  double inner_relative() const { return std::max(kInnerRelative, params.pcg_tolerance); }
+  // The potential gave its exact Hessian product at the last step that asked (exact_step):
+  // Newton's own solve is then that step's first preconditioner solve.
+  bool gives_product = false;
 
   // element rotations of the last assembly (warm start of the next)
   std::vector<Eigen::Matrix3d> rot;
@@ -248,8 +256,9 @@ struct Simulator::Impl {
   // satisfies Armijo's rule on the incremental potential phi (updated); false when none does.
   bool line_search(Eigen::VectorXd& vk, double h, double& phi);
   // With a potential that gives its exact Hessian product: the Newton step delta (the system's
-  // solution on entry) replaced by conjugate gradients on the system with that Hessian, from 0,
-  // preconditioned by the system (its first direction is delta); c = h^2. Without: unchanged.
+  // solution on entry, to the inner tolerance when gives_product) replaced by conjugate
+  // gradients on the system with that Hessian, from 0, preconditioned by the system (its first
+  // direction is delta); c = h^2. Without: unchanged.
   bool exact_step(const Eigen::VectorXd& xe, double c, std::string& why, int& iterations);
   // out = (A - c S + c H) v on the free dofs (S the potential's blocks in A, H its exact
   // Hessian); false when the potential gives no product.
@@ -564,11 +573,9 @@ bool Simulator::Impl::exact_step(const Eigen::VectorXd& xe, double c, std::strin
   // products a step, and as few Newton iterations as with a tighter residual.
   constexpr double kRelative = 1e-2;
   constexpr int kProducts = 30;
-  // Each preconditioner solve (PCG on the blocks' system) to 1e-3 unless pcg_tolerance is looser:
-  // the same Newton iterations for fewer PCG iterations (bench/results/contact.md)
-  constexpr double kInnerRelative = 1e-3;
   cg_z = delta;
-  if (!exact_product(xe, c, cg_z, cg_q)) return true;
+  gives_product = exact_product(xe, c, cg_z, cg_q);
+  if (!gives_product) return true;
   cg_p = cg_z;
   cg_res = r;
   cg_d.setZero(3 * n);
@@ -582,7 +589,7 @@ bool Simulator::Impl::exact_step(const Eigen::VectorXd& xe, double c, std::strin
     cg_res -= alpha * cg_q;
     if (k >= kProducts || cg_res.norm() <= goal) break;
     cg_z_old.swap(cg_z);
-    inner_tolerance = std::max(kInnerRelative, params.pcg_tolerance);
+    inner_tolerance = inner_relative();
     const bool solved = solve_again(cg_res, cg_z, why, iterations);
     inner_tolerance = 0.0;
     if (!solved) return false;
@@ -908,8 +915,11 @@ std::string Simulator::Impl::substep(double h, int& newton, int& iters, double& 
     t0 = Clock::now();
     std::string why;
     newton_index = it;
+    // exact_step's first preconditioner solve, to its inner tolerance, when it is to follow
+    if (potential && gives_product) inner_tolerance = inner_relative();
     bool ok = solve(why, iters);
     newton_index = -1;
+    inner_tolerance = 0.0;
     if (ok && it == 0) {
       guess2.swap(guess1);
       guess1 = delta;
@@ -1324,6 +1334,7 @@ static void check_potential_params(const Parameters& p) {
 void Simulator::set_potential(std::shared_ptr<Potential> potential) {
   if (potential) check_potential_params(impl_->params);
   impl_->potential = std::move(potential);
+  impl_->gives_product = false;
 }
 
 const std::shared_ptr<Potential>& Simulator::potential() const { return impl_->potential; }
