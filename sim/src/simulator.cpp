@@ -676,10 +676,18 @@ void Simulator::Impl::node_terms(int j, double cK, const ElementTerms& et,
     const Elem& el = elems[e];
     fj += et.force[e].col(c);
     if (Kvd) kj += et.Kv[e].col(c);
-    // column j's blocks of this element: rows of its nodes >= j
+    // column j's blocks of this element: rows of its nodes >= j (add_warped_tet_block's K_ac)
+    const double sl = cK * el.volume * el.lame.lambda, sm = cK * el.volume * el.lame.mu;
+    const Eigen::Vector3d uc = et.RG[e].col(c);
     for (int a = 0; a < 4; ++a) {
       const int q = el.blk[a][c];
-      if (q >= 0) add_warped_tet_block(el.grad, et.RG[e], el.lame, cK * el.volume, a, c, blocks[q]);
+      if (q < 0) continue;
+      const Eigen::Vector3d ua = et.RG[e].col(a);
+      Eigen::Matrix3d K;
+      K.noalias() = (sl * ua) * uc.transpose();
+      K.noalias() += (sm * uc) * ua.transpose();
+      K.diagonal().array() += sm * el.grad.col(a).dot(el.grad.col(c));
+      blocks[q] += K;  // summed in registers, added once
     }
   }
   f.segment<3>(3 * j) = fj;
