@@ -9,7 +9,7 @@
 // and no ground. Both with the scene's method (modified-BI) and with BI, whose contact Hessian
 // surrogate is exact against a plane; and modified-BI with Newton on that surrogate alone
 // (`modified-bi-blocks`: the contact without its exact Hessian product). Counters: ms of each frame, their ratio, Newton
-// iterations per frame of each, the contact frame's line-search halvings, the contact points
+// and PCG iterations per frame of each, the contact frame's line-search halvings, the contact points
 // inside the plane and their fraction of the surface, and the broad phase's counts
 // (SurfaceContact::counts: candidates and points with a term per evaluation at a new x,
 // candidates per move, points evaluated per substep start). Also at 20K and 1M points: the
@@ -80,7 +80,7 @@ struct Side {
   mbi::scenes::Scene scene;
   std::unique_ptr<FramePipeline> pipe;
   double ms = 0;
-  long newton = 0, halvings = 0;
+  long newton = 0, halvings = 0, pcg = 0;
   const SimulatorDriver& driver() { return dynamic_cast<const SimulatorDriver&>(pipe->driver()); }
   bool step() {
     const auto t0 = mbi::Clock::now();
@@ -88,6 +88,7 @@ struct Side {
     ms += mbi::ms_since(t0);
     newton += driver().last_step().newton_iterations;
     halvings += driver().last_step().line_search_halvings;
+    pcg += driver().last_step().solver_iterations;
     return ok;
   }
 };
@@ -110,7 +111,7 @@ void BM_ContactFrame(benchmark::State& st, mbi::pipeline::Method method, bool bl
   for (int f = 0; f < 8; ++f)  // the plane rises into the ball in frames 1..6
     if (!with.pipe->step().ok || !without.pipe->step().ok) return st.SkipWithError("a step failed while warming up");
   with.ms = without.ms = 0;
-  with.newton = without.newton = with.halvings = 0;
+  with.newton = without.newton = with.halvings = with.pcg = without.pcg = 0;
   long touching = 0;
   with.driver().contact()->reset_counts();
   for (auto _ : st) {
@@ -125,6 +126,8 @@ void BM_ContactFrame(benchmark::State& st, mbi::pipeline::Method method, bool bl
   st.counters["ratio"] = with.ms / without.ms;
   st.counters["newton_contact"] = static_cast<double>(with.newton) / n;
   st.counters["newton_plain"] = static_cast<double>(without.newton) / n;
+  st.counters["pcg_contact"] = static_cast<double>(with.pcg) / n;
+  st.counters["pcg_plain"] = static_cast<double>(without.pcg) / n;
   st.counters["halvings_contact"] = static_cast<double>(with.halvings) / n;
   st.counters["touching"] = static_cast<double>(touching) / n;
   st.counters["touching_fraction"] = static_cast<double>(touching) / n / static_cast<double>(m.dense.V.rows());
