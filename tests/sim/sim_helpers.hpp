@@ -71,4 +71,38 @@ inline Eigen::MatrixXd linear_static(const Mesh& M, const sim::Material& mat,
   return X;
 }
 
+/// E = sum_i k m_i / 2 |x_i - target_i|^2: mass-proportional springs, so pulling every node
+/// toward a rigid copy of the mesh has a rigid minimiser.
+struct MassSprings : sim::Potential {
+  Eigen::VectorXd k_dof, target;
+  double energy(const Eigen::Ref<const Eigen::VectorXd>& x) const override {
+    return 0.5 * (x - target).dot(k_dof.cwiseProduct(x - target));
+  }
+  void add_gradient(const Eigen::Ref<const Eigen::VectorXd>& x,
+                    Eigen::Ref<Eigen::VectorXd> g) const override {
+    g += k_dof.cwiseProduct(x - target);
+  }
+  void hessian_blocks(const Eigen::Ref<const Eigen::VectorXd>&,
+                      std::vector<sim::NodeBlock>& out) const override {
+    for (Eigen::Index i = 0; i < k_dof.size() / 3; ++i)
+      out.push_back({int(i), int(i), k_dof(3 * i) * Eigen::Matrix3d::Identity()});
+  }
+};
+
+/// MassSprings whose blocks are a fraction of its Hessian (a tenth by default), with (product) or
+/// without the exact Hessian product.
+struct WeakSprings : MassSprings {
+  double fraction = 0.1;
+  bool product = true;
+  void hessian_blocks(const Eigen::Ref<const Eigen::VectorXd>&, std::vector<sim::NodeBlock>& out) const override {
+    for (Eigen::Index i = 0; i < k_dof.size() / 3; ++i)
+      out.push_back({int(i), int(i), fraction * k_dof(3 * i) * Eigen::Matrix3d::Identity()});
+  }
+  bool add_hessian_product(const Eigen::Ref<const Eigen::VectorXd>&, const Eigen::Ref<const Eigen::VectorXd>& v,
+                           Eigen::Ref<Eigen::VectorXd> out) const override {
+    if (product) out += k_dof.cwiseProduct(v);
+    return product;
+  }
+};
+
 }  // namespace mbi::test

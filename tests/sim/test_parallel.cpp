@@ -10,27 +10,6 @@ using namespace mbi::sim;
 
 namespace {
 
-/// Springs toward a target, mass-proportional, with blocks a third of their Hessian and the
-/// exact Hessian product: Newton takes the conjugate-gradient step with inner PCG solves.
-struct ThirdSprings : Potential {
-  Eigen::VectorXd k_dof, target;
-  double energy(const Eigen::Ref<const Eigen::VectorXd>& x) const override {
-    return 0.5 * (x - target).dot(k_dof.cwiseProduct(x - target));
-  }
-  void add_gradient(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> g) const override {
-    g += k_dof.cwiseProduct(x - target);
-  }
-  void hessian_blocks(const Eigen::Ref<const Eigen::VectorXd>&, std::vector<NodeBlock>& out) const override {
-    for (Eigen::Index i = 0; i < k_dof.size() / 3; ++i)
-      out.push_back({int(i), int(i), k_dof(3 * i) / 3 * Eigen::Matrix3d::Identity()});
-  }
-  bool add_hessian_product(const Eigen::Ref<const Eigen::VectorXd>&, const Eigen::Ref<const Eigen::VectorXd>& v,
-                           Eigen::Ref<Eigen::VectorXd> out) const override {
-    out += k_dof.cwiseProduct(v);
-    return true;
-  }
-};
-
 /// The blocks in reverse order on this thread.
 void reverse_loop(long long count, long long block, const std::function<void(long long, long long)>& f) {
   for (long long b = (count - 1) / block * block; b >= 0; b -= block) f(b, std::min(b + block, count));
@@ -54,7 +33,7 @@ struct Trajectory {
   int newton = 0, pcg = 0;
 };
 
-/// A bar twisted at one end and pulled by ThirdSprings, 4 steps of 2 substeps on PCG.
+/// A bar twisted at one end and pulled by WeakSprings (blocks a third of the Hessian), 4 steps of 2 substeps on PCG.
 Trajectory twisted_bar(const ParallelFor& loop) {
   const auto M = mbi::test::bar(12, 3, 3, 1.0, 0.25);
   Parameters p;
@@ -71,7 +50,8 @@ Trajectory twisted_bar(const ParallelFor& loop) {
   twist.angular_velocity = 6.0;
   sim.add_kinematic(mbi::test::nodes_at(M.U, 0, 1.0), twist);
   sim.fix(mbi::test::nodes_at(M.U, 0, 0.0));
-  auto springs = std::make_shared<ThirdSprings>();
+  auto springs = std::make_shared<mbi::test::WeakSprings>();
+  springs->fraction = 1.0 / 3.0;
   springs->k_dof = Eigen::VectorXd::Constant(3 * M.U.rows(), 50.0);
   springs->target = Eigen::Map<const Eigen::VectorXd>(Eigen::MatrixXd((M.U.rowwise() + Eigen::RowVector3d(0, -0.1, 0)).transpose()).data(), 3 * M.U.rows());
   sim.set_potential(springs);

@@ -8,41 +8,10 @@
 #include <cmath>
 
 using namespace mbi::sim;
+using mbi::test::MassSprings;
+using mbi::test::WeakSprings;
 
 namespace {
-
-/// E = sum_i k m_i / 2 |x_i - target_i|^2: mass-proportional springs, so pulling every node
-/// toward a rigid copy of the mesh has a rigid minimiser.
-struct MassSprings : Potential {
-  Eigen::VectorXd k_dof, target;
-  double energy(const Eigen::Ref<const Eigen::VectorXd>& x) const override {
-    return 0.5 * (x - target).dot(k_dof.cwiseProduct(x - target));
-  }
-  void add_gradient(const Eigen::Ref<const Eigen::VectorXd>& x,
-                    Eigen::Ref<Eigen::VectorXd> g) const override {
-    g += k_dof.cwiseProduct(x - target);
-  }
-  void hessian_blocks(const Eigen::Ref<const Eigen::VectorXd>&,
-                      std::vector<NodeBlock>& out) const override {
-    for (Eigen::Index i = 0; i < k_dof.size() / 3; ++i)
-      out.push_back({int(i), int(i), k_dof(3 * i) * Eigen::Matrix3d::Identity()});
-  }
-};
-
-/// MassSprings whose blocks are a tenth of its Hessian, with (product) or without the exact
-/// Hessian product.
-struct WeakSprings : MassSprings {
-  bool product = true;
-  void hessian_blocks(const Eigen::Ref<const Eigen::VectorXd>&, std::vector<NodeBlock>& out) const override {
-    for (Eigen::Index i = 0; i < k_dof.size() / 3; ++i)
-      out.push_back({int(i), int(i), 0.1 * k_dof(3 * i) * Eigen::Matrix3d::Identity()});
-  }
-  bool add_hessian_product(const Eigen::Ref<const Eigen::VectorXd>&, const Eigen::Ref<const Eigen::VectorXd>& v,
-                           Eigen::Ref<Eigen::VectorXd> out) const override {
-    if (product) out += k_dof.cwiseProduct(v);
-    return product;
-  }
-};
 
 /// E = k/4 sum_i |x_i - c|^4 with a Hessian surrogate 10x too weak: full Newton steps overshoot.
 struct WeakQuartic : Potential {
