@@ -4,16 +4,6 @@
 
 namespace mbi::sim::detail {
 
-void for_blocks(const ParallelFor& loop, long long count, long long block,
-                const std::function<void(long long, long long)>& f) {
-  if (count <= 0) return;
-  if (loop && count > block) {
-    loop(count, block, f);
-    return;
-  }
-  for (long long b = 0; b < count; b += block) f(b, std::min(b + block, count));
-}
-
 void BlockRows::build(const std::vector<int>& outer, const std::vector<int>& row) {
   const int n = static_cast<int>(outer.size()) - 1;
   // each node's row: the blocks (i, j) stored in column j < i, its diagonal, then the transposes

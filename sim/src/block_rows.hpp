@@ -7,6 +7,7 @@
 #include <mbi/sim/simulator.hpp>
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <functional>
 #include <vector>
@@ -15,18 +16,29 @@ namespace mbi::sim::detail {
 
 /// f(begin, end) for the blocks [k block, min((k + 1) block, count)) of [0, count): on `loop`
 /// when it is set and there is more than one block, else in order on this thread.
-void for_blocks(const ParallelFor& loop, long long count, long long block,
-                const std::function<void(long long, long long)>& f);
+template <typename F>
+void for_blocks(const ParallelFor& loop, long long count, long long block, F&& f) {
+  if (count <= 0) return;
+  if (loop && count > block) {
+    loop(count, block, std::function<void(long long, long long)>(std::ref(f)));  // no copy of f
+    return;
+  }
+  for (long long b = 0; b < count; b += block) f(b, std::min(b + block, count));
+}
 
-/// S sums over [0, count): f(begin, end) returns a block's sums; they are added in block order.
-template <int S>
-std::array<double, S> sum_blocks(const ParallelFor& loop, long long count, long long block,
-                                 const std::function<std::array<double, S>(long long, long long)>& f) {
-  std::vector<std::array<double, S>> part(static_cast<size_t>((count + block - 1) / block));
+/// S sums over [0, count): f(begin, end) returns a block's sums (std::array<double, S>); they
+/// are added in block order.
+template <int S, typename F>
+std::array<double, S> sum_blocks(const ParallelFor& loop, long long count, long long block, F&& f) {
+  constexpr size_t kOnStack = 64;  // blocks whose sums need no allocation
+  const size_t blocks = static_cast<size_t>((count + block - 1) / block);
+  std::array<std::array<double, S>, kOnStack> stack;
+  std::vector<std::array<double, S>> heap(blocks > kOnStack ? blocks : 0);
+  std::array<double, S>* part = blocks > kOnStack ? heap.data() : stack.data();
   for_blocks(loop, count, block, [&](long long b, long long e) { part[static_cast<size_t>(b / block)] = f(b, e); });
   std::array<double, S> total{};
-  for (const auto& p : part)
-    for (int k = 0; k < S; ++k) total[k] += p[k];
+  for (size_t k = 0; k < blocks; ++k)
+    for (int i = 0; i < S; ++i) total[i] += part[k][i];
   return total;
 }
 

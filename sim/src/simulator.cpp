@@ -73,6 +73,17 @@ struct ElementTerms {
 
 constexpr long long kElementBlock = 64;  // elements per block of the element loops
 
+// cK K_ac of the element's warped stiffness (add_warped_tet_block's), RG = R grad: summed in
+// registers so that the global block takes one addition an element.
+Eigen::Matrix3d stiffness_block(const Elem& el, const Eigen::Matrix<double, 3, 4>& RG, double cK, int a, int c) {
+  const double sl = cK * el.volume * el.lame.lambda, sm = cK * el.volume * el.lame.mu;
+  Eigen::Matrix3d K;
+  K.noalias() = (sl * RG.col(a)) * RG.col(c).transpose();
+  K.noalias() += (sm * RG.col(c)) * RG.col(a).transpose();
+  K.diagonal().array() += sm * el.grad.col(a).dot(el.grad.col(c));
+  return K;
+}
+
 // The element's deformation gradient F = x_c grad^T at the stacked positions x (3n).
 Eigen::Matrix3d deformation_gradient(const Elem& el, const Eigen::VectorXd& x) {
   Eigen::Matrix<double, 3, 4> xc;
@@ -288,6 +299,9 @@ struct Simulator::Impl {
                      Eigen::Matrix3d& R, ElementTerms& et) const;
   void node_terms(int j, double cK, const ElementTerms& et, std::vector<Eigen::Matrix3d>& blocks,
                   Eigen::VectorXd& f, Eigen::VectorXd* Kvd) const;
+  // Without a loop: element e's parts added at once (the node pass's sums in the same order).
+  void add_element(size_t e, double cK, const ElementTerms& et, std::vector<Eigen::Matrix3d>& blocks,
+                   Eigen::VectorXd& f, Eigen::VectorXd* Kvd) const;
   void external_forces();                                   // gravity + point forces -> f_ext
   void add_poke_forces(const Eigen::VectorXd& xe, Eigen::VectorXd& f) const;
   bool solve(std::string& why, int& iterations);            // A delta = r
@@ -638,6 +652,17 @@ double Simulator::Impl::assemble_elastic(const Eigen::VectorXd& xe, double cK,
   // Elements on the loop, then each node gathers its elements' parts in element order: the same
   // sums as one pass over the elements, and no two threads write one block or force.
   et.resize(elems.size(), vd != nullptr);
+  if (!parallel) {  // one pass, each element's parts added while in cache
+    f.setZero(3 * n);
+    if (vd) Kvd.setZero(3 * n);
+    double energy = 0.0;
+    for (size_t e = 0; e < elems.size(); ++e) {
+      element_terms(e, xe, vd, warm, rots[e], et);
+      add_element(e, cK, et, blocks, f, vd ? &Kvd : nullptr);
+      energy += et.energy[e];
+    }
+    return energy;
+  }
   detail::for_blocks(parallel, static_cast<long long>(elems.size()), kElementBlock, [&](long long b, long long e) {
     for (long long k = b; k < e; ++k) element_terms(static_cast<size_t>(k), xe, vd, warm, rots[static_cast<size_t>(k)], et);
   });
@@ -666,6 +691,18 @@ void Simulator::Impl::element_terms(size_t e, const Eigen::VectorXd& xe, const E
   et.RG[e].noalias() = R * el.grad;
 }
 
+void Simulator::Impl::add_element(size_t e, double cK, const ElementTerms& et,
+                                  std::vector<Eigen::Matrix3d>& blocks, Eigen::VectorXd& f,
+                                  Eigen::VectorXd* Kvd) const {
+  const Elem& el = elems[e];
+  for (int c = 0; c < 4; ++c) {
+    f.segment<3>(3 * el.node[c]) += et.force[e].col(c);
+    if (Kvd) Kvd->segment<3>(3 * el.node[c]) += et.Kv[e].col(c);
+    for (int a = 0; a < 4; ++a)
+      if (const int q = el.blk[a][c]; q >= 0) blocks[q] += stiffness_block(el, et.RG[e], cK, a, c);
+  }
+}
+
 void Simulator::Impl::node_terms(int j, double cK, const ElementTerms& et,
                                  std::vector<Eigen::Matrix3d>& blocks, Eigen::VectorXd& f,
                                  Eigen::VectorXd* Kvd) const {
@@ -676,19 +713,9 @@ void Simulator::Impl::node_terms(int j, double cK, const ElementTerms& et,
     const Elem& el = elems[e];
     fj += et.force[e].col(c);
     if (Kvd) kj += et.Kv[e].col(c);
-    // column j's blocks of this element: rows of its nodes >= j (add_warped_tet_block's K_ac)
-    const double sl = cK * el.volume * el.lame.lambda, sm = cK * el.volume * el.lame.mu;
-    const Eigen::Vector3d uc = et.RG[e].col(c);
-    for (int a = 0; a < 4; ++a) {
-      const int q = el.blk[a][c];
-      if (q < 0) continue;
-      const Eigen::Vector3d ua = et.RG[e].col(a);
-      Eigen::Matrix3d K;
-      K.noalias() = (sl * ua) * uc.transpose();
-      K.noalias() += (sm * uc) * ua.transpose();
-      K.diagonal().array() += sm * el.grad.col(a).dot(el.grad.col(c));
-      blocks[q] += K;  // summed in registers, added once
-    }
+    // column j's blocks of this element: rows of its nodes >= j
+    for (int a = 0; a < 4; ++a)
+      if (const int q = el.blk[a][c]; q >= 0) blocks[q] += stiffness_block(el, et.RG[e], cK, a, c);
   }
   f.segment<3>(3 * j) = fj;
   if (Kvd) Kvd->segment<3>(3 * j) = kj;
@@ -787,7 +814,7 @@ double Simulator::Impl::product(const Eigen::VectorXd& v, Eigen::VectorXd& out, 
 std::array<double, 2> Simulator::Impl::pcg_update(double alpha, long long b, long long e) {
   double rr = 0.0, rz = 0.0;
   for (long long i = b; i < e; ++i) {
-    if (alpha != 0.0) {
+    if (alpha != 0.0) {  // 0: the first pass, before any direction
       delta.segment<3>(3 * i) += alpha * pcg_p.segment<3>(3 * i);
       pcg_r.segment<3>(3 * i) -= alpha * pcg_q.segment<3>(3 * i);
     }
