@@ -75,7 +75,7 @@ constexpr long long kElementBlock = 64;  // elements per block of the element lo
 
 // cK K_ac of the element's warped stiffness (add_warped_tet_block's), RG = R grad: summed in
 // registers so that the global block takes one addition an element.
-Eigen::Matrix3d stiffness_block(const Elem& el, const Eigen::Matrix<double, 3, 4>& RG, double cK, int a, int c) {
+inline Eigen::Matrix3d stiffness_block(const Elem& el, const Eigen::Matrix<double, 3, 4>& RG, double cK, int a, int c) {
   const double sl = cK * el.volume * el.lame.lambda, sm = cK * el.volume * el.lame.mu;
   Eigen::Matrix3d K;
   K.noalias() = (sl * RG.col(a)) * RG.col(c).transpose();
